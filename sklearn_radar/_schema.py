@@ -1,0 +1,315 @@
+"""The detection table: columns, units, frames and sign conventions.
+
+This module is the one place where the data layout of sklearn-radar is
+defined.  Everything else (simulator, RadarScenes reader and writer, the
+estimators) builds and checks tables through it.
+
+Detections travel as **one** :class:`pandas.DataFrame`, one row per radar
+detection.  Its first 14 columns are the RadarScenes ``radar_data`` fields
+under their RadarScenes names; ``sequence`` and eight *context* columns
+follow.  The context columns carry, on every row, the ego odometry of the
+detection's scan and the mounting of the detection's sensor.  Estimators
+therefore reach odometry and mounting as ordinary columns of ``X``: they
+survive any row subset (cross-validation splits, sequence filters), travel
+through a :class:`~sklearn.pipeline.Pipeline` and work with every search
+object, without metadata routing.  The whole-sequence odometry and the
+mounting table are kept beside the table in the data :class:`~sklearn.utils.Bunch`
+as well, because the RadarScenes writer needs them.
+
+Coordinate frames and sign conventions
+--------------------------------------
+* **Sensor frame (sc)**: polar, ``range_sc`` (m) and ``azimuth_sc`` (rad),
+  azimuth positive counter-clockwise, i.e. to the left of boresight.
+* **Car frame (cc)**: origin at the centre of the rear axle, x forward,
+  y to the left, yaw counter-clockwise.  A sensor mounted at
+  ``(sensor_x, sensor_y)`` with yaw ``sensor_yaw`` sees a detection at
+  ``x_cc = sensor_x + range_sc * cos(azimuth_sc + sensor_yaw)`` and
+  ``y_cc = sensor_y + range_sc * sin(azimuth_sc + sensor_yaw)``.
+* **Sequence frame (seq)**: a fixed world frame per recording with an
+  arbitrary origin.  With the ego pose ``(ego_x_seq, ego_y_seq, ego_yaw_seq)``
+  of the scan, ``x_seq = ego_x_seq + c * x_cc - s * y_cc`` and
+  ``y_seq = ego_y_seq + s * x_cc + c * y_cc`` (``c, s = cos, sin(ego_yaw_seq)``).
+* **Radial velocity**: ``vr`` is the measured Doppler velocity, the rate of
+  change of range, so **negative means approaching**.  ``vr_compensated``
+  removes the ego motion: ``vr = vr_compensated - v_s . u`` with the
+  line-of-sight unit vector ``u = (cos(azimuth_sc + sensor_yaw),
+  sin(azimuth_sc + sensor_yaw))`` and the sensor velocity over ground in
+  the car frame ``v_s = (ego_vx - ego_yaw_rate * sensor_y,
+  ego_yaw_rate * sensor_x)``.  Static targets have ``vr_compensated``
+  close to 0.
+* **Time**: ``timestamp`` is in microseconds with an arbitrary origin per
+  sequence; one scan (one sensor's measurement cycle) shares one timestamp.
+
+Labels
+------
+``label_id`` uses the RadarScenes classes (:data:`LABELS`); 11 (STATIC) is
+background.  ``track_id`` is the instance id: a non-empty string for
+moving road users, ``""`` for background.  A new track id starts after more
+than 0.5 s of absence.  The learning target ``y`` is derived from it by
+:func:`instance_target`: one integer per instance, -1 for background.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import pandas as pd
+
+
+@dataclass(frozen=True)
+class Column:
+    """One column of a table: name, in-memory dtype, unit and meaning."""
+
+    name: str
+    dtype: str
+    unit: str
+    description: str
+
+
+#: The 14 fields of a RadarScenes ``radar_data`` row, in file order.
+RADAR_DATA_COLUMNS = (
+    Column("timestamp", "int64", "µs", "scan time; equals the RadarScenes scene key"),
+    Column("sensor_id", "int64", "-", "radar 1..4 (1 front-right side, 4 front-left side)"),
+    Column("range_sc", "float32", "m", "radial distance from the sensor"),
+    Column("azimuth_sc", "float32", "rad", "azimuth in the sensor frame, positive to the left"),
+    Column("rcs", "float32", "dBsm", "radar cross section"),
+    Column("vr", "float32", "m/s", "measured radial velocity, negative = approaching"),
+    Column("vr_compensated", "float32", "m/s", "radial velocity over ground (ego motion removed)"),
+    Column("x_cc", "float32", "m", "x in the car frame of the scan (forward)"),
+    Column("y_cc", "float32", "m", "y in the car frame of the scan (left)"),
+    Column("x_seq", "float32", "m", "x in the sequence (world) frame"),
+    Column("y_seq", "float32", "m", "y in the sequence (world) frame"),
+    Column("uuid", "str", "-", "unique detection id"),
+    Column("track_id", "str", "-", "instance id of a moving road user, '' for background"),
+    Column("label_id", "int64", "-", "RadarScenes class, 11 = STATIC (see LABELS)"),
+)
+
+#: Columns that sklearn-radar adds to every detection row.
+CONTEXT_COLUMNS = (
+    Column("sequence", "int64", "-", "recording number N of the folder sequence_N"),
+    Column("ego_x_seq", "float32", "m", "ego x in the sequence frame at this scan's odometry row"),
+    Column("ego_y_seq", "float32", "m", "ego y in the sequence frame at this scan's odometry row"),
+    Column("ego_yaw_seq", "float32", "rad", "ego yaw in the sequence frame, counter-clockwise"),
+    Column("ego_vx", "float32", "m/s", "ego speed along the car x axis"),
+    Column("ego_yaw_rate", "float32", "rad/s", "ego yaw rate, counter-clockwise"),
+    Column("sensor_x", "float32", "m", "sensor mounting x in the car frame"),
+    Column("sensor_y", "float32", "m", "sensor mounting y in the car frame"),
+    Column("sensor_yaw", "float32", "rad", "sensor boresight yaw in the car frame"),
+)
+
+DETECTION_COLUMNS = RADAR_DATA_COLUMNS + CONTEXT_COLUMNS
+
+#: Fields of a RadarScenes ``odometry`` row, plus ``sequence`` in memory.
+ODOMETRY_COLUMNS = (
+    Column("sequence", "int64", "-", "recording number N of the folder sequence_N"),
+    Column("timestamp", "int64", "µs", "odometry sample time (about 50 Hz)"),
+    Column("x_seq", "float32", "m", "ego x in the sequence frame"),
+    Column("y_seq", "float32", "m", "ego y in the sequence frame"),
+    Column("yaw_seq", "float32", "rad", "ego yaw in the sequence frame"),
+    Column("vx", "float32", "m/s", "ego speed along the car x axis"),
+    Column("yaw_rate", "float32", "rad/s", "ego yaw rate"),
+)
+
+#: Sensor mounting table: index ``sensor_id``.
+SENSOR_COLUMNS = (
+    Column("x", "float64", "m", "mounting x in the car frame"),
+    Column("y", "float64", "m", "mounting y in the car frame"),
+    Column("yaw", "float64", "rad", "boresight yaw in the car frame"),
+)
+
+#: The RadarScenes mounting (``sensors.json`` of the dataset, devkit default).
+RADARSCENES_MOUNTING = {
+    1: {"x": 3.663, "y": -0.873, "yaw": -1.48418552},
+    2: {"x": 3.86, "y": -0.70, "yaw": -0.436185662},
+    3: {"x": 3.86, "y": 0.70, "yaw": 0.436},
+    4: {"x": 3.663, "y": 0.873, "yaw": 1.484},
+}
+
+#: RadarScenes ``label_id`` values.
+LABELS = {
+    0: "CAR",
+    1: "LARGE_VEHICLE",
+    2: "TRUCK",
+    3: "BUS",
+    4: "TRAIN",
+    5: "BICYCLE",
+    6: "MOTORIZED_TWO_WHEELER",
+    7: "PEDESTRIAN",
+    8: "PEDESTRIAN_GROUP",
+    9: "ANIMAL",
+    10: "OTHER",
+    11: "STATIC",
+}
+STATIC_LABEL = 11
+
+#: Odometry fields copied onto every detection row, as (odometry, detection) names.
+EGO_FIELDS = (
+    ("x_seq", "ego_x_seq"),
+    ("y_seq", "ego_y_seq"),
+    ("yaw_seq", "ego_yaw_seq"),
+    ("vx", "ego_vx"),
+    ("yaw_rate", "ego_yaw_rate"),
+)
+#: Mounting fields copied onto every detection row, as (mounting, detection) names.
+MOUNTING_FIELDS = (("x", "sensor_x"), ("y", "sensor_y"), ("yaw", "sensor_yaw"))
+
+
+def column_names(columns):
+    """Names of a tuple of :class:`Column`."""
+    return [column.name for column in columns]
+
+
+def _cast_column(values, column: Column, table: str):
+    values = np.asarray(values)
+    if column.dtype == "str":
+        if values.dtype.kind == "S":
+            values = np.char.decode(values, "ascii")
+        if values.dtype.kind not in "OUT":
+            raise ValueError(
+                f"{table}: column {column.name!r} must hold strings, got dtype {values.dtype}"
+            )
+        return pd.array(values.astype(str), dtype="str")
+    kind = np.dtype(column.dtype).kind
+    if values.dtype.kind not in "biuf":
+        raise ValueError(
+            f"{table}: column {column.name!r} must be numeric ({column.dtype}), "
+            f"got dtype {values.dtype}"
+        )
+    if kind in "iu" and values.dtype.kind == "f":
+        if not np.all(np.isfinite(values)) or np.any(values != np.round(values)):
+            raise ValueError(
+                f"{table}: column {column.name!r} must hold integers, found non-integer values"
+            )
+    return values.astype(column.dtype, copy=False)
+
+
+def make_frame(data, columns, table: str) -> pd.DataFrame:
+    """Build a DataFrame with exactly ``columns``, in order and in their dtypes.
+
+    Parameters
+    ----------
+    data : mapping or DataFrame
+        Column name to values.  Extra keys are ignored.
+    columns : tuple of Column
+        The schema, e.g. :data:`DETECTION_COLUMNS`.
+    table : str
+        Name used in error messages (a file name or ``"detections"``).
+
+    Raises
+    ------
+    ValueError
+        Naming the table and the first missing or ill-typed column.
+    """
+    missing = [c.name for c in columns if c.name not in data]
+    if missing:
+        raise ValueError(f"{table}: missing column(s) {missing}")
+    return pd.DataFrame({c.name: _cast_column(data[c.name], c, table) for c in columns})
+
+
+def check_columns(X, required, where: str = "X") -> None:
+    """Raise a ValueError naming the columns of ``required`` that ``X`` lacks.
+
+    ``X`` must be a DataFrame; estimators that read named columns call this
+    before touching them.
+    """
+    if not isinstance(X, pd.DataFrame):
+        raise ValueError(
+            f"{where} must be a pandas DataFrame with the columns {list(required)}, "
+            f"got {type(X).__name__}"
+        )
+    missing = [name for name in required if name not in X.columns]
+    if missing:
+        raise ValueError(f"{where} is missing the column(s) {missing}")
+
+
+def instance_target(track_id, sequence=None) -> np.ndarray:
+    """Integer instance label per detection, -1 for background.
+
+    Instances are numbered 0, 1, ... in order of first appearance.  When
+    ``sequence`` is given, equal track ids in different sequences are
+    different instances.
+
+    Parameters
+    ----------
+    track_id : array-like of str, shape (n_detections,)
+        RadarScenes track ids, ``""`` for background.
+    sequence : array-like of int, shape (n_detections,), default=None
+        Sequence number of each detection.
+
+    Returns
+    -------
+    target : ndarray of int64, shape (n_detections,)
+    """
+    track_id = np.asarray(track_id, dtype=object).astype(str)
+    target = np.full(track_id.shape, -1, dtype=np.int64)
+    is_object = track_id != ""
+    keys = track_id[is_object]
+    if sequence is not None:
+        keys = np.char.add(np.asarray(sequence)[is_object].astype(str), np.char.add(":", keys))
+    _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
+    rank = np.empty(len(first), dtype=np.int64)
+    rank[np.argsort(first, kind="stable")] = np.arange(len(first))
+    target[is_object] = rank[inverse.ravel()]
+    return target
+
+
+def attach_context(radar_data: pd.DataFrame, sequence: int, odometry_index, odometry, mounting):
+    """Add ``sequence``, ego-pose and mounting columns to one sequence's radar data.
+
+    Parameters
+    ----------
+    radar_data : DataFrame
+        The 14 RadarScenes fields of one sequence.
+    sequence : int
+        The sequence number.
+    odometry_index : ndarray of int, shape (n_detections,)
+        Row of ``odometry`` that belongs to each detection's scan.
+    odometry : DataFrame
+        That sequence's odometry with columns ``x_seq ... yaw_rate``.
+    mounting : mapping
+        ``{sensor_id: {"x": m, "y": m, "yaw": rad}}``.
+    """
+    table = {name: radar_data[name].to_numpy() for name in radar_data.columns}
+    table["sequence"] = np.full(len(radar_data), sequence, dtype=np.int64)
+    for odo_name, det_name in EGO_FIELDS:
+        table[det_name] = odometry[odo_name].to_numpy()[odometry_index]
+    sensor_id = radar_data["sensor_id"].to_numpy()
+    unknown = sorted(set(np.unique(sensor_id).tolist()) - set(int(k) for k in mounting))
+    if unknown:
+        raise ValueError(f"sensor_id {unknown} has no mounting (sensors.json)")
+    for field, det_name in MOUNTING_FIELDS:
+        lookup = np.zeros(max(int(k) for k in mounting) + 1)
+        for sensor, mount in mounting.items():
+            lookup[int(sensor)] = mount[field]
+        table[det_name] = lookup[sensor_id]
+    return make_frame(table, DETECTION_COLUMNS, table="detections")
+
+
+def describe_columns(columns=DETECTION_COLUMNS) -> str:
+    """The column table as reStructuredText-like plain text, for docs and ``--help``."""
+    width = max(len(c.name) for c in columns)
+    lines = [f"{'column':<{width}}  {'dtype':<7}  {'unit':<5}  meaning"]
+    lines += [f"{c.name:<{width}}  {c.dtype:<7}  {c.unit:<5}  {c.description}" for c in columns]
+    return "\n".join(lines)
+
+
+def nearest_odometry_index(scan_timestamps, odometry_timestamps) -> np.ndarray:
+    """Index of the odometry row nearest in time to each scan (ties: the earlier row).
+
+    This is how a RadarScenes scene chooses its ``odometry_index``; the
+    simulator and the writer both use it, so that ego columns round-trip.
+
+    Parameters
+    ----------
+    scan_timestamps : array-like of int, µs
+    odometry_timestamps : array-like of int, µs, sorted ascending, non-empty
+    """
+    scan = np.asarray(scan_timestamps, dtype=np.int64)
+    odo = np.asarray(odometry_timestamps, dtype=np.int64)
+    after = np.clip(np.searchsorted(odo, scan, side="left"), 1, len(odo) - 1) if len(odo) > 1 else None
+    if after is None:
+        return np.zeros(len(scan), dtype=np.int64)
+    before = after - 1
+    take_after = np.abs(odo[after] - scan) < np.abs(scan - odo[before])
+    return np.where(take_after, after, before).astype(np.int64)
