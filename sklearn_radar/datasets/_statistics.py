@@ -1,0 +1,75 @@
+"""Statistics of a detection data set, to judge at a glance whether it is realistic."""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+
+from .._schema import LABELS
+
+#: Range bins (m) of :func:`scene_statistics`.
+RANGE_BINS = (0.0, 10.0, 25.0, 50.0, 100.0)
+
+
+def scene_statistics(bunch, range_bins=RANGE_BINS):
+    """Summary figures of a data Bunch (simulated or loaded).
+
+    Parameters
+    ----------
+    bunch : Bunch
+        As returned by :func:`make_scenes` or :func:`load_radarscenes`.
+    range_bins : sequence of float, default=(0, 10, 25, 50, 100)
+        Edges of the range bins, m.
+
+    Returns
+    -------
+    summary : dict
+        ``n_detections``, ``n_sequences``, ``duration_s`` (summed over
+        sequences), ``detections_per_second``, ``scans``,
+        ``detections_per_scan``, ``static_share`` (share of detections with
+        target -1), ``instances`` (number of distinct targets) and
+        ``objects_per_sequence`` (mean).
+    per_object_scan : DataFrame
+        Mean number of detections of one object in one scan in which it is
+        detected, by class (rows) and range bin of the object's median range
+        in that scan (columns).  A count is missing where no object of that
+        class was seen in that bin.
+    """
+    data, target = bunch.data, np.asarray(bunch.target)
+    spans = data.groupby("sequence")["timestamp"].agg(["min", "max"])
+    duration = float(((spans["max"] - spans["min"]) * 1e-6).sum())
+    scans = data.groupby(["sequence", "timestamp"]).ngroups
+    objects = data.loc[target >= 0, ["sequence", "timestamp", "range_sc", "label_id"]].assign(instance=target[target >= 0])
+    per_scan = objects.groupby(["instance", "timestamp"]).agg(
+        count=("range_sc", "size"), range=("range_sc", "median"), label_id=("label_id", "first")
+    )
+    per_scan["class"] = per_scan["label_id"].map(LABELS)
+    per_scan["range_bin"] = pd.cut(per_scan["range"], list(range_bins))
+    table = per_scan.pivot_table(index="class", columns="range_bin", values="count", aggfunc="mean", observed=False)
+    summary = {
+        "n_detections": int(len(data)),
+        "n_sequences": int(data["sequence"].nunique()),
+        "duration_s": duration,
+        "detections_per_second": len(data) / duration if duration > 0 else float("nan"),
+        "scans": int(scans),
+        "detections_per_scan": len(data) / max(scans, 1),
+        "static_share": float(np.mean(target == -1)) if len(target) else float("nan"),
+        "instances": int(len(np.unique(target[target >= 0]))),
+        "objects_per_sequence": float(objects.groupby("sequence")["instance"].nunique().mean()) if len(objects) else 0.0,
+    }
+    return summary, table
+
+
+def format_statistics(summary, table) -> str:
+    """Human-readable text of :func:`scene_statistics` output."""
+    lines = [
+        f"detections            {summary['n_detections']}",
+        f"sequences             {summary['n_sequences']} ({summary['duration_s']:.1f} s in all)",
+        f"detections per second {summary['detections_per_second']:.0f}",
+        f"detections per scan   {summary['detections_per_scan']:.1f} ({summary['scans']} scans)",
+        f"static share          {100 * summary['static_share']:.1f} %",
+        f"object instances      {summary['instances']} ({summary['objects_per_sequence']:.1f} per sequence)",
+        "detections per object per scan (when detected), by range bin in m:",
+        table.round(2).to_string(),
+    ]
+    return "\n".join(lines)
