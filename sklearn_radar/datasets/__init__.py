@@ -1,0 +1,7 @@
+"""Data sets: the RadarScenes reader/writer and the scene simulator."""
+
+from ._radarscenes import load_radarscenes, write_radarscenes
+from ._simulator import make_scenes
+from ._statistics import format_statistics, scene_statistics
+
+__all__ = ["format_statistics", "load_radarscenes", "make_scenes", "scene_statistics", "write_radarscenes"]
