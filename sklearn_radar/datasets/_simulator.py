@@ -285,10 +285,20 @@ def _static_detections(static, sensor, rng):
         s_hi = sensor["s"][scans].max() + MAX_RANGE + 5
         lo, hi = np.searchsorted(static.s, [s_lo, s_hi])
         points = np.arange(lo, hi)
-        r, azimuth = _polar(sensor, scans[:, None], static.x[points][None, :], static.y[points][None, :])
-        p = static.p_detect[points][None, :] * _visibility(r, azimuth) / (1.0 + (r / 30.0) ** 2)
-        hit_scan, hit_point = np.nonzero(rng.random(p.shape) < p)
-        found.append((scans[hit_scan], points[hit_point], r[hit_scan, hit_point], azimuth[hit_scan, hit_point]))
+        dx = static.x[points][None, :] - sensor["x"][scans][:, None]
+        dy = static.y[points][None, :] - sensor["y"][scans][:, None]
+        cos_b, sin_b = np.cos(sensor["boresight"][scans])[:, None], np.sin(sensor["boresight"][scans])[:, None]
+        along, across = dx * cos_b + dy * sin_b, dy * cos_b - dx * sin_b
+        # Cheap field-of-view and range test first; angles only for what passes.
+        seen_scan, seen_point = np.nonzero(
+            (np.abs(across) < np.tan(FOV) * along) & (along * along + across * across < MAX_RANGE**2)
+        )
+        along, across = along[seen_scan, seen_point], across[seen_scan, seen_point]
+        scan, point = scans[seen_scan], points[seen_point]
+        r, azimuth = np.hypot(along, across), np.arctan2(across, along)
+        p = static.p_detect[point] * _visibility(r, azimuth) / (1.0 + (r / 30.0) ** 2)
+        hit = rng.random(len(p)) < p
+        found.append((scan[hit], point[hit], r[hit], azimuth[hit]))
     scan, point, r, azimuth = (np.concatenate(v) for v in zip(*found))
     rcs = static.rcs_mean[point] + rng.normal(0.0, 3.0, len(point))
     vr = _static_vr(sensor, scan, azimuth)
