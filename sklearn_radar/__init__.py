@@ -7,7 +7,16 @@ The detection table is described in :mod:`sklearn_radar._schema`.
 """
 
 from ._schema import LABELS, RADARSCENES_MOUNTING, describe_columns, instance_target
+from .preprocessing import DopplerDensityFilter, FrameTransform
 
 __version__ = "0.1.0.dev0"
 
-__all__ = ["LABELS", "RADARSCENES_MOUNTING", "describe_columns", "instance_target", "__version__"]
+__all__ = [
+    "DopplerDensityFilter",
+    "FrameTransform",
+    "LABELS",
+    "RADARSCENES_MOUNTING",
+    "__version__",
+    "describe_columns",
+    "instance_target",
+]

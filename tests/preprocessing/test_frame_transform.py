@@ -1,0 +1,120 @@
+"""FrameTransform against hand-computed geometry, the RadarScenes columns and the official devkit."""
+
+import numpy as np
+import pandas as pd
+import pytest
+from radar_scenes.coordinate_transformation import transform_detections_sequence_to_car
+
+from sklearn_radar import FrameTransform
+from sklearn_radar.datasets import make_scenes
+
+
+@pytest.fixture(scope="module")
+def scenes():
+    return make_scenes(n_sequences=2, duration=6.0, random_state=11)
+
+
+def _detection(**values):
+    row = dict(range_sc=0.0, azimuth_sc=0.0, vr=0.0, timestamp=0, sensor_x=0.0, sensor_y=0.0, sensor_yaw=0.0,
+               ego_x_seq=0.0, ego_y_seq=0.0, ego_yaw_seq=0.0, ego_vx=0.0, ego_yaw_rate=0.0, sequence=1)
+    row.update(values)
+    return row
+
+
+def test_hand_computed_car_and_frame_coordinates():
+    # Sensor 1 m ahead of the rear axle looking left; target 2 m along its boresight.
+    X = pd.DataFrame([_detection(range_sc=2.0, sensor_x=1.0, sensor_yaw=np.pi / 2, ego_x_seq=10.0, ego_y_seq=5.0, ego_yaw_seq=np.pi / 2)])
+    car = FrameTransform(frame="car").fit_transform(X)
+    np.testing.assert_allclose(car[["x", "y"]].to_numpy(), [[1.0, 2.0]], atol=1e-12)
+    # Car heading along world +y: car x -> world +y, car y -> world -x.
+    frame = FrameTransform(frame="frame").fit_transform(X)
+    np.testing.assert_allclose(frame[["x", "y"]].to_numpy(), [[8.0, 6.0]], atol=1e-12)
+
+
+def test_doppler_of_a_static_target_is_compensated_to_zero():
+    # Ego at 10 m/s, forward-looking sensor, static target straight ahead: vr = -10 m/s (approaching).
+    X = pd.DataFrame([_detection(range_sc=20.0, vr=-10.0, sensor_x=3.8, ego_vx=10.0, timestamp=2_500_000)])
+    Xt = FrameTransform().fit_transform(X)
+    assert Xt["v_r"].iloc[0] == pytest.approx(0.0, abs=1e-12)
+    assert Xt["t"].iloc[0] == pytest.approx(2.5)
+
+
+def test_yaw_rate_moves_a_sensor_mounted_off_the_rear_axle():
+    # Turning on the spot at 0.5 rad/s: a sensor 4 m ahead moves left at 2 m/s.
+    # A static target to its left (sensor yaw pi/2) approaches at 2 m/s: vr = -2.
+    X = pd.DataFrame([_detection(range_sc=10.0, vr=-2.0, sensor_x=4.0, sensor_yaw=np.pi / 2, ego_yaw_rate=0.5)])
+    assert FrameTransform().fit_transform(X)["v_r"].iloc[0] == pytest.approx(0.0, abs=1e-12)
+
+
+def test_a_static_point_stays_in_place_in_the_frame_system_but_moves_in_the_car_system():
+    # The ego drives along world x at 10 m/s; a static point at world (30, 4) is seen from three scans 0.1 s apart.
+    rows = []
+    for k in range(3):
+        ego_x = 1.0 * k
+        dx, dy = 30.0 - ego_x, 4.0
+        rows.append(_detection(range_sc=np.hypot(dx, dy), azimuth_sc=np.arctan2(dy, dx), ego_x_seq=ego_x, ego_vx=10.0, timestamp=100_000 * k))
+    X = pd.DataFrame(rows)
+    frame = FrameTransform(frame="frame").fit_transform(X)
+    np.testing.assert_allclose(frame[["x", "y"]].to_numpy(), [[30.0, 4.0]] * 3, atol=1e-9)
+    car = FrameTransform(frame="car").fit_transform(X)
+    np.testing.assert_allclose(np.diff(car["x"]), [-1.0, -1.0], atol=1e-9)
+
+
+def test_results_agree_with_the_radarscenes_columns(scenes):
+    X = scenes.data
+    car = FrameTransform(frame="car").fit_transform(X)
+    frame = FrameTransform(frame="frame").fit_transform(X)
+    np.testing.assert_allclose(car["x"], X["x_cc"], atol=1e-4)
+    np.testing.assert_allclose(car["y"], X["y_cc"], atol=1e-4)
+    np.testing.assert_allclose(frame["x"], X["x_seq"], atol=1e-3)
+    np.testing.assert_allclose(frame["y"], X["y_seq"], atol=1e-3)
+    np.testing.assert_allclose(frame["v_r"], X["vr_compensated"], atol=1e-4)
+    np.testing.assert_allclose(frame["t"], X["timestamp"] * 1e-6)
+
+
+def test_frame_coordinates_map_back_to_car_coordinates_with_the_devkit(scenes):
+    X = scenes.data
+    car = FrameTransform(frame="car").fit_transform(X)
+    frame = FrameTransform(frame="frame").fit_transform(X)
+    for _, scan in X.groupby(["sequence", "timestamp"]).groups.items():
+        pose = np.array(
+            [tuple(X.loc[scan[0], ["ego_x_seq", "ego_y_seq", "ego_yaw_seq"]])],
+            dtype=[("x_seq", "f8"), ("y_seq", "f8"), ("yaw_seq", "f8")],
+        )[0]
+        x_cc, y_cc = transform_detections_sequence_to_car(frame.loc[scan, "x"].to_numpy(), frame.loc[scan, "y"].to_numpy(), pose)
+        np.testing.assert_allclose(x_cc, car.loc[scan, "x"], atol=1e-6)
+        np.testing.assert_allclose(y_cc, car.loc[scan, "y"], atol=1e-6)
+
+
+def test_rows_index_and_input_are_preserved(scenes):
+    X = scenes.data.iloc[::-3].copy()  # reversed, strided index
+    before = X.copy()
+    Xt = FrameTransform().fit_transform(X)
+    pd.testing.assert_frame_equal(X, before)
+    assert Xt.index.equals(X.index)
+    pd.testing.assert_frame_equal(Xt[X.columns], X)
+    assert list(Xt.columns[-4:]) == ["x", "y", "v_r", "t"]
+
+
+def test_sequences_are_transformed_independently(scenes):
+    X = scenes.data
+    together = FrameTransform().fit_transform(X)
+    apart = pd.concat([FrameTransform().fit_transform(part) for _, part in X.groupby("sequence")])
+    pd.testing.assert_frame_equal(together, apart.loc[together.index])
+
+
+def test_plain_array_is_read_by_position():
+    r, az = np.array([1.0, 2.0]), np.array([0.0, np.pi / 2])
+    Xt = FrameTransform().fit_transform(np.c_[r, az])
+    np.testing.assert_allclose(Xt, [[1.0, 0.0, 0.0, 0.0, 0.0], [0.0, 2.0, 0.0, 0.0, 0.0]], atol=1e-12)
+
+
+def test_missing_column_or_odometry_is_a_clear_error(scenes):
+    with pytest.raises(ValueError, match=r"missing the column\(s\) \['ego_yaw_seq'\]"):
+        FrameTransform().fit(scenes.data.drop(columns="ego_yaw_seq"))
+    bad = scenes.data.copy()
+    bad.loc[3, "ego_vx"] = np.nan
+    with pytest.raises(ValueError, match="'ego_vx' contains NaN"):
+        FrameTransform().fit(bad)
+    with pytest.raises(ValueError, match="frame"):
+        FrameTransform(frame="world").fit(scenes.data)
