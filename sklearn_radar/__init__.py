@@ -7,6 +7,7 @@ The detection table is described in :mod:`sklearn_radar._schema`.
 """
 
 from ._schema import LABELS, RADARSCENES_MOUNTING, describe_columns, instance_target
+from .cluster import RadarDBSCAN
 from .preprocessing import DopplerDensityFilter, FrameTransform
 
 __version__ = "0.1.0.dev0"
@@ -16,6 +17,7 @@ __all__ = [
     "FrameTransform",
     "LABELS",
     "RADARSCENES_MOUNTING",
+    "RadarDBSCAN",
     "__version__",
     "describe_columns",
     "instance_target",

@@ -16,11 +16,20 @@ from sklearn.utils.validation import validate_data
 
 #: Working columns written by FrameTransform, read by the later stages:
 #: x and y (m, car or frame coordinates), v_r (ego-motion-compensated radial
-#: velocity, m/s) and t (s).
-WORK_COLUMNS = ("x", "y", "v_r", "t")
+#: velocity, m/s), t (s) and heading (rad, the car's yaw in the x-y axes).
+WORK_COLUMNS = ("x", "y", "v_r", "t", "heading")
 
 #: Positions of the columns in a plain array, and their defaults when absent.
-ARRAY_LAYOUT = {"x": 0.0, "y": 0.0, "v_r": 0.0, "t": 0.0, "sequence": 0.0, "keep": 1.0, "range_sc": 50.0}
+ARRAY_LAYOUT = {
+    "x": 0.0,
+    "y": 0.0,
+    "v_r": 0.0,
+    "t": 0.0,
+    "sequence": 0.0,
+    "keep": 1.0,
+    "range_sc": 50.0,
+    "heading": 0.0,
+}
 
 
 def read_columns(estimator, X, required, optional=(), *, reset, layout=None):
@@ -35,7 +44,8 @@ def read_columns(estimator, X, required, optional=(), *, reset, layout=None):
     required, optional : sequence of str
         Columns to read.  A DataFrame must hold every required column; an
         absent optional column is returned as None.  An array is read by
-        position in ``layout`` and absent positions take their defaults.
+        position in ``layout`` and absent positions (required or optional)
+        take their defaults.
     reset : bool
         True in ``fit``, False afterwards.
     layout : dict, default=None
@@ -60,8 +70,6 @@ def read_columns(estimator, X, required, optional=(), *, reset, layout=None):
         position = positions.index(name)
         if position < X.shape[1]:
             columns[name] = X[:, position]
-        elif name in optional:
-            columns[name] = None
         else:
             columns[name] = np.full(X.shape[0], layout[name], dtype=np.float64)
     return X, columns

@@ -30,7 +30,7 @@ _REQUIRED = tuple(name for name in INPUT_LAYOUT if name != "sequence")
 
 
 class FrameTransform(TransformerMixin, BaseEstimator):
-    """Give every detection working coordinates x, y (m), v_r (m/s) and t (s).
+    """Give every detection working coordinates x, y (m), v_r (m/s), t (s) and heading (rad).
 
     The first stage of the framework (Sec. "Detection Filtering" of Scheiner
     et al. 2019).  Positions come from each detection's polar measurement
@@ -50,6 +50,9 @@ class FrameTransform(TransformerMixin, BaseEstimator):
     ``vr + (ego_vx - ego_yaw_rate sensor_y) cos(a) + ego_yaw_rate sensor_x sin(a)``
     with ``a = azimuth_sc + sensor_yaw``: about 0 for static targets, negative
     for targets that approach the sensor.  ``t = timestamp * 1e-6``.
+    ``heading`` is the direction of the car's x axis in the x-y axes
+    (``ego_yaw_seq`` in FCS, 0 in CCS); the box criterion of
+    :class:`RadarDBSCAN` uses it to keep its box aligned with the car.
     On RadarScenes data the results equal ``x_cc``/``y_cc`` (CCS),
     ``x_seq``/``y_seq`` (FCS) and ``vr_compensated``.
 
@@ -71,13 +74,13 @@ class FrameTransform(TransformerMixin, BaseEstimator):
     Notes
     -----
     X is the detection table of :mod:`sklearn_radar._schema` (a DataFrame);
-    :meth:`transform` returns a copy with the columns ``x``, ``y``, ``v_r``
-    and ``t`` added (overwritten if present).  A plain array is read by
+    :meth:`transform` returns a copy with the columns ``x``, ``y``, ``v_r``,
+    ``t`` and ``heading`` added (overwritten if present).  A plain array is read by
     position in the order ``range_sc, azimuth_sc, vr, timestamp, sensor_x,
     sensor_y, sensor_yaw, ego_x_seq, ego_y_seq, ego_yaw_seq, ego_vx,
     ego_yaw_rate, sequence`` (absent trailing columns are 0), and the result
-    is the array ``[x, y, v_r, t, sequence]`` that the later stages read by
-    position.
+    is the array ``[x, y, v_r, t, sequence, keep, range_sc, heading]`` (keep
+    = 1) that the later stages read by position.
 
     Examples
     --------
@@ -112,7 +115,7 @@ class FrameTransform(TransformerMixin, BaseEstimator):
         return self
 
     def transform(self, X):
-        """Add the working columns ``x``, ``y`` (m), ``v_r`` (m/s) and ``t`` (s).
+        """Add the working columns ``x``, ``y`` (m), ``v_r`` (m/s), ``t`` (s) and ``heading`` (rad).
 
         Parameters
         ----------
@@ -122,7 +125,8 @@ class FrameTransform(TransformerMixin, BaseEstimator):
         -------
         Xt : DataFrame or ndarray
             A DataFrame with the columns added, or the array
-            ``[x, y, v_r, t, sequence]`` of shape (n_detections, 5).
+            ``[x, y, v_r, t, sequence, keep, range_sc, heading]`` of shape
+            (n_detections, 8).
         """
         check_is_fitted(self)
         X, c = read_columns(self, X, _REQUIRED, ("sequence",), reset=False, layout=INPUT_LAYOUT)
@@ -135,11 +139,17 @@ class FrameTransform(TransformerMixin, BaseEstimator):
             x, y = c["ego_x_seq"] + cos_e * x - sin_e * y, c["ego_y_seq"] + sin_e * x + cos_e * y
         sensor_vx = c["ego_vx"] - c["ego_yaw_rate"] * c["sensor_y"]
         sensor_vy = c["ego_yaw_rate"] * c["sensor_x"]
-        work = {"x": x, "y": y, "v_r": c["vr"] + sensor_vx * cos_a + sensor_vy * sin_a, "t": c["timestamp"] * 1e-6}
+        work = {
+            "x": x,
+            "y": y,
+            "v_r": c["vr"] + sensor_vx * cos_a + sensor_vy * sin_a,
+            "t": c["timestamp"] * 1e-6,
+            "heading": c["ego_yaw_seq"] if self.frame == "frame" else np.zeros(len(x)),
+        }
         if hasattr(X, "columns"):
             return write_columns(X, work)
         sequence = c["sequence"] if c["sequence"] is not None else np.zeros(len(x))
-        return np.column_stack([work["x"], work["y"], work["v_r"], work["t"], sequence])
+        return write_columns(np.empty((len(x), 0)), {**work, "sequence": sequence, "range_sc": c["range_sc"]})
 
     def __sklearn_tags__(self):
         tags = super().__sklearn_tags__()

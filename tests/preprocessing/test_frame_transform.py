@@ -93,7 +93,8 @@ def test_rows_index_and_input_are_preserved(scenes):
     pd.testing.assert_frame_equal(X, before)
     assert Xt.index.equals(X.index)
     pd.testing.assert_frame_equal(Xt[X.columns], X)
-    assert list(Xt.columns[-4:]) == ["x", "y", "v_r", "t"]
+    assert list(Xt.columns[-5:]) == ["x", "y", "v_r", "t", "heading"]
+    np.testing.assert_array_equal(Xt["heading"], X["ego_yaw_seq"])
 
 
 def test_sequences_are_transformed_independently(scenes):
@@ -106,7 +107,8 @@ def test_sequences_are_transformed_independently(scenes):
 def test_plain_array_is_read_by_position():
     r, az = np.array([1.0, 2.0]), np.array([0.0, np.pi / 2])
     Xt = FrameTransform().fit_transform(np.c_[r, az])
-    np.testing.assert_allclose(Xt, [[1.0, 0.0, 0.0, 0.0, 0.0], [0.0, 2.0, 0.0, 0.0, 0.0]], atol=1e-12)
+    # [x, y, v_r, t, sequence, keep, range_sc, heading]
+    np.testing.assert_allclose(Xt, [[1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 0.0], [0.0, 2.0, 0.0, 0.0, 0.0, 1.0, 2.0, 0.0]], atol=1e-12)
 
 
 def test_missing_column_or_odometry_is_a_clear_error(scenes):

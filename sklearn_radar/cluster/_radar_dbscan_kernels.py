@@ -1,0 +1,152 @@
+"""Numba kernels of RadarDBSCAN: neighbourhood criteria (Eqs. 3-5), core points, union-find.
+
+All kernels work on the points of one sequence sorted by (grid cell, time)
+as produced by :func:`sklearn_radar._neighbors.build_grid`.  Neighbours are
+visited on the fly, cell by cell, so memory stays linear in the number of
+points however dense the clutter is.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+BOX, XY, XYV = 0, 1, 2
+METRIC_CODES = {"box": BOX, "xy": XY, "xyv": XYV}
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _spatial_neighbor(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv):
+    """Eqs. 3-5 without the time criterion (strict inequalities, as printed in the paper)."""
+    dx = x[j] - x[i]
+    dy = y[j] - y[i]
+    dv = v[j] - v[i]
+    if metric == BOX:
+        # Box axes: the car frame of the later detection of the pair (the newest scan of a sliding window).
+        k = i if t[i] >= t[j] else j
+        along = cos_h[k] * dx + sin_h[k] * dy
+        across = cos_h[k] * dy - sin_h[k] * dx
+        return abs(along) < eps_xy and abs(across) < eps_xy and abs(dv) < eps_vr
+    if metric == XY:
+        return dx * dx + dy * dy < eps_xy * eps_xy and abs(dv) < eps_vr
+    return dx * dx + dy * dy + dv * dv / (vr_scale * vr_scale) < eps_xyv * eps_xyv
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _pair_distance(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv):
+    """The criterion as a normalised distance (< 1 for neighbours); ranks border candidates."""
+    dx = x[j] - x[i]
+    dy = y[j] - y[i]
+    dv = abs(v[j] - v[i])
+    if metric == BOX:
+        k = i if t[i] >= t[j] else j
+        along = abs(cos_h[k] * dx + sin_h[k] * dy)
+        across = abs(cos_h[k] * dy - sin_h[k] * dx)
+        return max(along / eps_xy, across / eps_xy, dv / eps_vr)
+    if metric == XY:
+        return max(math.sqrt(dx * dx + dy * dy) / eps_xy, dv / eps_vr)
+    return math.sqrt(dx * dx + dy * dy + dv * dv / (vr_scale * vr_scale)) / eps_xyv
+
+
+@numba.njit(cache=True, nogil=True)
+def neighbors_of(i, out, cap, only, x, y, v, t, cos_h, sin_h, cell_x, cell_y, cell_keys, cell_start, cell_end,
+                 metric, eps_xy, eps_vr, vr_scale, eps_xyv, t_before, t_after):  # fmt: skip
+    """Write up to ``cap`` neighbours of point i into ``out`` and return how many.
+
+    A neighbour j != i satisfies the criterion ``metric`` and
+    ``t_i - t_before <= t_j <= t_i + t_after``.  When ``only`` is non-empty,
+    only points with ``only[j]`` True are visited.
+    """
+    found = 0
+    for dx in range(-1, 2):
+        for dy in range(-1, 2):
+            key = (cell_x[i] + dx) * 4294967296 + (cell_y[i] + dy + 2147483648)
+            c = np.searchsorted(cell_keys, key)
+            if c >= len(cell_keys) or cell_keys[c] != key:
+                continue
+            start, end = cell_start[c], cell_end[c]
+            lo = start + np.searchsorted(t[start:end], t[i] - t_before, side="left")
+            hi = start + np.searchsorted(t[start:end], t[i] + t_after, side="right")
+            for j in range(lo, hi):
+                if j == i or (len(only) > 0 and not only[j]):
+                    continue
+                if _spatial_neighbor(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv):
+                    out[found] = j
+                    found += 1
+                    if found >= cap:
+                        return found
+    return found
+
+
+@numba.njit(cache=True, nogil=True)
+def find(parent, i):
+    """Root of i, with path halving."""
+    while parent[i] != i:
+        parent[i] = parent[parent[i]]
+        i = parent[i]
+    return i
+
+
+@numba.njit(cache=True, nogil=True)
+def union_keep_smaller(parent, i, j):
+    """Merge the sets of i and j; the smaller root survives (the older cluster wins)."""
+    a = find(parent, i)
+    b = find(parent, j)
+    if a < b:
+        parent[b] = a
+    elif b < a:
+        parent[a] = b
+
+
+@numba.njit(cache=True, nogil=True)
+def dbscan_sorted(x, y, v, t, cos_h, sin_h, min_points, can_be_core, cell_x, cell_y, cell_keys, cell_start, cell_end,
+                  metric, eps_xy, eps_vr, vr_scale, eps_xyv, eps_t):  # fmt: skip
+    """DBSCAN on grid-sorted points; returns (root per point or -1, core flags).
+
+    A point is core when it may be (``can_be_core``) and it has at least
+    ``min_points - 1`` neighbours: like scikit-learn, the point counts
+    itself toward its (real-valued) minimum.  Core neighbours are joined;
+    a non-core point joins the cluster of its closest core neighbour.
+    """
+    n = len(x)
+    out = np.empty(n, dtype=np.int64)
+    no_mask = np.zeros(0, dtype=np.bool_)
+    core = np.zeros(n, dtype=np.bool_)
+    for i in range(n):
+        if not can_be_core[i]:
+            continue
+        need = max(int(math.ceil(min_points[i])) - 1, 0)
+        if need == 0:
+            core[i] = True
+            continue
+        found = neighbors_of(i, out, need, no_mask, x, y, v, t, cos_h, sin_h, cell_x, cell_y, cell_keys,
+                             cell_start, cell_end, metric, eps_xy, eps_vr, vr_scale, eps_xyv, eps_t, eps_t)  # fmt: skip
+        core[i] = found >= need
+
+    parent = np.arange(n)
+    for i in range(n):
+        if not core[i]:
+            continue
+        found = neighbors_of(i, out, n, core, x, y, v, t, cos_h, sin_h, cell_x, cell_y, cell_keys,
+                             cell_start, cell_end, metric, eps_xy, eps_vr, vr_scale, eps_xyv, eps_t, eps_t)  # fmt: skip
+        for k in range(found):
+            if out[k] > i:
+                union_keep_smaller(parent, i, out[k])
+
+    roots = np.full(n, -1, dtype=np.int64)
+    for i in range(n):
+        if core[i]:
+            roots[i] = find(parent, i)
+            continue
+        found = neighbors_of(i, out, n, core, x, y, v, t, cos_h, sin_h, cell_x, cell_y, cell_keys,
+                             cell_start, cell_end, metric, eps_xy, eps_vr, vr_scale, eps_xyv, eps_t, eps_t)  # fmt: skip
+        best, best_distance = -1, np.inf
+        for k in range(found):
+            d = _pair_distance(i, out[k], x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv)
+            if d < best_distance:
+                best, best_distance = out[k], d
+        if best >= 0:
+            roots[i] = find(parent, best)
+    return roots, core
