@@ -16,6 +16,7 @@ import numpy as np
 EGO_DT = 0.005
 MAX_ACCEL = 2.5  # m/s^2, ego acceleration and braking limit
 MAX_LATERAL_ACCEL = 2.5  # m/s^2, bounds the curvature at speed
+MAX_CURVATURE = 0.04  # 1/m, road radius of at least 25 m
 
 # Road layout (lateral offsets d in m, positive to the left, ego lane at 0).
 OVERTAKING_LANE = 3.5
@@ -103,6 +104,8 @@ class RoadUser:
     t_cross: float = 0.0
     absences: tuple = ()  # (start, end) intervals, s, without any detection
     gait_hz: float = 0.0
+    centres: np.ndarray | None = None  # (K, 4): scattering centres (along, across) and outward normals, m
+
 
     @property
     def params(self):
@@ -177,7 +180,8 @@ def simulate_ego(duration, rng) -> EgoMotion:
         t, rng, lambda: 0.0 if rng.random() < 0.4 else rng.normal(0.0, 0.025), (2.0, 6.0)
     )
     curvature = _rate_limited(curvature, 0.0, 0.02 * EGO_DT)  # clothoid-like transitions
-    curvature = np.clip(curvature, -MAX_LATERAL_ACCEL / np.maximum(speed, 1.0) ** 2, MAX_LATERAL_ACCEL / np.maximum(speed, 1.0) ** 2)
+    max_curvature = np.minimum(MAX_CURVATURE, MAX_LATERAL_ACCEL / np.maximum(speed, 1.0) ** 2)
+    curvature = np.clip(curvature, -max_curvature, max_curvature)
     yaw_rate = curvature * speed
     yaw = rng.uniform(-np.pi, np.pi) + np.concatenate([[0.0], np.cumsum(yaw_rate[:-1] * EGO_DT)])
     x = rng.uniform(-50, 50) + np.concatenate([[0.0], np.cumsum(speed[:-1] * np.cos(yaw[:-1]) * EGO_DT)])
@@ -345,7 +349,7 @@ def _road_user(kind, ego, road, duration, stops, rng) -> RoadUser:
         user = dict(s0=s_meet + rng.uniform(-5, 30) - speed * t_meet, speed=speed, d0=BIKE_LANE)
     elif kind == "walker":
         cls = rng.choice(["pedestrian", "pedestrian", "pedestrian_group"])
-        speed = rng.choice([-1.0, 1.0]) * rng.uniform(0.8, 1.8)
+        speed = rng.choice([-1.0, 1.0]) * rng.uniform(0.8, 1.6)
         side = rng.choice([RIGHT_SIDEWALK, LEFT_SIDEWALK])
         user = dict(s0=s_meet + rng.uniform(5, 35) - speed * t_meet, speed=speed, d0=side + rng.normal(0, 0.4))
     else:  # crosser: crosses the road ahead, preferably while the ego waits
@@ -367,11 +371,34 @@ def _road_user(kind, ego, road, duration, stops, rng) -> RoadUser:
         kind=cls,
         length=length,
         width=width,
+        centres=scattering_centres(length, width, rng),
         road=road,
         absences=_absences(duration, rng),
         gait_hz=rng.uniform(1.5, 2.2) if params["micro"] > 0 else 0.0,
         **user,
     )
+
+
+def scattering_centres(length, width, rng, spacing=1.5):
+    """Persistent reflection points on the outline of a length x width box (m).
+
+    Real targets reflect mostly from a few spots (wheel houses, corners,
+    mirrors, a pedestrian's torso and legs), so successive scans see them at
+    the same places.  Returns an array (K, 4): position (along, across) in the
+    object frame and the outward normal of its edge.
+    """
+    perimeter = 2 * (length + width)
+    k = max(2, int(round(perimeter / spacing)))
+    u = np.sort(rng.uniform(0.0, perimeter, k))
+    half_l, half_w = length / 2, width / 2
+    edges = np.cumsum([0.0, length, width, length])  # right side, front, left side, back
+    edge = np.searchsorted(edges, u, side="right") - 1
+    offset = u - edges[edge]
+    along = np.select([edge == 0, edge == 1, edge == 2], [-half_l + offset, np.full(k, half_l), half_l - offset], -half_l)
+    across = np.select([edge == 0, edge == 1, edge == 2], [np.full(k, -half_w), -half_w + offset, np.full(k, half_w)], half_w - offset)
+    normal_along = np.select([edge == 1, edge == 3], [np.ones(k), -np.ones(k)], 0.0)
+    normal_across = np.select([edge == 0, edge == 2], [-np.ones(k), np.ones(k)], 0.0)
+    return np.column_stack([along, across, normal_along, normal_across])
 
 
 def _absences(duration, rng):

@@ -38,10 +38,11 @@ ODOMETRY_PERIOD = 0.020  # s (50 Hz)
 RANGE_NOISE = 0.05  # m
 DOPPLER_NOISE = 0.04  # m/s
 DOPPLER_OUTLIER_RATE = 0.02
-AZIMUTH_NOISE_BORESIGHT = np.deg2rad(0.25)  # rad
-AZIMUTH_NOISE_EDGE = np.deg2rad(1.0)  # rad
+AZIMUTH_NOISE_BORESIGHT = np.deg2rad(0.15)  # rad, about 0.3 x the resolution
+AZIMUTH_NOISE_EDGE = np.deg2rad(0.6)  # rad
 CLUTTER_PER_SCAN = 6.0  # false alarms per scan
 GHOST_RATE = 0.04  # multipath ghosts per object detection
+DIFFUSE_SHARE = 0.3  # object detections spread over the outline rather than from a scattering centre
 NEW_TRACK_GAP = 0.5  # s, RadarScenes: a new track id after longer absence
 SCAN_BLOCK = 48  # scans processed together for the static world
 
@@ -331,7 +332,7 @@ def _one_object(index, user, sensor, rng):
     t = sensor["t"]
     cx, cy, vx, vy, heading, yaw_rate = user.kinematics(t)
     r_centre, az_centre = _polar(sensor, np.arange(len(t)), cx, cy)
-    mean_count = params["det_10m"] * np.clip(12.0 / np.maximum(r_centre, 1.0), 0.08, 1.5)
+    mean_count = params["det_10m"] * np.clip((12.0 / np.maximum(r_centre, 1.0)) ** 0.6, 0.3, 1.5)
     mean_count *= _visibility(r_centre, az_centre) * ~user.absent(t) * (r_centre > 1.5)
     scan = np.repeat(np.arange(len(t)), rng.poisson(mean_count))
     along, across = _outline_points(user, sensor, scan, cx, cy, heading, rng)
@@ -354,9 +355,11 @@ def _one_object(index, user, sensor, rng):
 
 
 def _outline_points(user, sensor, scan, cx, cy, heading, rng):
-    """Points on the outline edges that face the sensor, chosen by apparent length.
+    """Reflection points on the outline edges that face the sensor, in the object frame (m).
 
-    Returns coordinates (along, across) in the object frame, m.
+    Most detections come from the object's persistent scattering centres
+    (weighted by how squarely their edge faces the sensor); the rest are
+    spread uniformly over the visible edges by apparent length.
     """
     half_length, half_width = user.length / 2, user.width / 2
     dx, dy = sensor["x"][scan] - cx[scan], sensor["y"][scan] - cy[scan]
@@ -369,7 +372,21 @@ def _outline_points(user, sensor, scan, cx, cy, heading, rng):
     on_end = rng.random(len(scan)) * (w_end + w_side + 1e-12) < w_end
     along = np.where(on_end, np.sign(q_along) * half_length, rng.uniform(-half_length, half_length, len(scan)))
     across = np.where(on_end, rng.uniform(-half_width, half_width, len(scan)), np.sign(q_across) * half_width)
-    return along + rng.normal(0, 0.05, len(scan)), across + rng.normal(0, 0.05, len(scan))
+
+    centres = user.centres
+    to_sensor_along = q_along[:, None] - centres[None, :, 0]
+    to_sensor_across = q_across[:, None] - centres[None, :, 1]
+    facing = (centres[None, :, 2] * to_sensor_along + centres[None, :, 3] * to_sensor_across) / np.maximum(
+        np.hypot(to_sensor_along, to_sensor_across), 1e-6
+    )
+    weight = np.clip(facing, 0.0, None)
+    total = weight.sum(axis=1)
+    use_centre = (rng.random(len(scan)) >= DIFFUSE_SHARE) & (total > 0)
+    pick = (np.cumsum(weight, axis=1) < (rng.random(len(scan)) * total)[:, None]).sum(axis=1)
+    pick = np.minimum(pick, len(centres) - 1)
+    along = np.where(use_centre, centres[pick, 0], along)
+    across = np.where(use_centre, centres[pick, 1], across)
+    return along + rng.normal(0, 0.08, len(scan)), across + rng.normal(0, 0.08, len(scan))
 
 
 def _ghosts(objects, rng):
