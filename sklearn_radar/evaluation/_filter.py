@@ -1,0 +1,685 @@
+"""Evaluation of the Doppler-density filter: Sec. "Filtering Results", Tables I and II.
+
+The filter of Eq. 1 (:class:`~sklearn_radar.DopplerDensityFilter`) is tuned
+on two parameters, the Doppler threshold ``eta_1`` (``vr_threshold``, m/s)
+and the spatial radius ``d_xy`` (m).  The paper enumerates a grid of both
+and, for every cell, counts the *errors*: the number of times a labelled
+road user kept less than 75 % of its detections during a whole 150 ms time
+frame (Table I).  For a few promising settings it then reports the share of
+background detections removed (Table II).
+
+Units: positions and radii in m, velocities in m/s, times in s, shares in
+[0, 1] unless a column says percent.
+"""
+
+from __future__ import annotations
+
+import time
+from numbers import Integral, Real
+
+import numpy as np
+import pandas as pd
+from joblib import Parallel, delayed
+from sklearn.utils import Bunch
+
+from ..preprocessing import FrameTransform, doppler_density_keep, neighbor_counts
+
+__all__ = [
+    "PAPER_TABLE_II",
+    "filter_error_windows",
+    "filter_errors",
+    "filter_grid",
+    "filter_removal_rates",
+    "filter_settings_table",
+    "plot_filter_errors",
+]
+
+#: Tolerance (s) when placing times into windows: timestamps are integer µs
+#: scaled to s, so a detection meant to lie exactly on a window edge may sit
+#: a rounding error below it.  Raised to a few float64 spacings of the
+#: largest time when those are coarser (very large absolute timestamps).
+_TIME_EPS = 1e-9
+
+#: Table II of Scheiner et al. (2019): the filter settings discussed in the
+#: paper, their background removal rate (percent) and their number of errors.
+#: ``frame`` uses the names of :class:`~sklearn_radar.FrameTransform`
+#: ("car" = CCS, "frame" = FCS).
+PAPER_TABLE_II = pd.DataFrame(
+    {
+        "frame": ["car", "frame", "frame", "frame", "frame"],
+        "vr_threshold": [0.10, 0.10, 0.35, 0.20, 0.35],
+        "d_xy": [1.4, 1.4, 0.8, 1.4, 1.2],
+        "paper_removal_rate": [25.10, 29.10, 31.47, 35.45, 36.91],
+        "paper_errors": np.array([0, 0, 0, 1, 1], dtype=np.int64),
+    }
+)
+
+
+# ----------------------------------------------------------------------------
+# Input checks
+# ----------------------------------------------------------------------------
+def _as_keep(keep, name="keep"):
+    keep = np.asarray(keep)
+    if keep.ndim != 1:
+        raise ValueError(f"{name} must be 1-D, got shape {keep.shape}")
+    if keep.dtype.kind == "b":
+        return keep
+    if keep.dtype.kind not in "iuf" or not np.all((keep == 0) | (keep == 1)):
+        raise ValueError(f"{name} must be boolean (or 0/1), got dtype {keep.dtype}")
+    return keep.astype(bool)
+
+
+def _as_target(target, n_rows):
+    target = np.asarray(target)
+    if target.ndim != 1:
+        raise ValueError(f"target must be 1-D, got shape {target.shape}")
+    if target.dtype.kind == "f":
+        if not np.all(np.isfinite(target)) or np.any(target != np.round(target)):
+            raise ValueError("target must hold integer instance ids (-1 = background)")
+    elif target.dtype.kind not in "iu":
+        raise ValueError(f"target must hold integer instance ids, got dtype {target.dtype}")
+    target = target.astype(np.int64)
+    if len(target) != n_rows:
+        raise ValueError(f"keep and target have different lengths: {n_rows} and {len(target)}")
+    if np.any(target < -1):
+        raise ValueError("target must be -1 (background) or a non-negative instance id")
+    return target
+
+
+def _check_window(window, min_kept):
+    if not isinstance(window, Real) or not np.isfinite(window) or window <= 0:
+        raise ValueError(f"window must be a positive number of seconds, got {window!r}")
+    if not isinstance(min_kept, Real) or not 0 <= min_kept <= 1:
+        raise ValueError(f"min_kept must be a share in [0, 1], got {min_kept!r}")
+
+
+def _check_rule(threshold_ratios, min_neighbors):
+    ratios = np.asarray(threshold_ratios, dtype=np.float64).ravel()
+    n_min = np.asarray(min_neighbors).ravel()
+    if len(ratios) == 0 or len(ratios) != len(n_min):
+        raise ValueError(
+            "threshold_ratios and min_neighbors must be non-empty and of equal length, "
+            f"got {len(ratios)} and {len(n_min)}"
+        )
+    if not np.all(ratios > 0):
+        raise ValueError(f"threshold_ratios must be positive, got {threshold_ratios!r}")
+    if n_min.dtype.kind not in "iu" or not np.all(n_min >= 1):
+        raise ValueError(f"min_neighbors must be integers >= 1, got {min_neighbors!r}")
+    return ratios, n_min
+
+
+def _check_grid(values, name, allow_zero):
+    values = np.asarray(values, dtype=np.float64).ravel()
+    if len(values) == 0:
+        raise ValueError(f"{name} must not be empty")
+    low_ok = values >= 0 if allow_zero else values > 0
+    if not np.all(np.isfinite(values) & low_ok):
+        raise ValueError(f"{name} must be finite and {'>= 0' if allow_zero else '> 0'}, got {values.tolist()}")
+    if len(np.unique(values)) != len(values):
+        raise ValueError(f"{name} must not repeat values, got {values.tolist()}")
+    return values
+
+
+# ----------------------------------------------------------------------------
+# Removal rates and errors of one keep mask
+# ----------------------------------------------------------------------------
+def filter_removal_rates(keep, target) -> dict:
+    """Shares of background and of object detections that a filter removed.
+
+    Parameters
+    ----------
+    keep : array-like of bool, shape (n_detections,)
+        Filter output, False = removed (the ``keep`` column of
+        :class:`~sklearn_radar.DopplerDensityFilter`).
+    target : array-like of int, shape (n_detections,)
+        Instance id per detection, -1 for background.
+
+    Returns
+    -------
+    rates : dict
+        ``background_removed`` : float in [0, 1]
+            Share of background rows (``target == -1``) with ``keep`` False;
+            the paper's "removal rate" (as a share, not percent).
+        ``objects_removed`` : float in [0, 1]
+            Share of object rows (``target >= 0``) with ``keep`` False.
+        ``n_background``, ``n_objects`` : int
+            Number of background and object rows.
+
+        A share is 0.0 when its group is empty.
+
+    Examples
+    --------
+    >>> from sklearn_radar.evaluation import filter_removal_rates
+    >>> rates = filter_removal_rates([False, True, True, False], [-1, -1, 3, 3])
+    >>> rates["background_removed"], rates["objects_removed"]
+    (0.5, 0.5)
+    """
+    keep = _as_keep(keep)
+    target = _as_target(target, len(keep))
+    background = target == -1
+    n_background = int(background.sum())
+    n_objects = int(len(target) - n_background)
+    removed = ~keep
+    removed_background = int(np.count_nonzero(removed & background))
+    removed_objects = int(np.count_nonzero(removed & ~background))
+    return {
+        "background_removed": removed_background / n_background if n_background else 0.0,
+        "objects_removed": removed_objects / n_objects if n_objects else 0.0,
+        "n_background": n_background,
+        "n_objects": n_objects,
+    }
+
+
+def filter_error_windows(keep, target, t, window=0.15, min_kept=0.75) -> pd.DataFrame:
+    """Per object and complete time window: detections, kept detections, error flag.
+
+    For each object (``target >= 0``) with first and last detection times
+    ``t0`` and ``t1``, the windows are ``[t0 + k window, t0 + (k + 1) window)``
+    for every ``k >= 0`` with ``t0 + (k + 1) window <= t1``: only complete
+    windows count, so an object present for less than ``window`` has none,
+    and detections after the last complete window are ignored.  A window
+    with ``n > 0`` detections of which ``kept`` survive the filter is an
+    *error* when ``kept / n < min_kept`` (the paper: 75 % within 150 ms).
+
+    Parameters
+    ----------
+    keep : array-like of bool, shape (n_detections,)
+        Filter output, False = removed.
+    target : array-like of int, shape (n_detections,)
+        Instance id per detection, -1 for background (ignored).  Ids must be
+        unique across sequences (as ``make_scenes(...).target`` is).
+    t : array-like of float, shape (n_detections,)
+        Detection time, s (the ``t`` column of
+        :class:`~sklearn_radar.FrameTransform`, i.e. ``timestamp * 1e-6``).
+    window : float, default=0.15
+        Window length, s.
+    min_kept : float, default=0.75
+        Smallest share of an object's detections in a window that must be
+        kept for the window not to be an error.
+
+    Returns
+    -------
+    windows : DataFrame
+        One row per complete window that holds at least one detection of
+        its object (empty windows cannot be errors and are not listed),
+        sorted by ``instance`` and ``start_s``, with columns
+
+        ``instance`` (int), ``start_s`` (float, s: ``t0 + k window``),
+        ``n`` (int, detections), ``kept`` (int, detections kept),
+        ``kept_share`` (float, ``kept / n``), ``error`` (bool).
+
+    Notes
+    -----
+    Times are placed into windows with a tolerance of 1 ns (or a few
+    float64 spacings of the largest time, if coarser), so that a detection
+    meant to lie on a window edge (timestamps are integer µs) falls into the
+    window that starts there.  The work is a few sorts of
+    the object rows: no Python loop over objects or detections.
+
+    See Also
+    --------
+    filter_errors : the number of error windows.
+    """
+    keep = _as_keep(keep)
+    target = _as_target(target, len(keep))
+    _check_window(window, min_kept)
+    windows = _Windows(target, t, window)
+    kept = windows.kept(keep)
+    share = kept / np.maximum(windows.n, 1)  # n >= 1 for every listed window
+    return pd.DataFrame(
+        {
+            "instance": windows.instance,
+            "start_s": windows.start_s,
+            "n": windows.n,
+            "kept": kept,
+            "kept_share": share,
+            "error": windows.errors(kept, min_kept),
+        }
+    )
+
+
+class _Windows:
+    """The complete, occupied (object, time window) cells of a labelling.
+
+    They depend on ``target``, ``t`` and ``window`` only, not on the filter,
+    so a grid search builds them once and counts kept detections per cell.
+    """
+
+    def __init__(self, target, t, window):
+        t = np.asarray(t, dtype=np.float64)
+        if t.shape != target.shape:
+            raise ValueError(f"t must have the shape of target {target.shape}, got {t.shape}")
+        if not isinstance(window, Real) or not np.isfinite(window) or window <= 0:
+            raise ValueError(f"window must be a positive number of seconds, got {window!r}")
+        self.rows = np.zeros(0, np.int64)  # object rows that lie in a complete window
+        self.cell = np.zeros(0, np.int64)  # their window number, 0 .. n_cells - 1
+        self.instance = np.zeros(0, np.int64)
+        self.start_s = np.zeros(0, np.float64)
+        self.n = np.zeros(0, np.int64)
+        object_rows = np.flatnonzero(target >= 0)
+        if len(object_rows) == 0:
+            return
+        obj_t = t[object_rows]
+        if not np.all(np.isfinite(obj_t)):
+            raise ValueError("t contains NaN or infinity")
+        instances, inverse = np.unique(target[object_rows], return_inverse=True)
+        inverse = inverse.ravel()
+        eps = max(_TIME_EPS, 8 * float(np.spacing(np.abs(obj_t).max()))) / window  # in windows
+
+        # First and last time of every object: sort by object, reduce per block.
+        order = np.argsort(inverse, kind="stable")
+        starts = np.searchsorted(inverse[order], np.arange(len(instances)))
+        t_sorted = obj_t[order]
+        t0 = np.minimum.reduceat(t_sorted, starts)
+        t1 = np.maximum.reduceat(t_sorted, starts)
+        n_windows = np.floor((t1 - t0) / window + eps).astype(np.int64)
+
+        # Window k of each detection; keep those in a complete window (k < n_windows).
+        k = np.floor((obj_t - t0[inverse]) / window + eps).astype(np.int64)
+        complete = k < n_windows[inverse]
+        if not np.any(complete):
+            return
+        offsets = np.concatenate(([0], np.cumsum(n_windows)[:-1]))
+        keys, cell, n = np.unique(offsets[inverse[complete]] + k[complete], return_inverse=True, return_counts=True)
+
+        # Back from the flat key to (object, k); keys are sorted, hence so are the cells.
+        owner = np.searchsorted(offsets, keys, side="right") - 1
+        self.rows = object_rows[complete]
+        self.cell = cell.ravel().astype(np.int64)
+        self.instance = instances[owner].astype(np.int64)
+        self.start_s = t0[owner] + (keys - offsets[owner]) * window
+        self.n = n.astype(np.int64)
+
+    def kept(self, keep):
+        """Kept detections per window."""
+        return np.bincount(self.cell, weights=keep[self.rows], minlength=len(self.n)).astype(np.int64)
+
+    def errors(self, kept, min_kept):
+        """Error flag per window: ``kept / n < min_kept``."""
+        return kept / np.maximum(self.n, 1) < min_kept
+
+
+def filter_errors(keep, target, t, window=0.15, min_kept=0.75) -> int:
+    """Number of (object, time window) cases in which an object lost too many detections.
+
+    The paper's optimisation criterion for the filter (Table I): the number
+    of times a labelled road user kept less than ``min_kept`` (75 %) of its
+    detections during a whole time window of ``window`` (150 ms).  Windows
+    are defined per object from its first detection on, and only complete
+    windows count; see :func:`filter_error_windows` for the exact rule and
+    for the windows themselves.
+
+    Parameters
+    ----------
+    keep : array-like of bool, shape (n_detections,)
+        Filter output, False = removed.
+    target : array-like of int, shape (n_detections,)
+        Instance id per detection, -1 for background.
+    t : array-like of float, shape (n_detections,)
+        Detection time, s.
+    window : float, default=0.15
+        Window length, s.
+    min_kept : float, default=0.75
+        Share of an object's detections in a window that must be kept.
+
+    Returns
+    -------
+    errors : int
+        ``filter_error_windows(...)["error"].sum()``.
+
+    Examples
+    --------
+    >>> from sklearn_radar.evaluation import filter_errors
+    >>> t = [0.00, 0.05, 0.10, 0.15, 0.20, 0.30]       # one object, s
+    >>> keep = [True, False, False, True, True, True]  # window [0, 0.15): 1 of 3 kept
+    >>> filter_errors(keep, [0] * 6, t)
+    1
+    """
+    return int(filter_error_windows(keep, target, t, window, min_kept)["error"].sum())
+
+
+# ----------------------------------------------------------------------------
+# Grid enumeration (Table I) and settings (Table II)
+# ----------------------------------------------------------------------------
+def _working_columns(X, frame):
+    """FrameTransform once; the float64 arrays the filter reads."""
+    if not isinstance(X, pd.DataFrame):
+        raise ValueError(f"X must be the detection DataFrame, got {type(X).__name__}")
+    Xt = FrameTransform(frame=frame).fit_transform(X)
+    columns = {name: Xt[name].to_numpy(dtype=np.float64) for name in ("x", "y", "v_r", "t")}
+    columns["sequence"] = Xt["sequence"].to_numpy(dtype=np.float64) if "sequence" in Xt.columns else None
+    return columns
+
+
+def _counts(c, d_xy, dt, causal, cap):
+    # n_jobs=1 inside: the parallelism is over d_xy (or settings) outside.
+    return neighbor_counts(c["x"], c["y"], c["t"], c["sequence"], float(d_xy), dt, causal, cap, 1)
+
+
+def _scores(c, counts, vr_threshold, target, ratios, n_min, windows, min_kept):
+    """(errors, background share removed, object share removed) of one setting."""
+    keep = doppler_density_keep(c["v_r"], counts, float(vr_threshold), ratios, n_min)
+    rates = filter_removal_rates(keep, target)
+    errors = int(np.count_nonzero(windows.errors(windows.kept(keep), min_kept)))
+    return errors, rates["background_removed"], rates["objects_removed"]
+
+
+def _check_common(X, target, dt, causal, threshold_ratios, min_neighbors, window, min_kept, verbose):
+    if not isinstance(X, pd.DataFrame):
+        raise ValueError(f"X must be the raw detection DataFrame, got {type(X).__name__}")
+    target = _as_target(target, len(X))
+    if not isinstance(dt, Real) or not np.isfinite(dt) or dt < 0:
+        raise ValueError(f"dt must be a non-negative number of seconds, got {dt!r}")
+    if not isinstance(causal, (bool, np.bool_)):
+        raise ValueError(f"causal must be a bool, got {causal!r}")
+    if not isinstance(verbose, Integral):
+        raise ValueError(f"verbose must be an int, got {verbose!r}")
+    _check_window(window, min_kept)
+    ratios, n_min = _check_rule(threshold_ratios, min_neighbors)
+    return target, ratios, n_min
+
+
+def filter_grid(
+    X,
+    target,
+    vr_thresholds=(0.05, 0.10, 0.15, 0.20, 0.25, 0.30, 0.35),
+    d_xys=(0.8, 1.0, 1.2, 1.4, 1.6, 1.8, 2.0),
+    *,
+    frame="frame",
+    dt=0.25,
+    causal=False,
+    threshold_ratios=(1, 5, 10, 50),
+    min_neighbors=(2, 3, 4, 10),
+    window=0.15,
+    min_kept=0.75,
+    n_jobs=None,
+    verbose=0,
+) -> Bunch:
+    """Enumerate the filter's two tuning parameters: the paper's Table I.
+
+    For every pair of Doppler threshold ``eta_1`` (``vr_threshold``) and
+    spatial radius ``d_xy`` this runs the filter of Eq. 1 and measures the
+    errors (:func:`filter_errors`) and the removal rates
+    (:func:`filter_removal_rates`).  The result for a cell equals running
+    ``DopplerDensityFilter(vr_threshold=..., d_xy=..., dt=dt, causal=causal,
+    threshold_ratios=..., min_neighbors=...)`` after
+    ``FrameTransform(frame=frame)``, but the work is shared: the frame
+    transform runs once, the neighbour counts once per ``d_xy`` (they do not
+    depend on the Doppler threshold) and only Eq. 1 itself per cell.
+
+    Parameters
+    ----------
+    X : DataFrame
+        Raw detection table (:mod:`sklearn_radar._schema`), e.g.
+        ``make_scenes(...).data``; :class:`~sklearn_radar.FrameTransform`
+        is applied here.
+    target : array-like of int, shape (n_detections,)
+        Instance id per detection, -1 for background, unique across
+        sequences.
+    vr_thresholds : sequence of float, default=(0.05, 0.10, ..., 0.35)
+        Values of ``eta_1``, m/s (the paper: 0.05 to 0.35 m/s).
+    d_xys : sequence of float, default=(0.8, 1.0, ..., 2.0)
+        Values of ``d_xy``, m (the paper: 0.8 to 2.0 m).
+    frame : {"frame", "car"}, default="frame"
+        Coordinate system: "frame" (FCS) or "car" (CCS).
+    dt : float, default=0.25
+        Neighbour time window, s.
+    causal : bool, default=False
+        Count only neighbours at or before a detection's time.
+    threshold_ratios : sequence of float, default=(1, 5, 10, 50)
+        ``eta_1 / eta_i``.
+    min_neighbors : sequence of int, default=(2, 3, 4, 10)
+        ``N_i``; the neighbour counts are capped at their maximum.
+    window : float, default=0.15
+        Error window, s.
+    min_kept : float, default=0.75
+        Share of an object's detections per window that must be kept.
+    n_jobs : int, default=None
+        Number of ``d_xy`` values processed in parallel (joblib threads; the
+        neighbour-count kernel releases the GIL).  None means 1, -1 all
+        cores.
+    verbose : int, default=0
+        If > 0, print one line per finished ``d_xy`` to stdout.
+
+    Returns
+    -------
+    result : Bunch
+        ``errors`` : DataFrame of int
+            Error count per cell, index ``vr_threshold`` (m/s), columns
+            ``d_xy`` (m): Table I.
+        ``background_removed``, ``objects_removed`` : DataFrame of float
+            Shares in [0, 1] on the same grid.
+        ``frame`` : str
+        ``n_background``, ``n_objects`` : int
+        ``elapsed_s`` : float
+            Wall time of the enumeration, s.
+
+    See Also
+    --------
+    filter_settings_table : Table II for chosen settings.
+    plot_filter_errors : heatmap of ``result.errors``.
+
+    Examples
+    --------
+    >>> from sklearn_radar.datasets import make_scenes
+    >>> from sklearn_radar.evaluation import filter_grid
+    >>> scenes = make_scenes(n_sequences=1, duration=3.0, random_state=0)
+    >>> grid = filter_grid(scenes.data, scenes.target, (0.1, 0.2), (1.0, 1.4))
+    >>> grid.errors.shape
+    (2, 2)
+    """
+    start = time.perf_counter()
+    target, ratios, n_min = _check_common(
+        X, target, dt, causal, threshold_ratios, min_neighbors, window, min_kept, verbose
+    )
+    vr_values = _check_grid(vr_thresholds, "vr_thresholds", allow_zero=True)
+    d_values = _check_grid(d_xys, "d_xys", allow_zero=False)
+    c = _working_columns(X, frame)
+    windows = _Windows(target, c["t"], window)  # independent of the filter setting
+    cap = int(n_min.max())
+
+    def column(j):
+        counts = _counts(c, d_values[j], dt, causal, cap)
+        return j, [_scores(c, counts, vr, target, ratios, n_min, windows, min_kept) for vr in vr_values]
+
+    errors = np.zeros((len(vr_values), len(d_values)), dtype=np.int64)
+    background = np.zeros(errors.shape)
+    objects = np.zeros(errors.shape)
+    results = Parallel(n_jobs=n_jobs, prefer="threads", return_as="generator_unordered")(
+        delayed(column)(j) for j in range(len(d_values))
+    )
+    for done, (j, cells) in enumerate(results, start=1):
+        errors[:, j], background[:, j], objects[:, j] = (np.array(v) for v in zip(*cells))
+        if verbose > 0:
+            print(f"filter grid [{frame}] d_xy={d_values[j]:.2f} m: {done}/{len(d_values)} done", flush=True)
+
+    index = pd.Index(vr_values, name="vr_threshold")
+    columns = pd.Index(d_values, name="d_xy")
+    rates = filter_removal_rates(np.ones(len(target), bool), target)
+    return Bunch(
+        errors=pd.DataFrame(errors, index=index, columns=columns),
+        background_removed=pd.DataFrame(background, index=index, columns=columns),
+        objects_removed=pd.DataFrame(objects, index=index, columns=columns),
+        frame=frame,
+        n_background=rates["n_background"],
+        n_objects=rates["n_objects"],
+        elapsed_s=time.perf_counter() - start,
+    )
+
+
+def filter_settings_table(
+    X,
+    target,
+    settings=None,
+    *,
+    frame="frame",
+    dt=0.25,
+    causal=False,
+    threshold_ratios=(1, 5, 10, 50),
+    min_neighbors=(2, 3, 4, 10),
+    window=0.15,
+    min_kept=0.75,
+    n_jobs=None,
+    verbose=0,
+) -> pd.DataFrame:
+    """Measure chosen filter settings beside the paper's numbers: Table II.
+
+    Parameters
+    ----------
+    X : DataFrame
+        Raw detection table; :class:`~sklearn_radar.FrameTransform` is
+        applied once per distinct frame.
+    target : array-like of int, shape (n_detections,)
+        Instance id per detection, -1 for background.
+    settings : DataFrame, default=None
+        One row per setting with the columns ``vr_threshold`` (m/s),
+        ``d_xy`` (m) and optionally ``frame`` ("frame" or "car"; the
+        ``frame`` argument where absent).  Other columns are carried
+        through.  None means :data:`PAPER_TABLE_II`.
+    frame : {"frame", "car"}, default="frame"
+        Frame of the settings that lack a ``frame`` column.
+    dt, causal, threshold_ratios, min_neighbors, window, min_kept
+        As in :func:`filter_grid`.
+    n_jobs : int, default=None
+        Distinct (frame, ``d_xy``) pairs processed in parallel (threads).
+    verbose : int, default=0
+        If > 0, print one line per finished (frame, ``d_xy``) pair.
+
+    Returns
+    -------
+    table : DataFrame
+        The columns of ``settings`` (for the default: ``frame``,
+        ``vr_threshold``, ``d_xy``, ``paper_removal_rate`` in percent,
+        ``paper_errors``) followed by the measured
+
+        ``removal_rate`` (float, percent of background detections removed),
+        ``object_removal_rate`` (float, percent of object detections
+        removed) and ``errors`` (int, :func:`filter_errors`).
+
+    Examples
+    --------
+    >>> from sklearn_radar.datasets import make_scenes
+    >>> from sklearn_radar.evaluation import filter_settings_table
+    >>> scenes = make_scenes(n_sequences=1, duration=3.0, random_state=0)
+    >>> table = filter_settings_table(scenes.data, scenes.target)
+    >>> list(table.columns)[-3:]
+    ['removal_rate', 'object_removal_rate', 'errors']
+    """
+    target, ratios, n_min = _check_common(
+        X, target, dt, causal, threshold_ratios, min_neighbors, window, min_kept, verbose
+    )
+    table = (PAPER_TABLE_II if settings is None else pd.DataFrame(settings)).copy().reset_index(drop=True)
+    missing = [name for name in ("vr_threshold", "d_xy") if name not in table.columns]
+    if missing:
+        raise ValueError(f"settings is missing the column(s) {missing}")
+    if "frame" not in table.columns:
+        table.insert(0, "frame", frame)
+    unknown = sorted(set(table["frame"]) - {"frame", "car"})
+    if unknown:
+        raise ValueError(f"settings: frame must be 'frame' or 'car', got {unknown}")
+    _check_grid(table["vr_threshold"].unique(), "settings vr_threshold", allow_zero=True)
+    _check_grid(table["d_xy"].unique(), "settings d_xy", allow_zero=False)
+
+    working = {name: _working_columns(X, name) for name in table["frame"].unique()}
+    # t does not depend on the frame, so neither do the error windows.
+    windows = _Windows(target, next(iter(working.values()))["t"], window)
+    cap = int(n_min.max())
+    groups = list(table.groupby(["frame", "d_xy"], sort=False).groups.items())
+
+    def measure(frame_name, d_xy, rows):
+        c = working[frame_name]
+        counts = _counts(c, d_xy, dt, causal, cap)
+        vr = table.loc[rows, "vr_threshold"].to_numpy(dtype=np.float64)
+        return rows, [_scores(c, counts, v, target, ratios, n_min, windows, min_kept) for v in vr], frame_name, d_xy
+
+    table["removal_rate"] = np.nan
+    table["object_removal_rate"] = np.nan
+    table["errors"] = 0
+    results = Parallel(n_jobs=n_jobs, prefer="threads", return_as="generator_unordered")(
+        delayed(measure)(f, d, rows) for (f, d), rows in groups
+    )
+    for done, (rows, cells, frame_name, d_xy) in enumerate(results, start=1):
+        errors, background, objects = (np.array(v) for v in zip(*cells))
+        table.loc[rows, "removal_rate"] = 100.0 * background
+        table.loc[rows, "object_removal_rate"] = 100.0 * objects
+        table.loc[rows, "errors"] = errors
+        if verbose > 0:
+            print(f"filter settings [{frame_name}] d_xy={d_xy:.2f} m: {done}/{len(groups)} done", flush=True)
+    table["errors"] = table["errors"].astype(np.int64)
+    return table
+
+
+# ----------------------------------------------------------------------------
+# Plot
+# ----------------------------------------------------------------------------
+def plot_filter_errors(errors, ax=None, chosen=(0.10, 1.4)):
+    """Heatmap of the filter error matrix (Table I).
+
+    Parameters
+    ----------
+    errors : DataFrame
+        Error counts with index ``vr_threshold`` (m/s) and columns ``d_xy``
+        (m), e.g. ``filter_grid(...).errors``.
+    ax : matplotlib Axes, default=None
+        Axes to draw into; a new figure when None.
+    chosen : tuple of (vr_threshold, d_xy), default=(0.10, 1.4)
+        Setting marked with an asterisk (the paper's choice); None for no
+        mark.  Matched to the grid with a tolerance of 1e-9.
+
+    Returns
+    -------
+    ax : matplotlib Axes
+        With one text per cell (its count), the asterisk as one more text,
+        ``d_xy`` on x, ``vr_threshold`` on y (increasing upwards) and a
+        colour bar.
+
+    Raises
+    ------
+    ImportError
+        When matplotlib is not installed.
+    ValueError
+        When ``chosen`` is not a cell of the grid.
+    """
+    try:
+        import matplotlib.pyplot as plt
+    except ImportError as exc:  # pragma: no cover - depends on the environment
+        raise ImportError(
+            "plot_filter_errors needs matplotlib, an optional dependency of sklearn-radar; "
+            "install it with `pip install matplotlib` or `pip install sklearn-radar[plot]`."
+        ) from exc
+    if not isinstance(errors, pd.DataFrame):
+        raise ValueError(f"errors must be a DataFrame (vr_threshold x d_xy), got {type(errors).__name__}")
+    values = errors.to_numpy(dtype=np.float64)
+    vr_values = np.asarray(errors.index, dtype=np.float64)
+    d_values = np.asarray(errors.columns, dtype=np.float64)
+    if ax is None:
+        _, ax = plt.subplots(figsize=(1.0 + 0.8 * len(d_values), 0.8 + 0.6 * len(vr_values)))
+
+    image = ax.imshow(values, origin="lower", aspect="auto", cmap="Reds", interpolation="nearest")
+    ax.figure.colorbar(image, ax=ax, label="errors (object windows below min. kept share)")
+    ax.set_xticks(np.arange(len(d_values)), [f"{d:g}" for d in d_values])
+    ax.set_yticks(np.arange(len(vr_values)), [f"{v:g}" for v in vr_values])
+    ax.set_xlabel(r"$d_{xy}$ (m)")
+    ax.set_ylabel(r"$\eta_{v_r,1}$ = vr_threshold (m/s)")
+
+    finite = values[np.isfinite(values)]
+    high = finite.max() if finite.size else 0.0
+    for i in range(len(vr_values)):
+        for j in range(len(d_values)):
+            value = values[i, j]
+            dark = high > 0 and np.isfinite(value) and value > 0.6 * high
+            label = f"{value:g}" if np.isfinite(value) else "-"
+            ax.text(j, i, label, ha="center", va="center", color="white" if dark else "black")
+
+    if chosen is not None:
+        vr_chosen, d_chosen = chosen
+        rows = np.flatnonzero(np.isclose(vr_values, vr_chosen, rtol=0, atol=1e-9))
+        cols = np.flatnonzero(np.isclose(d_values, d_chosen, rtol=0, atol=1e-9))
+        if len(rows) == 0 or len(cols) == 0:
+            raise ValueError(f"chosen={chosen!r} is not a cell of the error grid")
+        i, j = rows[0], cols[0]
+        dark = high > 0 and values[i, j] > 0.6 * high
+        ax.text(j + 0.3, i + 0.25, "*", ha="center", va="center", fontsize="x-large", fontweight="bold",
+                color="white" if dark else "black")
+    ax.set_title("Filter errors per setting (* chosen)")
+    return ax
