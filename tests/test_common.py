@@ -37,6 +37,7 @@ def _expected_failed_checks(estimator):
         DopplerDensityFilter(),
         RadarDBSCAN(),
         RadarDBSCAN(metric="xyv", alpha_r=0.5, vr_min=-np.inf),
+        RadarDBSCAN(metric="xy", causal=True, vr_min=-np.inf),
     ],
     expected_failed_checks=_expected_failed_checks,
 )

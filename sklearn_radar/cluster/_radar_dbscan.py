@@ -11,7 +11,7 @@ from sklearn.utils._param_validation import Interval, StrOptions
 
 from .._neighbors import build_grid
 from .._validation import read_columns, sequence_slices
-from ._radar_dbscan_kernels import METRIC_CODES, dbscan_sorted
+from ._radar_dbscan_kernels import METRIC_CODES, causal_sequence, causal_update, dbscan_sorted
 
 _REQUIRED = ("x", "y", "v_r", "t")
 _OPTIONAL = ("sequence", "keep", "range_sc", "heading")
@@ -92,6 +92,13 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
     vr_min : float, default=0.4
         Only detections with ``|v_r| > vr_min`` (m/s) can be core points;
         ``-inf`` lets every detection be one.
+    causal : bool, default=False
+        If True, :meth:`fit` labels each scan as the real-time stream of
+        :meth:`partial_fit` would: a detection's neighbours are only the
+        detections at or before its time, its core status and label are
+        decided when its scan arrives and never revised, and clusters that
+        meet keep the older id.  If False, the whole time window around each
+        detection (``|dt| <= eps_t``, past and future) is used.
     n_jobs : int, default=None
         Sequences clustered in parallel (joblib threads).
 
@@ -139,6 +146,7 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
         "alpha_r": [Interval(Real, 0, 1, closed="both")],
         "range_scaling": [StrOptions({"reciprocal", "linear"})],
         "vr_min": [Real],
+        "causal": ["boolean"],
         "n_jobs": [None, Integral],
     }
 
@@ -154,6 +162,7 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
         alpha_r=0.0,
         range_scaling="reciprocal",
         vr_min=0.4,
+        causal=False,
         n_jobs=None,
     ):
         self.metric = metric
@@ -166,6 +175,7 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
         self.alpha_r = alpha_r
         self.range_scaling = range_scaling
         self.vr_min = vr_min
+        self.causal = causal
         self.n_jobs = n_jobs
 
     @_fit_context(prefer_skip_nested_validation=True)
@@ -184,19 +194,17 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
         self : RadarDBSCAN
         """
         X, c = read_columns(self, X, _REQUIRED, _OPTIONAL, reset=True)
-        if self.alpha_r > 0 and c["range_sc"] is None:
-            raise ValueError("RadarDBSCAN: alpha_r > 0 needs the column 'range_sc' (range to the sensor, m)")
+        self.__dict__.pop("_stream", None)  # a batch fit ends any stream
         n = len(c["x"])
-        active = np.ones(n, dtype=bool) if c["keep"] is None else c["keep"] != 0
-        min_points = self._min_points(c["range_sc"], n)
-        can_be_core = active & (np.abs(c["v_r"]) > self.vr_min)
+        active, min_points, can_be_core = self._point_rules(c)
         roots = np.full(n, -1, dtype=np.int64)
         core = np.zeros(n, dtype=bool)
         active_rows = np.flatnonzero(active)
         sequence = None if c["sequence"] is None else c["sequence"][active_rows]
         slices = [active_rows[part] for part in sequence_slices(sequence)]
+        cluster = self._cluster_sequence_causal if self.causal else self._cluster_sequence
         results = Parallel(n_jobs=self.n_jobs, prefer="threads")(
-            delayed(self._cluster_sequence)(rows, c, min_points, can_be_core) for rows in slices
+            delayed(cluster)(rows, c, min_points, can_be_core) for rows in slices
         )
         for rows, sequence_roots, sequence_core in results:
             found = sequence_roots >= 0
@@ -206,10 +214,98 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
         self.core_sample_indices_ = np.flatnonzero(core)
         return self
 
-    def _min_points(self, range_sc, n):
+    @_fit_context(prefer_skip_nested_validation=True)
+    def partial_fit(self, X, y=None):
+        """Label the next scan(s) of a live stream, using only the past.
+
+        Keeps, per sequence, the detections of the last ``eps_t`` seconds
+        and labels the new ones against them exactly as ``causal=True`` does
+        offline.  A cluster that continues keeps its id from call to call;
+        when two clusters meet, the older (smaller) id wins.  Ids are never
+        reused.  The first call starts the stream; :meth:`fit` ends it.
+
+        Parameters
+        ----------
+        X : DataFrame or array-like of shape (n_detections, n_columns)
+            One or more complete scans, not older than anything already
+            passed for their sequence.
+        y : None
+            Ignored.
+
+        Returns
+        -------
+        self : RadarDBSCAN
+            ``labels_`` holds the labels of the rows of X (-1 for noise).
+        """
+        first_call = not hasattr(self, "_stream")
+        X, c = read_columns(self, X, _REQUIRED, _OPTIONAL, reset=first_call)
+        if first_call:
+            self._stream = {}
+            self._next_id = 0
+        active, min_points, can_be_core = self._point_rules(c)
+        labels = np.full(len(c["x"]), -1, dtype=np.int64)
+        sequence = np.zeros(len(labels)) if c["sequence"] is None else c["sequence"]
+        heading = np.zeros(len(labels)) if c["heading"] is None else c["heading"]
+        eps_t = np.inf if self.eps_t is None else float(self.eps_t)
+        rows_in_time_order = np.lexsort((c["t"], sequence))
+        for rows in np.split(rows_in_time_order, np.flatnonzero(np.diff(sequence[rows_in_time_order]) != 0) + 1):
+            window = self._stream.setdefault(float(sequence[rows[0]]), _Window())
+            for scan in np.split(rows, np.flatnonzero(np.diff(c["t"][rows]) != 0) + 1):
+                scan = scan[active[scan]]
+                if len(scan) == 0:
+                    continue
+                if c["t"][scan[0]] < window.last_time:
+                    raise ValueError(
+                        f"RadarDBSCAN.partial_fit: column 't' goes back in time ({c['t'][scan[0]]} s after "
+                        f"{window.last_time} s in sequence {sequence[rows[0]]:g}); pass scans in time order"
+                    )
+                window.append(c, scan, heading, min_points, can_be_core, eps_t)
+                self._next_id = causal_update(
+                    window.x, window.y, window.v, window.t, window.cos_h, window.sin_h, window.min_points,
+                    window.can_be_core, window.core, window.cluster, window.first_new, self._next_id,
+                    METRIC_CODES[self.metric], float(self.eps_xy), float(self.eps_vr), float(self.vr_scale),
+                    float(self.eps_xyv), eps_t,
+                )  # fmt: skip
+                labels[scan] = window.cluster[window.first_new :]
+        self.labels_ = labels
+        return self
+
+    def _point_rules(self, c):
+        """Per detection: taking part (keep), N_min (Eq. 2) and whether it may be core."""
+        n = len(c["x"])
+        if self.alpha_r > 0 and c["range_sc"] is None:
+            raise ValueError("RadarDBSCAN: alpha_r > 0 needs the column 'range_sc' (range to the sensor, m)")
+        active = np.ones(n, dtype=bool) if c["keep"] is None else c["keep"] != 0
         if self.alpha_r == 0:
-            return np.full(n, float(self.min_samples))
-        return min_points_at_range(range_sc, self.min_samples, self.alpha_r, self.range_scaling)
+            min_points = np.full(n, float(self.min_samples))
+        else:
+            min_points = min_points_at_range(c["range_sc"], self.min_samples, self.alpha_r, self.range_scaling)
+        return active, min_points, active & (np.abs(c["v_r"]) > self.vr_min)
+
+    def _cluster_sequence_causal(self, rows, c, min_points, can_be_core):
+        """Offline-causal roots (as positions within ``rows``) and core flags of one sequence."""
+        order = np.argsort(c["t"][rows], kind="stable")
+        rows_sorted = rows[order]
+        t = c["t"][rows_sorted]
+        heading = np.zeros(len(rows)) if c["heading"] is None else c["heading"][rows_sorted]
+        emitted, core_sorted = causal_sequence(
+            np.ascontiguousarray(c["x"][rows_sorted]), np.ascontiguousarray(c["y"][rows_sorted]),
+            np.ascontiguousarray(c["v_r"][rows_sorted]), t - t.min() if len(t) else t,
+            np.cos(heading), np.sin(heading), np.ascontiguousarray(min_points[rows_sorted]),
+            np.ascontiguousarray(can_be_core[rows_sorted]), METRIC_CODES[self.metric], float(self.eps_xy),
+            float(self.eps_vr), float(self.vr_scale), float(self.eps_xyv),
+            np.inf if self.eps_t is None else float(self.eps_t),
+        )  # fmt: skip
+        # Express each emitted id as the position of the first detection that carried it.
+        roots = np.full(len(rows), -1, dtype=np.int64)
+        core = np.empty(len(rows), dtype=bool)
+        clustered = emitted >= 0
+        _, first = np.unique(emitted[clustered], return_index=True)
+        first_position = np.full(emitted.max() + 1 if clustered.any() else 0, -1, dtype=np.int64)
+        first_position[np.unique(emitted[clustered])] = order[np.flatnonzero(clustered)[first]]
+        roots[order[clustered]] = first_position[emitted[clustered]]
+        core[order] = core_sorted
+        return rows, roots, core
 
     def _cluster_sequence(self, rows, c, min_points, can_be_core):
         """Roots (positions within ``rows``, or -1) and core flags of one sequence."""
@@ -253,3 +349,30 @@ def _consecutive_labels(roots):
         rank[np.argsort(first, kind="stable")] = np.arange(len(first))
         labels[clustered] = rank[inverse.ravel()]
     return labels
+
+
+class _Window:
+    """The detections of one sequence within the last eps_t, for the stream."""
+
+    _FIELDS = ("x", "y", "v", "t", "cos_h", "sin_h", "min_points", "can_be_core", "core", "cluster")
+
+    def __init__(self):
+        for name, dtype in zip(self._FIELDS, [float] * 7 + [bool, bool, np.int64]):
+            setattr(self, name, np.zeros(0, dtype=dtype))
+        self.first_new = 0
+        self.last_time = -np.inf
+
+    def append(self, c, scan, heading, min_points, can_be_core, eps_t):
+        """Drop what is older than ``eps_t`` before the scan, then add the scan."""
+        now = c["t"][scan[0]]
+        keep = self.t >= now - eps_t
+        new = {
+            "x": c["x"][scan], "y": c["y"][scan], "v": c["v_r"][scan], "t": c["t"][scan],
+            "cos_h": np.cos(heading[scan]), "sin_h": np.sin(heading[scan]), "min_points": min_points[scan],
+            "can_be_core": can_be_core[scan], "core": np.zeros(len(scan), dtype=bool),
+            "cluster": np.full(len(scan), -1, dtype=np.int64),
+        }  # fmt: skip
+        for name in self._FIELDS:
+            setattr(self, name, np.concatenate([getattr(self, name)[keep], new[name]]))
+        self.first_new = int(keep.sum())
+        self.last_time = now

@@ -150,3 +150,139 @@ def dbscan_sorted(x, y, v, t, cos_h, sin_h, min_points, can_be_core, cell_x, cel
         if best >= 0:
             roots[i] = find(parent, best)
     return roots, core
+
+
+@numba.njit(cache=True, nogil=True)
+def _find_id(id_parent, a):
+    while id_parent[a] != a:
+        a = id_parent[a]
+    return a
+
+
+@numba.njit(cache=True, nogil=True)
+def causal_update(x, y, v, t, cos_h, sin_h, min_points, can_be_core, core, cluster, first_new, next_id,
+                  metric, eps_xy, eps_vr, vr_scale, eps_xyv, eps_t):  # fmt: skip
+    """Label one new scan against the sliding window before it, using only the past.
+
+    The arrays hold the window: points ``[0, first_new)`` are earlier
+    detections still within ``eps_t`` (their ``core`` flags and ``cluster``
+    ids are final), points ``[first_new, n)`` the new scan.  A new point is
+    core when it may be and has at least ``min_points - 1`` neighbours at or
+    before its time (itself counted, like the offline rule).  New core points
+    join their core neighbours; clusters that meet keep the oldest (smallest)
+    id and the window is relabelled.  A new non-core point joins its closest
+    core neighbour.  ``core`` and ``cluster`` are updated in place; returns
+    the next free cluster id.
+    """
+    n = len(x)
+    n_new = n - first_new
+    if n_new <= 0:
+        return next_id
+    for i in range(first_new, n):
+        if not can_be_core[i]:
+            continue
+        need = max(int(math.ceil(min_points[i])) - 1, 0)
+        count = 0
+        for j in range(n):
+            if count >= need:
+                break
+            if j != i and t[j] <= t[i] and t[i] - t[j] <= eps_t and _spatial_neighbor(
+                i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv
+            ):
+                count += 1
+        core[i] = count >= need
+
+    # Union-find over the new core points; links from them to old clusters.
+    parent = np.arange(n_new)
+    id_parent = numba.typed.Dict.empty(key_type=numba.int64, value_type=numba.int64)
+    link_root = numba.typed.List.empty_list(numba.int64)
+    link_id = numba.typed.List.empty_list(numba.int64)
+    for i in range(first_new, n):
+        if not core[i]:
+            continue
+        for j in range(n):
+            if j == i or not core[j] or t[i] - t[j] > eps_t or t[j] > t[i]:
+                continue
+            if not _spatial_neighbor(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv):
+                continue
+            if j >= first_new:
+                union_keep_smaller(parent, i - first_new, j - first_new)
+            else:
+                link_root.append(i - first_new)
+                link_id.append(cluster[j])
+                id_parent[cluster[j]] = cluster[j]
+    # Old clusters linked through one new component merge into the oldest id.
+    best = np.full(n_new, -1, dtype=np.int64)
+    for k in range(len(link_root)):
+        root = find(parent, link_root[k])
+        a = _find_id(id_parent, link_id[k])
+        if best[root] < 0:
+            best[root] = a
+        else:
+            b = _find_id(id_parent, best[root])
+            if a < b:
+                id_parent[b] = a
+            elif b < a:
+                id_parent[a] = b
+    for j in range(first_new):
+        if cluster[j] >= 0 and cluster[j] in id_parent:
+            cluster[j] = _find_id(id_parent, cluster[j])
+    final = np.full(n_new, -1, dtype=np.int64)
+    for i in range(first_new, n):
+        if not core[i]:
+            continue
+        root = find(parent, i - first_new)
+        if final[root] < 0:
+            if best[root] >= 0:
+                final[root] = _find_id(id_parent, best[root])
+            else:
+                final[root] = next_id
+                next_id += 1
+        cluster[i] = final[root]
+
+    for i in range(first_new, n):
+        if core[i]:
+            continue
+        closest, closest_distance = -1, np.inf
+        for j in range(n):
+            if j == i or not core[j] or t[i] - t[j] > eps_t or t[j] > t[i]:
+                continue
+            if not _spatial_neighbor(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv):
+                continue
+            d = _pair_distance(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv)
+            if d < closest_distance:
+                closest, closest_distance = j, d
+        cluster[i] = cluster[closest] if closest >= 0 else -1
+    return next_id
+
+
+@numba.njit(cache=True, nogil=True)
+def causal_sequence(x, y, v, t, cos_h, sin_h, min_points, can_be_core,
+                    metric, eps_xy, eps_vr, vr_scale, eps_xyv, eps_t):  # fmt: skip
+    """Offline-causal labels of one time-sorted sequence: each scan as the stream would see it.
+
+    Returns the label each detection receives when its scan arrives (cluster
+    ids never reused, oldest id kept on merges) and the core flags.
+    """
+    n = len(x)
+    core = np.zeros(n, dtype=np.bool_)
+    cluster = np.full(n, -1, dtype=np.int64)
+    emitted = np.full(n, -1, dtype=np.int64)
+    next_id = 0
+    start = 0
+    scan_start = 0
+    while scan_start < n:
+        scan_end = scan_start + 1
+        while scan_end < n and t[scan_end] == t[scan_start]:
+            scan_end += 1
+        while t[start] < t[scan_start] - eps_t:
+            start += 1
+        next_id = causal_update(
+            x[start:scan_end], y[start:scan_end], v[start:scan_end], t[start:scan_end],
+            cos_h[start:scan_end], sin_h[start:scan_end], min_points[start:scan_end],
+            can_be_core[start:scan_end], core[start:scan_end], cluster[start:scan_end],
+            scan_start - start, next_id, metric, eps_xy, eps_vr, vr_scale, eps_xyv, eps_t,
+        )  # fmt: skip
+        emitted[scan_start:scan_end] = cluster[scan_start:scan_end]
+        scan_start = scan_end
+    return emitted, core
