@@ -76,37 +76,69 @@ def count_neighbors(grid: GridIndex, radius, before, after, cap) -> np.ndarray:
 
 
 @numba.njit(cache=True, nogil=True)
-def _cell_range(cell_keys, cell_start, cell_end, key):
-    c = np.searchsorted(cell_keys, key)
-    if c < len(cell_keys) and cell_keys[c] == key:
-        return cell_start[c], cell_end[c]
-    return 0, 0
+def neighbor_cells(cell_keys, cell_start, cell_x, cell_y):
+    """For each occupied cell, the indices of its 3 x 3 neighbourhood in the cell table (-1: empty)."""
+    n_cells = len(cell_keys)
+    table = np.full((n_cells, 9), -1, dtype=np.int64)
+    for c in range(n_cells):
+        first = cell_start[c]
+        k = 0
+        for dx in range(-1, 2):
+            for dy in range(-1, 2):
+                key = (cell_x[first] + dx) * 4294967296 + (cell_y[first] + dy + 2147483648)
+                found = np.searchsorted(cell_keys, key)
+                if found < n_cells and cell_keys[found] == key:
+                    table[c, k] = found
+                k += 1
+    return table
+
+
+@numba.njit(cache=True, nogil=True)
+def point_cells(cell_start, cell_end, n):
+    """Cell index of every (sorted) point."""
+    cell = np.empty(n, dtype=np.int64)
+    for c in range(len(cell_start)):
+        cell[cell_start[c] : cell_end[c]] = c
+    return cell
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def time_range(times, start, end, t_low, t_high):
+    """Positions in [start, end) of a time-sorted run whose times lie in [t_low, t_high]."""
+    if end - start <= 16:  # short runs: a linear walk beats two binary searches
+        lo = start
+        while lo < end and times[lo] < t_low:
+            lo += 1
+        hi = lo
+        while hi < end and times[hi] <= t_high:
+            hi += 1
+        return lo, hi
+    lo = start + np.searchsorted(times[start:end], t_low, side="left")
+    hi = start + np.searchsorted(times[start:end], t_high, side="right")
+    return lo, hi
 
 
 @numba.njit(cache=True, nogil=True)
 def _count_capped(x, y, t, cell_x, cell_y, cell_keys, cell_start, cell_end, radius2, before, after, cap):
     n = len(x)
+    cells = neighbor_cells(cell_keys, cell_start, cell_x, cell_y)
+    point_cell = point_cells(cell_start, cell_end, n)
     counts = np.zeros(n, dtype=np.int64)
     for i in range(n):
         count = 0
-        for dx in range(-1, 2):
-            for dy in range(-1, 2):
-                key = (cell_x[i] + dx) * 4294967296 + (cell_y[i] + dy + 2147483648)
-                start, end = _cell_range(cell_keys, cell_start, cell_end, key)
-                if start == end:
-                    continue
-                lo = start + np.searchsorted(t[start:end], t[i] - before, side="left")
-                hi = start + np.searchsorted(t[start:end], t[i] + after, side="right")
-                for j in range(lo, hi):
-                    if j != i:
-                        ddx = x[j] - x[i]
-                        ddy = y[j] - y[i]
-                        if ddx * ddx + ddy * ddy <= radius2:
-                            count += 1
-                            if count >= cap:
-                                break
-                if count >= cap:
-                    break
+        for k in range(9):
+            c = cells[point_cell[i], k]
+            if c < 0:
+                continue
+            lo, hi = time_range(t, cell_start[c], cell_end[c], t[i] - before, t[i] + after)
+            for j in range(lo, hi):
+                if j != i:
+                    ddx = x[j] - x[i]
+                    ddy = y[j] - y[i]
+                    if ddx * ddx + ddy * ddy <= radius2:
+                        count += 1
+                        if count >= cap:
+                            break
             if count >= cap:
                 break
         counts[i] = count

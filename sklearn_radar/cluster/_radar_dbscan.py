@@ -314,9 +314,9 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
         t = c["t"][rows]
         t = t - t.min()  # small numbers: exact time-window edges
         eps_t = np.inf if self.eps_t is None else float(self.eps_t)
-        grid = build_grid(c["x"][rows], c["y"][rows], t, self._cell_size())
-        order = grid.order
         heading = np.zeros(len(rows)) if c["heading"] is None else c["heading"][rows]
+        grid = build_grid(c["x"][rows], c["y"][rows], t, self._cell_size(heading))
+        order = grid.order
         sorted_roots, sorted_core = dbscan_sorted(
             grid.x, grid.y, np.ascontiguousarray(c["v_r"][rows][order]), grid.t,
             np.cos(heading[order]), np.sin(heading[order]),
@@ -332,10 +332,11 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
         core[order] = sorted_core
         return rows, roots, core
 
-    def _cell_size(self):
+    def _cell_size(self, heading):
         """Grid cell side, m: the largest spatial reach of the criterion."""
         if self.metric == "box":
-            return self.eps_xy * np.sqrt(2.0)  # a rotated box reaches its corners
+            rotated = np.any(np.abs(np.sin(2.0 * heading)) > 1e-12)  # not a multiple of 90 degrees
+            return self.eps_xy * np.sqrt(2.0) if rotated else self.eps_xy  # a rotated box reaches its corners
         return self.eps_xy if self.metric == "xy" else self.eps_xyv
 
 

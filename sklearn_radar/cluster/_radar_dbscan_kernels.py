@@ -13,6 +13,8 @@ import math
 import numba
 import numpy as np
 
+from .._neighbors import neighbor_cells, point_cells, time_range
+
 BOX, XY, XYV = 0, 1, 2
 METRIC_CODES = {"box": BOX, "xy": XY, "xyv": XYV}
 
@@ -51,36 +53,6 @@ def _pair_distance(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_sc
 
 
 @numba.njit(cache=True, nogil=True)
-def neighbors_of(i, out, cap, only, x, y, v, t, cos_h, sin_h, cell_x, cell_y, cell_keys, cell_start, cell_end,
-                 metric, eps_xy, eps_vr, vr_scale, eps_xyv, t_before, t_after):  # fmt: skip
-    """Write up to ``cap`` neighbours of point i into ``out`` and return how many.
-
-    A neighbour j != i satisfies the criterion ``metric`` and
-    ``t_i - t_before <= t_j <= t_i + t_after``.  When ``only`` is non-empty,
-    only points with ``only[j]`` True are visited.
-    """
-    found = 0
-    for dx in range(-1, 2):
-        for dy in range(-1, 2):
-            key = (cell_x[i] + dx) * 4294967296 + (cell_y[i] + dy + 2147483648)
-            c = np.searchsorted(cell_keys, key)
-            if c >= len(cell_keys) or cell_keys[c] != key:
-                continue
-            start, end = cell_start[c], cell_end[c]
-            lo = start + np.searchsorted(t[start:end], t[i] - t_before, side="left")
-            hi = start + np.searchsorted(t[start:end], t[i] + t_after, side="right")
-            for j in range(lo, hi):
-                if j == i or (len(only) > 0 and not only[j]):
-                    continue
-                if _spatial_neighbor(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv):
-                    out[found] = j
-                    found += 1
-                    if found >= cap:
-                        return found
-    return found
-
-
-@numba.njit(cache=True, nogil=True)
 def find(parent, i):
     """Root of i, with path halving."""
     while parent[i] != i:
@@ -109,46 +81,80 @@ def dbscan_sorted(x, y, v, t, cos_h, sin_h, min_points, can_be_core, cell_x, cel
     ``min_points - 1`` neighbours: like scikit-learn, the point counts
     itself toward its (real-valued) minimum.  Core neighbours are joined;
     a non-core point joins the cluster of its closest core neighbour.
+    Passes 2 and 3 visit core points only, so static clutter that cannot be
+    core costs one capped count, however dense it is.
     """
     n = len(x)
-    out = np.empty(n, dtype=np.int64)
-    no_mask = np.zeros(0, dtype=np.bool_)
+    n_cells = len(cell_keys)
+    cells = neighbor_cells(cell_keys, cell_start, cell_x, cell_y)
+    point_cell = point_cells(cell_start, cell_end, n)
+
+    # Pass 1: core points, counting neighbours up to the number needed.
     core = np.zeros(n, dtype=np.bool_)
     for i in range(n):
         if not can_be_core[i]:
             continue
         need = max(int(math.ceil(min_points[i])) - 1, 0)
-        if need == 0:
-            core[i] = True
-            continue
-        found = neighbors_of(i, out, need, no_mask, x, y, v, t, cos_h, sin_h, cell_x, cell_y, cell_keys,
-                             cell_start, cell_end, metric, eps_xy, eps_vr, vr_scale, eps_xyv, eps_t, eps_t)  # fmt: skip
-        core[i] = found >= need
+        count = 0
+        for k in range(9):
+            c = cells[point_cell[i], k]
+            if c < 0 or count >= need:
+                continue
+            lo, hi = time_range(t, cell_start[c], cell_end[c], t[i] - eps_t, t[i] + eps_t)
+            for j in range(lo, hi):
+                if j != i and _spatial_neighbor(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv):
+                    count += 1
+                    if count >= need:
+                        break
+        core[i] = count >= need
 
+    # The core points keep the (cell, time) order: per cell, a contiguous run.
+    core_position = np.flatnonzero(core)
+    core_t = t[core_position]
+    core_start = np.zeros(n_cells, dtype=np.int64)
+    core_end = np.zeros(n_cells, dtype=np.int64)
+    for k in range(len(core_position)):
+        c = point_cell[core_position[k]]
+        if k == 0 or point_cell[core_position[k - 1]] != c:
+            core_start[c] = k
+        core_end[c] = k + 1
+
+    # Pass 2: join neighbouring core points; each pair is visited once, from its lower cell.
     parent = np.arange(n)
-    for i in range(n):
-        if not core[i]:
-            continue
-        found = neighbors_of(i, out, n, core, x, y, v, t, cos_h, sin_h, cell_x, cell_y, cell_keys,
-                             cell_start, cell_end, metric, eps_xy, eps_vr, vr_scale, eps_xyv, eps_t, eps_t)  # fmt: skip
-        for k in range(found):
-            if out[k] > i:
-                union_keep_smaller(parent, i, out[k])
+    for i in core_position:
+        own = point_cell[i]
+        for k in range(9):
+            c = cells[own, k]
+            if c < own or core_end[c] == core_start[c]:
+                continue
+            lo, hi = time_range(core_t, core_start[c], core_end[c], t[i] - eps_t, t[i] + eps_t)
+            for m in range(lo, hi):
+                j = core_position[m]
+                if (c > own or j > i) and _spatial_neighbor(
+                    i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv
+                ):
+                    union_keep_smaller(parent, i, j)
 
+    # Pass 3: roots; a non-core point takes its closest core neighbour's.
     roots = np.full(n, -1, dtype=np.int64)
     for i in range(n):
         if core[i]:
             roots[i] = find(parent, i)
             continue
-        found = neighbors_of(i, out, n, core, x, y, v, t, cos_h, sin_h, cell_x, cell_y, cell_keys,
-                             cell_start, cell_end, metric, eps_xy, eps_vr, vr_scale, eps_xyv, eps_t, eps_t)  # fmt: skip
-        best, best_distance = -1, np.inf
-        for k in range(found):
-            d = _pair_distance(i, out[k], x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv)
-            if d < best_distance:
-                best, best_distance = out[k], d
-        if best >= 0:
-            roots[i] = find(parent, best)
+        closest, closest_distance = -1, np.inf
+        for k in range(9):
+            c = cells[point_cell[i], k]
+            if c < 0 or core_end[c] == core_start[c]:
+                continue
+            lo, hi = time_range(core_t, core_start[c], core_end[c], t[i] - eps_t, t[i] + eps_t)
+            for m in range(lo, hi):
+                j = core_position[m]
+                if _spatial_neighbor(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv):
+                    d = _pair_distance(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv)
+                    if d < closest_distance:
+                        closest, closest_distance = j, d
+        if closest >= 0:
+            roots[i] = find(parent, closest)
     return roots, core
 
 
