@@ -23,7 +23,6 @@ Every measurement runs in a child process of its own so that peak memory
 import argparse
 import json
 import os
-import resource
 import subprocess
 import sys
 import tempfile
@@ -40,20 +39,25 @@ SEPARATION = 1e6  # m added per sequence or window so that no neighbourhood cros
 
 
 def make_data(path, n_max):
-    """Simulated FCS detections (x, y, v_r, t, sequence), about n_max rows, saved to ``path``."""
+    """Simulated FCS detections (x, y, v_r, t, sequence, ...), about n_max rows, one .npy per column."""
     from sklearn_radar import FrameTransform
     from sklearn_radar.datasets import make_scenes
 
     n_sequences = max(1, int(np.ceil(n_max / 60_000)))
     scenes = make_scenes(n_sequences=n_sequences, duration=30.0, random_state=0)
     X = FrameTransform().fit_transform(scenes.data)
-    np.savez(path, **{name: X[name].to_numpy() for name in ("x", "y", "v_r", "t", "sequence", "range_sc")},
-             **{name: scenes.data[name].to_numpy() for name in ("timestamp",)})  # fmt: skip
+    os.makedirs(path, exist_ok=True)
+    for name in ("x", "y", "v_r", "t", "sequence", "range_sc", "timestamp"):
+        np.save(os.path.join(path, f"{name}.npy"), X[name].to_numpy())
 
 
 def load(path, n):
-    data = np.load(path)
-    return {name: data[name][:n] for name in data.files}
+    """The first n rows, read through a memory map so that only they occupy memory."""
+    return {
+        name[:-4]: np.array(np.load(os.path.join(path, name), mmap_mode="r")[:n])
+        for name in os.listdir(path)
+        if name.endswith(".npy")
+    }
 
 
 def window_features(d):
@@ -81,12 +85,43 @@ def euclid_features(d):
 # ----------------------------------------------------------------------------- children
 
 
+class PeakMemory:
+    """Peak growth of this process's resident memory (MB) while the block runs, sampled every 2 ms."""
+
+    def __enter__(self):
+        import threading
+
+        self._page = os.sysconf("SC_PAGE_SIZE")
+        self._start = self._peak = self._rss()
+        self._running = True
+        self._thread = threading.Thread(target=self._sample, daemon=True)
+        self._thread.start()
+        return self
+
+    def _rss(self):
+        with open("/proc/self/statm") as statm:
+            return int(statm.read().split()[1]) * self._page
+
+    def _sample(self):
+        while self._running:
+            self._peak = max(self._peak, self._rss())
+            time.sleep(0.002)
+
+    def __exit__(self, *exc):
+        self._running = False
+        self._thread.join()
+        self._peak = max(self._peak, self._rss())
+        self.mb = (self._peak - self._start) / 2**20
+
+
+
 def child(method, path, n, out):
     import pandas as pd
 
     d = load(path, n)
     frame = pd.DataFrame({k: d[k] for k in ("x", "y", "v_r", "t", "sequence")})
     result = {}
+    labels = core = np.zeros(0, dtype=np.int64)
     if method.startswith("ours"):
         from sklearn_radar import RadarDBSCAN
 
@@ -98,9 +133,11 @@ def child(method, path, n, out):
         else:
             params = WINDOW_PARAMS
         RadarDBSCAN(**params).fit(frame.iloc[:2000])  # JIT warm-up (compiled code is cached on disk)
-        start = time.perf_counter()
-        model = RadarDBSCAN(n_jobs=n_jobs, **params).fit(frame)
-        result["seconds"] = time.perf_counter() - start
+        with PeakMemory() as memory:
+            start = time.perf_counter()
+            model = RadarDBSCAN(n_jobs=n_jobs, **params).fit(frame)
+            result["seconds"] = time.perf_counter() - start
+        result["peak_mb"] = memory.mb
         labels, core = model.labels_, model.core_sample_indices_
     elif method.startswith("sklearn"):
         from sklearn.cluster import DBSCAN
@@ -112,31 +149,38 @@ def child(method, path, n, out):
         else:
             X = window_features(d)
             model = DBSCAN(eps=1.0, min_samples=3, metric="chebyshev")
-        start = time.perf_counter()
-        model.fit(X)
-        result["seconds"] = time.perf_counter() - start
+        with PeakMemory() as memory:
+            start = time.perf_counter()
+            model.fit(X)
+            result["seconds"] = time.perf_counter() - start
+        result["peak_mb"] = memory.mb
         labels, core = model.labels_, model.core_sample_indices_
     elif method == "dbscan:euclid":
         from dbscan import DBSCAN as parallel_dbscan
 
         X = euclid_features(d)
-        start = time.perf_counter()
-        labels, core_mask = parallel_dbscan(X, eps=1.0, min_samples=3)
-        result["seconds"] = time.perf_counter() - start
+        with PeakMemory() as memory:
+            start = time.perf_counter()
+            labels, core_mask = parallel_dbscan(X, eps=1.0, min_samples=3)
+            result["seconds"] = time.perf_counter() - start
+        result["peak_mb"] = memory.mb
         core = np.flatnonzero(core_mask)
-    elif method == "pipeline":
+    elif method.startswith("pipeline"):
         from sklearn_radar import DopplerDensityFilter, RadarDBSCAN
 
         frame["range_sc"] = d["range_sc"]
         DopplerDensityFilter().fit_transform(frame.iloc[:2000])
         RadarDBSCAN().fit(frame.iloc[:2000])
         params = dict(metric="xyv", eps_xyv=1.04, vr_scale=1.03, min_samples=3.87, alpha_r=0.99, vr_min=1.0)
-        start = time.perf_counter()
-        filtered = DopplerDensityFilter().fit_transform(frame)
-        labels = RadarDBSCAN(**params).fit(filtered).labels_
-        result["seconds"] = time.perf_counter() - start
-        core = np.zeros(0, dtype=np.int64)
+        n_jobs = int(method.split(":")[1])
+        with PeakMemory() as memory:
+            start = time.perf_counter()
+            filtered = DopplerDensityFilter(n_jobs=n_jobs).fit_transform(frame)
+            labels = RadarDBSCAN(n_jobs=n_jobs, **params).fit(filtered).labels_
+            result["seconds"] = time.perf_counter() - start
+        result["peak_mb"] = memory.mb
     elif method.startswith("dense"):
+        labels = core = None
         kind, n_dense = method.split(":")[1], int(method.split(":")[2])
         rng = np.random.default_rng(0)
         x = np.r_[d["x"], rng.uniform(0, 2, n_dense)]
@@ -149,40 +193,45 @@ def child(method, path, n, out):
 
             dense = pd.DataFrame({"x": x, "y": y, "v_r": v, "t": t, "sequence": s})
             RadarDBSCAN(**WINDOW_PARAMS).fit(dense.iloc[:2000])
-            start = time.perf_counter()
-            labels = RadarDBSCAN(**WINDOW_PARAMS).fit(dense).labels_
+            with PeakMemory() as memory:
+                start = time.perf_counter()
+                RadarDBSCAN(**WINDOW_PARAMS).fit(dense)
+                result["seconds"] = time.perf_counter() - start
         else:
             from sklearn.cluster import DBSCAN
 
             X = window_features({"x": x, "y": y, "v_r": v, "t": t, "sequence": s})
-            start = time.perf_counter()
-            labels = DBSCAN(eps=1.0, min_samples=3, metric="chebyshev").fit(X).labels_
-        result["seconds"] = time.perf_counter() - start
-        core = np.zeros(0, dtype=np.int64)
+            with PeakMemory() as memory:
+                start = time.perf_counter()
+                DBSCAN(eps=1.0, min_samples=3, metric="chebyshev").fit(X)
+                result["seconds"] = time.perf_counter() - start
+        result["peak_mb"] = memory.mb
+        labels = core = np.zeros(0, dtype=np.int64)
     elif method == "stream":
         from sklearn_radar import RadarDBSCAN
+        from sklearn_radar.cluster import ScanStream
 
-        frame["sequence"] = d["sequence"]
         params = dict(metric="xyv", eps_xyv=1.04, vr_scale=1.03, min_samples=3.87, vr_min=1.0)
-        first = frame["sequence"] == frame["sequence"].iloc[0]
-        scans = list(frame[first].groupby(d["timestamp"][first.to_numpy()], sort=True).indices.values())
-        model = RadarDBSCAN(**params)
-        for rows in scans[:50]:  # warm-up
-            model.partial_fit(frame.iloc[rows])
-        model = RadarDBSCAN(**params)
-        latencies = []
-        for rows in scans:
-            scan = frame.iloc[rows]
-            start = time.perf_counter()
-            model.partial_fit(scan)
-            latencies.append(time.perf_counter() - start)
-        result["latency_median"] = float(np.median(latencies))
-        result["latency_p99"] = float(np.quantile(latencies, 0.99))
+        first = (d["sequence"] == d["sequence"][0])
+        scans = list(pd.Series(np.arange(first.sum())).groupby(d["timestamp"][first], sort=True).indices.values())
+        arrays = [(d["x"][r], d["y"][r], d["v_r"][r], d["t"][r[0]]) for r in scans]
+        frames = [frame.iloc[r] for r in scans]
+        for kind in ("arrays", "frames"):
+            for warm_up in (True, False):
+                stream, model = ScanStream(RadarDBSCAN(**params)), RadarDBSCAN(**params)
+                latencies = []
+                for scan, scan_frame in zip(arrays, frames):
+                    start = time.perf_counter()
+                    stream.update(*scan) if kind == "arrays" else model.partial_fit(scan_frame)
+                    latencies.append(time.perf_counter() - start)
+                    if warm_up and len(latencies) == 50:
+                        break
+            result[f"{kind}_median"] = float(np.median(latencies))
+            result[f"{kind}_p99"] = float(np.quantile(latencies, 0.99))
         result["scans"] = len(scans)
         result["detections_per_scan"] = float(first.sum() / len(scans))
         result["seconds"] = float(np.sum(latencies))
-        labels = core = np.zeros(0, dtype=np.int64)
-    result["peak_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    result.setdefault("peak_mb", 0.0)
     np.savez(out, labels=labels, core=core)
     print(json.dumps(result))
 
@@ -224,8 +273,10 @@ def main():
         return child(method, path, int(n), out)
 
     with tempfile.TemporaryDirectory() as tmp:
-        path = os.path.join(tmp, "data.npz")
+        path = os.path.join(tmp, "data")
         make_data(path, max(args.sizes))
+        above = lambda r: r.get("peak_mb", float("nan"))  # noqa: E731
+        print("memory: peak growth of resident memory during the clustering call itself, MB\n")
         print("1. identical problems (detections/s; ratio = our speed / theirs; 'same' = identical clusters)")
         print(f"{'problem':<10} {'n':>9} {'ours 1 thr':>12} {'ours 2 thr':>12} {'sklearn':>12} {'dbscan pkg':>12}"
               f" {'x sklearn':>10} {'x dbscan':>9} {'same':>5} {'MB ours':>8} {'MB sklearn':>10}")  # fmt: skip
@@ -241,30 +292,34 @@ def main():
                 rate = lambda r: n / r["seconds"] if "seconds" in r else float("nan")  # noqa: E731
                 print(f"{problem:<10} {n:>9,} {rate(ours):>12,.0f} {rate(ours2):>12,.0f} {rate(ref):>12,.0f}"
                       f" {rate(pkg):>12,.0f} {rate(ours) / rate(ref):>9.1f}x {rate(ours) / rate(pkg):>8.2f}x"
-                      f" {str(same):>5} {ours.get('peak_mb', float('nan')):>8.0f} {ref.get('peak_mb', float('nan')):>10.0f}")  # fmt: skip
+                      f" {str(same):>5} {above(ours):>8.0f} {above(ref):>10.0f}")  # fmt: skip
                 for r in (ours, ref, pkg):
                     if "error" in r:
                         print("   error:", r["error"])
 
         n = max(args.sizes)
-        result, _ = run_child("pipeline", path, n)
-        print(f"\n2. DopplerDensityFilter + RadarDBSCAN (paper's best setting #8), {n:,} detections: "
-              f"{result['seconds']:.2f} s = {n / result['seconds']:,.0f} detections/s, peak {result['peak_mb']:.0f} MB")  # fmt: skip
+        for n_jobs in (1, 2):
+            result, _ = run_child(f"pipeline:{n_jobs}", path, n)
+            print(f"\n2. DopplerDensityFilter + RadarDBSCAN (paper's best setting #8), {n:,} detections, n_jobs={n_jobs}: "
+                  f"{result['seconds']:.2f} s = {n / result['seconds']:,.0f} detections/s, +{above(result):.0f} MB", end="")  # fmt: skip
+        print()
 
         print("\n3. dense static clutter: extra detections in 2 m x 2 m within 0.25 s, on top of 100,000")
         print(f"{'dense':>8} {'ours s':>8} {'ours MB':>8} {'sklearn s':>10} {'sklearn MB':>11}")
         for n_dense in (0, 5_000, 20_000):
             ours, _ = run_child(f"dense:ours:{n_dense}", path, 100_000)
             ref, _ = run_child(f"dense:sklearn:{n_dense}", path, 100_000)
-            print(f"{n_dense:>8,} {ours.get('seconds', float('nan')):>8.2f} {ours.get('peak_mb', float('nan')):>8.0f}"
-                  f" {ref.get('seconds', float('nan')):>10.2f} {ref.get('peak_mb', float('nan')):>11.0f}")  # fmt: skip
+            print(f"{n_dense:>8,} {ours.get('seconds', float('nan')):>8.2f} {above(ours):>8.0f}"
+                  f" {ref.get('seconds', float('nan')):>10.2f} {above(ref):>11.0f}")  # fmt: skip
 
         result, _ = run_child("stream", path, n)
         budget = 0.060 / 4
-        print(f"\n4. streaming (partial_fit, one scan per call, {result['scans']} scans, "
-              f"{result['detections_per_scan']:.1f} detections/scan): median {1e6 * result['latency_median']:.0f} µs, "
-              f"p99 {1e6 * result['latency_p99']:.0f} µs; budget 15 ms per scan -> "
-              f"{budget / result['latency_median']:.0f}x (median) / {budget / result['latency_p99']:.0f}x (p99) faster than real time")  # fmt: skip
+        print(f"\n4. streaming, one scan per call ({result['scans']} scans of {result['detections_per_scan']:.1f} "
+              f"detections); budget {1e3 * budget:.0f} ms per scan (60 ms cycle, 4 sensors)")  # fmt: skip
+        for kind, name in (("arrays", "ScanStream.update (arrays)"), ("frames", "partial_fit (DataFrame)")):
+            median, p99 = result[f"{kind}_median"], result[f"{kind}_p99"]
+            print(f"   {name:<28} median {1e6 * median:6.0f} µs ({budget / median:5.0f}x real time), "
+                  f"p99 {1e6 * p99:6.0f} µs ({budget / p99:5.0f}x)")
 
 
 if __name__ == "__main__":

@@ -11,7 +11,7 @@ from sklearn.utils._param_validation import Interval, StrOptions
 
 from .._neighbors import build_grid
 from .._validation import read_columns, sequence_slices
-from ._radar_dbscan_kernels import METRIC_CODES, causal_sequence, causal_update, dbscan_sorted
+from ._radar_dbscan_kernels import BOX_UNROTATED, METRIC_CODES, causal_sequence, causal_update, dbscan_sorted
 
 _REQUIRED = ("x", "y", "v_r", "t")
 _OPTIONAL = ("sequence", "keep", "range_sc", "heading")
@@ -240,34 +240,8 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
         first_call = not hasattr(self, "_stream")
         X, c = read_columns(self, X, _REQUIRED, _OPTIONAL, reset=first_call)
         if first_call:
-            self._stream = {}
-            self._next_id = 0
-        active, min_points, can_be_core = self._point_rules(c)
-        labels = np.full(len(c["x"]), -1, dtype=np.int64)
-        sequence = np.zeros(len(labels)) if c["sequence"] is None else c["sequence"]
-        heading = np.zeros(len(labels)) if c["heading"] is None else c["heading"]
-        eps_t = np.inf if self.eps_t is None else float(self.eps_t)
-        rows_in_time_order = np.lexsort((c["t"], sequence))
-        for rows in np.split(rows_in_time_order, np.flatnonzero(np.diff(sequence[rows_in_time_order]) != 0) + 1):
-            window = self._stream.setdefault(float(sequence[rows[0]]), _Window())
-            for scan in np.split(rows, np.flatnonzero(np.diff(c["t"][rows]) != 0) + 1):
-                scan = scan[active[scan]]
-                if len(scan) == 0:
-                    continue
-                if c["t"][scan[0]] < window.last_time:
-                    raise ValueError(
-                        f"RadarDBSCAN.partial_fit: column 't' goes back in time ({c['t'][scan[0]]} s after "
-                        f"{window.last_time} s in sequence {sequence[rows[0]]:g}); pass scans in time order"
-                    )
-                window.append(c, scan, heading, min_points, can_be_core, eps_t)
-                self._next_id = causal_update(
-                    window.x, window.y, window.v, window.t, window.cos_h, window.sin_h, window.min_points,
-                    window.can_be_core, window.core, window.cluster, window.first_new, self._next_id,
-                    METRIC_CODES[self.metric], float(self.eps_xy), float(self.eps_vr), float(self.vr_scale),
-                    float(self.eps_xyv), eps_t,
-                )  # fmt: skip
-                labels[scan] = window.cluster[window.first_new :]
-        self.labels_ = labels
+            self._stream = ScanStream(self)
+        self.labels_ = self._stream._label(c)
         return self
 
     def _point_rules(self, c):
@@ -322,7 +296,7 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
             np.cos(heading[order]), np.sin(heading[order]),
             np.ascontiguousarray(min_points[rows][order]), np.ascontiguousarray(can_be_core[rows][order]),
             grid.cell_x, grid.cell_y, grid.cell_keys, grid.cell_start, grid.cell_end,
-            METRIC_CODES[self.metric], float(self.eps_xy), float(self.eps_vr), float(self.vr_scale),
+            self._metric_code(heading), float(self.eps_xy), float(self.eps_vr), float(self.vr_scale),
             float(self.eps_xyv), eps_t,
         )  # fmt: skip
         roots = np.full(len(rows), -1, dtype=np.int64)
@@ -331,6 +305,12 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
         roots[order[found]] = order[sorted_roots[found]]
         core[order] = sorted_core
         return rows, roots, core
+
+    def _metric_code(self, heading):
+        """The kernel's criterion code; the box needs no rotation when every heading is 0."""
+        if self.metric == "box" and not np.any(heading):
+            return BOX_UNROTATED
+        return METRIC_CODES[self.metric]
 
     def _cell_size(self, heading):
         """Grid cell side, m: the largest spatial reach of the criterion."""
@@ -352,6 +332,115 @@ def _consecutive_labels(roots):
     return labels
 
 
+class ScanStream:
+    """Real-time RadarDBSCAN: label each new radar scan from the last ``eps_t`` seconds.
+
+    The low-overhead twin of :meth:`RadarDBSCAN.partial_fit` for use on a
+    vehicle: it takes plain arrays, keeps per sequence only the detections of
+    the last ``eps_t`` and gives every new detection the label the offline
+    ``causal=True`` mode gives it.  A cluster that continues keeps its id;
+    when clusters meet the older (smaller) id wins; ids are never reused.
+
+    Parameters
+    ----------
+    clusterer : RadarDBSCAN
+        Its parameters (read once, at construction) define the clustering.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from sklearn_radar.cluster import RadarDBSCAN, ScanStream
+    >>> stream = ScanStream(RadarDBSCAN(metric="xy", min_samples=2, vr_min=0.0))
+    >>> stream.update(x=[0.0, 0.3], y=[0.0, 0.0], v_r=[5.0, 5.0], t=0.0)
+    array([0, 0])
+    >>> stream.update(x=[0.5], y=[0.0], v_r=[5.0], t=0.06)
+    array([0])
+    """
+
+    def __init__(self, clusterer):
+        clusterer._validate_params()
+        self.clusterer = clusterer
+        self._windows = {}
+        self._next_id = 0
+        self._eps_t = np.inf if clusterer.eps_t is None else float(clusterer.eps_t)
+        self._criterion = (
+            METRIC_CODES[clusterer.metric], float(clusterer.eps_xy), float(clusterer.eps_vr),
+            float(clusterer.vr_scale), float(clusterer.eps_xyv), self._eps_t,
+        )  # fmt: skip
+
+    def update(self, x, y, v_r, t, *, sequence=0, keep=None, range_sc=None, heading=None):
+        """Labels of one or more new scans (-1: noise), in the order given.
+
+        Parameters
+        ----------
+        x, y : array-like of float, m
+            Working coordinates (see :class:`FrameTransform`).
+        v_r : array-like of float, m/s
+            Ego-motion-compensated radial velocity.
+        t : float or array-like of float, s
+            Scan time(s); never older than what was passed for the sequence.
+        sequence : int or array-like, default=0
+        keep : array-like of bool, default=None
+            False marks detections removed by the filter.
+        range_sc : array-like of float, m, default=None
+            Needed when ``alpha_r > 0``.
+        heading : array-like of float, rad, default=None
+            Car heading for the box criterion.
+
+        Returns
+        -------
+        labels : ndarray of int64
+        """
+        x = np.asarray(x, dtype=np.float64).ravel()
+        n = len(x)
+
+        def column(values, name):
+            if values is None:
+                return None
+            values = np.asarray(values, dtype=np.float64)
+            values = np.full(n, values) if values.ndim == 0 else values.ravel()
+            if len(values) != n or not np.isfinite(values).all():
+                raise ValueError(f"ScanStream.update: {name!r} must hold {n} finite values")
+            return values
+
+        c = {"x": column(x, "x"), "y": column(y, "y"), "v_r": column(v_r, "v_r"), "t": column(t, "t"),
+             "sequence": column(sequence, "sequence"), "keep": column(keep, "keep"),
+             "range_sc": column(range_sc, "range_sc"), "heading": column(heading, "heading")}  # fmt: skip
+        return self._label(c)
+
+    def _label(self, c):
+        active, min_points, can_be_core = self.clusterer._point_rules(c)
+        n = len(c["x"])
+        labels = np.full(n, -1, dtype=np.int64)
+        sequence = np.zeros(n) if c["sequence"] is None else c["sequence"]
+        heading = np.zeros(n) if c["heading"] is None else c["heading"]
+        one_scan = n > 0 and np.all(sequence == sequence[0]) and np.all(c["t"] == c["t"][0])
+        if one_scan:
+            groups = [np.arange(n)]
+        else:
+            order = np.lexsort((c["t"], sequence))
+            cut = np.flatnonzero((np.diff(sequence[order]) != 0) | (np.diff(c["t"][order]) != 0)) + 1
+            groups = np.split(order, cut)
+        for scan in groups:
+            scan = scan[active[scan]]
+            if len(scan) == 0:
+                continue
+            key = float(sequence[scan[0]])
+            window = self._windows.get(key) or self._windows.setdefault(key, _Window())
+            if c["t"][scan[0]] < window.last_time:
+                raise ValueError(
+                    f"RadarDBSCAN stream: column 't' goes back in time ({c['t'][scan[0]]} s after "
+                    f"{window.last_time} s in sequence {sequence[scan[0]]:g}); pass scans in time order"
+                )
+            window.append(c, scan, heading, min_points, can_be_core, self._eps_t)
+            self._next_id = causal_update(
+                window.x, window.y, window.v, window.t, window.cos_h, window.sin_h, window.min_points,
+                window.can_be_core, window.core, window.cluster, window.first_new, self._next_id, *self._criterion,
+            )  # fmt: skip
+            labels[scan] = window.cluster[window.first_new :]
+        return labels
+
+
 class _Window:
     """The detections of one sequence within the last eps_t, for the stream."""
 
@@ -366,7 +455,7 @@ class _Window:
     def append(self, c, scan, heading, min_points, can_be_core, eps_t):
         """Drop what is older than ``eps_t`` before the scan, then add the scan."""
         now = c["t"][scan[0]]
-        keep = self.t >= now - eps_t
+        first_kept = int(np.searchsorted(self.t, now - eps_t, side="left"))  # the window is time-sorted
         new = {
             "x": c["x"][scan], "y": c["y"][scan], "v": c["v_r"][scan], "t": c["t"][scan],
             "cos_h": np.cos(heading[scan]), "sin_h": np.sin(heading[scan]), "min_points": min_points[scan],
@@ -374,6 +463,6 @@ class _Window:
             "cluster": np.full(len(scan), -1, dtype=np.int64),
         }  # fmt: skip
         for name in self._FIELDS:
-            setattr(self, name, np.concatenate([getattr(self, name)[keep], new[name]]))
-        self.first_new = int(keep.sum())
+            setattr(self, name, np.concatenate([getattr(self, name)[first_kept:], new[name]]))
+        self.first_new = len(self.t) - len(scan)
         self.last_time = now

@@ -15,7 +15,7 @@ import numpy as np
 
 from .._neighbors import neighbor_cells, point_cells, time_range
 
-BOX, XY, XYV = 0, 1, 2
+BOX, XY, XYV, BOX_UNROTATED = 0, 1, 2, 3
 METRIC_CODES = {"box": BOX, "xy": XY, "xyv": XYV}
 
 
@@ -25,6 +25,8 @@ def _spatial_neighbor(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr
     dx = x[j] - x[i]
     dy = y[j] - y[i]
     dv = v[j] - v[i]
+    if metric == BOX_UNROTATED:  # every heading is 0: the box axes are the x-y axes
+        return abs(dx) < eps_xy and abs(dy) < eps_xy and abs(dv) < eps_vr
     if metric == BOX:
         # Box axes: the car frame of the later detection of the pair (the newest scan of a sliding window).
         k = i if t[i] >= t[j] else j
@@ -42,6 +44,8 @@ def _pair_distance(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_sc
     dx = x[j] - x[i]
     dy = y[j] - y[i]
     dv = abs(v[j] - v[i])
+    if metric == BOX_UNROTATED:
+        return max(abs(dx) / eps_xy, abs(dy) / eps_xy, dv / eps_vr)
     if metric == BOX:
         k = i if t[i] >= t[j] else j
         along = abs(cos_h[k] * dx + sin_h[k] * dy)
@@ -102,7 +106,9 @@ def dbscan_sorted(x, y, v, t, cos_h, sin_h, min_points, can_be_core, cell_x, cel
                 continue
             lo, hi = time_range(t, cell_start[c], cell_end[c], t[i] - eps_t, t[i] + eps_t)
             for j in range(lo, hi):
-                if j != i and _spatial_neighbor(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv):
+                if j == i:
+                    continue
+                if _spatial_neighbor(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv):
                     count += 1
                     if count >= need:
                         break
@@ -130,9 +136,9 @@ def dbscan_sorted(x, y, v, t, cos_h, sin_h, min_points, can_be_core, cell_x, cel
             lo, hi = time_range(core_t, core_start[c], core_end[c], t[i] - eps_t, t[i] + eps_t)
             for m in range(lo, hi):
                 j = core_position[m]
-                if (c > own or j > i) and _spatial_neighbor(
-                    i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv
-                ):
+                if c == own and j <= i:
+                    continue
+                if _spatial_neighbor(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv):
                     union_keep_smaller(parent, i, j)
 
     # Pass 3: roots; a non-core point takes its closest core neighbour's.
@@ -158,11 +164,25 @@ def dbscan_sorted(x, y, v, t, cos_h, sin_h, min_points, can_be_core, cell_x, cel
     return roots, core
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _past_neighbor(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv, eps_t):
+    """j is a neighbour of i at or before i's time (the causal neighbourhood)."""
+    # Plain ifs: the same test as one chained boolean expression compiled 8x slower.
+    if j == i:
+        return False
+    lag = t[i] - t[j]
+    if lag < 0.0 or lag > eps_t:
+        return False
+    return _spatial_neighbor(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv)
+
+
 @numba.njit(cache=True, nogil=True)
-def _find_id(id_parent, a):
-    while id_parent[a] != a:
-        a = id_parent[a]
-    return a
+def _local_id(ids, n_ids, cluster_id):
+    """Position of ``cluster_id`` among the first ``n_ids`` entries of ``ids`` (-1 if absent)."""
+    for k in range(n_ids):
+        if ids[k] == cluster_id:
+            return k
+    return -1
 
 
 @numba.njit(cache=True, nogil=True)
@@ -192,47 +212,52 @@ def causal_update(x, y, v, t, cos_h, sin_h, min_points, can_be_core, core, clust
         for j in range(n):
             if count >= need:
                 break
-            if j != i and t[j] <= t[i] and t[i] - t[j] <= eps_t and _spatial_neighbor(
-                i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv
-            ):
+            if _past_neighbor(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv, eps_t):
                 count += 1
         core[i] = count >= need
 
-    # Union-find over the new core points; links from them to old clusters.
+    # Phase A: components of the new core points among themselves.
     parent = np.arange(n_new)
-    id_parent = numba.typed.Dict.empty(key_type=numba.int64, value_type=numba.int64)
-    link_root = numba.typed.List.empty_list(numba.int64)
-    link_id = numba.typed.List.empty_list(numba.int64)
+    for i in range(first_new, n):
+        if core[i]:
+            for j in range(i + 1, n):
+                if not core[j]:
+                    continue
+                if _spatial_neighbor(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv):
+                    union_keep_smaller(parent, i - first_new, j - first_new)
+    # Phase B: old clusters touched by a component merge into the oldest (smallest) id.
+    ids = np.empty(first_new, dtype=np.int64)  # distinct old cluster ids met
+    id_parent = np.empty(first_new, dtype=np.int64)
+    n_ids = 0
+    best = np.full(n_new, -1, dtype=np.int64)  # per component: local index of an id it touches
     for i in range(first_new, n):
         if not core[i]:
             continue
-        for j in range(n):
-            if j == i or not core[j] or t[i] - t[j] > eps_t or t[j] > t[i]:
+        root = find(parent, i - first_new)
+        for j in range(first_new):
+            if not core[j]:
                 continue
-            if not _spatial_neighbor(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv):
+            if not _past_neighbor(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv, eps_t):
                 continue
-            if j >= first_new:
-                union_keep_smaller(parent, i - first_new, j - first_new)
+            k = _local_id(ids, n_ids, cluster[j])
+            if k < 0:
+                k = n_ids
+                ids[k] = cluster[j]
+                id_parent[k] = k
+                n_ids += 1
+            if best[root] < 0:
+                best[root] = k
             else:
-                link_root.append(i - first_new)
-                link_id.append(cluster[j])
-                id_parent[cluster[j]] = cluster[j]
-    # Old clusters linked through one new component merge into the oldest id.
-    best = np.full(n_new, -1, dtype=np.int64)
-    for k in range(len(link_root)):
-        root = find(parent, link_root[k])
-        a = _find_id(id_parent, link_id[k])
-        if best[root] < 0:
-            best[root] = a
-        else:
-            b = _find_id(id_parent, best[root])
-            if a < b:
-                id_parent[b] = a
-            elif b < a:
-                id_parent[a] = b
+                a, b = find(id_parent, k), find(id_parent, best[root])
+                if ids[a] < ids[b]:
+                    id_parent[b] = a
+                elif ids[b] < ids[a]:
+                    id_parent[a] = b
     for j in range(first_new):
-        if cluster[j] >= 0 and cluster[j] in id_parent:
-            cluster[j] = _find_id(id_parent, cluster[j])
+        if cluster[j] >= 0:
+            k = _local_id(ids, n_ids, cluster[j])
+            if k >= 0:
+                cluster[j] = ids[find(id_parent, k)]
     final = np.full(n_new, -1, dtype=np.int64)
     for i in range(first_new, n):
         if not core[i]:
@@ -240,7 +265,7 @@ def causal_update(x, y, v, t, cos_h, sin_h, min_points, can_be_core, core, clust
         root = find(parent, i - first_new)
         if final[root] < 0:
             if best[root] >= 0:
-                final[root] = _find_id(id_parent, best[root])
+                final[root] = ids[find(id_parent, best[root])]
             else:
                 final[root] = next_id
                 next_id += 1
@@ -251,9 +276,9 @@ def causal_update(x, y, v, t, cos_h, sin_h, min_points, can_be_core, core, clust
             continue
         closest, closest_distance = -1, np.inf
         for j in range(n):
-            if j == i or not core[j] or t[i] - t[j] > eps_t or t[j] > t[i]:
+            if not core[j]:
                 continue
-            if not _spatial_neighbor(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv):
+            if not _past_neighbor(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv, eps_t):
                 continue
             d = _pair_distance(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv)
             if d < closest_distance:

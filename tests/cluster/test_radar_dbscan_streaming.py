@@ -94,3 +94,26 @@ def test_fit_ends_the_stream():
     model.partial_fit(_scan(5.0, [(0.0, 0.0), (0.3, 0.0)]))
     model.fit(_scan(1.0, [(0.0, 0.0), (0.3, 0.0)]))
     assert model.partial_fit(_scan(0.0, [(0.0, 0.0), (0.3, 0.0)])).labels_.tolist() == [0, 0]
+
+
+def test_scan_stream_on_arrays_equals_partial_fit(detections):
+    from sklearn_radar.cluster import ScanStream
+
+    stream = ScanStream(RadarDBSCAN(**PARAMS))
+    labels = np.full(len(detections), -2, dtype=np.int64)
+    for _, rows in detections.groupby(["t", "sequence"], sort=True).indices.items():
+        scan = detections.iloc[rows]
+        labels[rows] = stream.update(
+            scan["x"], scan["y"], scan["v_r"], scan["t"].iloc[0], sequence=scan["sequence"].iloc[0], keep=scan["keep"]
+        )
+    np.testing.assert_array_equal(labels, _stream(RadarDBSCAN(**PARAMS), detections))
+
+
+def test_scan_stream_rejects_ragged_or_non_finite_input():
+    from sklearn_radar.cluster import ScanStream
+
+    stream = ScanStream(RadarDBSCAN())
+    with pytest.raises(ValueError, match="'y' must hold 2 finite values"):
+        stream.update(x=[0.0, 1.0], y=[0.0], v_r=[1.0, 1.0], t=0.0)
+    with pytest.raises(ValueError, match="'v_r' must hold 1 finite values"):
+        stream.update(x=[0.0], y=[0.0], v_r=[np.nan], t=0.0)
