@@ -7,12 +7,13 @@ The detection table is described in :mod:`sklearn_radar._schema`.
 """
 
 from ._schema import LABELS, RADARSCENES_MOUNTING, describe_columns, instance_target
-from .cluster import RadarDBSCAN
+from .cluster import ClusterMerger, RadarDBSCAN
 from .preprocessing import DopplerDensityFilter, FrameTransform
 
 __version__ = "0.1.0.dev0"
 
 __all__ = [
+    "ClusterMerger",
     "DopplerDensityFilter",
     "FrameTransform",
     "LABELS",

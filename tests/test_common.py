@@ -4,7 +4,7 @@ from sklearn.utils.estimator_checks import parametrize_with_checks
 
 import numpy as np
 
-from sklearn_radar import DopplerDensityFilter, FrameTransform, RadarDBSCAN
+from sklearn_radar import ClusterMerger, DopplerDensityFilter, FrameTransform, RadarDBSCAN
 
 #: {repr of the estimator below: {check name: reason}}.  Keep every entry justified.
 _BY_DESIGN_NOISE = (
@@ -23,6 +23,10 @@ EXPECTED_FAILED_CHECKS = {
         "check_clustering": _BY_DESIGN_NOISE,
         "check_clustering(readonly_memmap=True)": _BY_DESIGN_NOISE,
     },
+    "ClusterMerger()": {
+        "check_clustering": "Its default stage 1 is RadarDBSCAN() with vr_min = 0.4 m/s: " + _BY_DESIGN_NOISE,
+        "check_clustering(readonly_memmap=True)": "Its default stage 1 is RadarDBSCAN(): " + _BY_DESIGN_NOISE,
+    },
 }
 
 
@@ -38,6 +42,9 @@ def _expected_failed_checks(estimator):
         RadarDBSCAN(),
         RadarDBSCAN(metric="xyv", alpha_r=0.5, vr_min=-np.inf),
         RadarDBSCAN(metric="xy", causal=True, vr_min=-np.inf),
+        ClusterMerger(),
+        ClusterMerger(stage1=RadarDBSCAN(metric="xy", vr_min=-np.inf)),
+        ClusterMerger(mode="velocity", unknown_velocity="accept", stage1=RadarDBSCAN(metric="xy", vr_min=-np.inf)),
     ],
     expected_failed_checks=_expected_failed_checks,
 )

@@ -1,5 +1,14 @@
-"""Stage 1: RadarDBSCAN (Eqs. 2-5)."""
+"""Stage 1 (RadarDBSCAN, Eqs. 2-5) and stage 2 (ClusterMerger, Eq. 6 and continuation)."""
 
+from ._cluster_merger import ClusterMerger
 from ._radar_dbscan import RadarDBSCAN, ScanStream, min_points_at_range
+from ._velocity import estimate_velocities, estimate_velocity
 
-__all__ = ["RadarDBSCAN", "ScanStream", "min_points_at_range"]
+__all__ = [
+    "ClusterMerger",
+    "RadarDBSCAN",
+    "ScanStream",
+    "estimate_velocities",
+    "estimate_velocity",
+    "min_points_at_range",
+]
