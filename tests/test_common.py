@@ -5,6 +5,7 @@ from sklearn.utils.estimator_checks import parametrize_with_checks
 import numpy as np
 
 from sklearn_radar import ClusterMerger, DopplerDensityFilter, FrameTransform, RadarDBSCAN
+from sklearn_radar.cluster import WindowedDBSCAN, WindowedHDBSCAN
 
 #: {repr of the estimator below: {check name: reason}}.  Keep every entry justified.
 _BY_DESIGN_NOISE = (
@@ -45,6 +46,8 @@ def _expected_failed_checks(estimator):
         ClusterMerger(),
         ClusterMerger(stage1=RadarDBSCAN(metric="xy", vr_min=-np.inf)),
         ClusterMerger(mode="velocity", unknown_velocity="accept", stage1=RadarDBSCAN(metric="xy", vr_min=-np.inf)),
+        WindowedDBSCAN(),
+        WindowedHDBSCAN(),
     ],
     expected_failed_checks=_expected_failed_checks,
 )

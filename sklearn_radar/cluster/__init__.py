@@ -3,11 +3,14 @@
 from ._cluster_merger import ClusterMerger
 from ._radar_dbscan import RadarDBSCAN, ScanStream, min_points_at_range
 from ._velocity import estimate_velocities, estimate_velocity
+from ._windowed import WindowedDBSCAN, WindowedHDBSCAN
 
 __all__ = [
     "ClusterMerger",
     "RadarDBSCAN",
     "ScanStream",
+    "WindowedDBSCAN",
+    "WindowedHDBSCAN",
     "estimate_velocities",
     "estimate_velocity",
     "min_points_at_range",

@@ -1,0 +1,152 @@
+"""The clusterers a user would otherwise pick: scikit-learn's DBSCAN and HDBSCAN per time window."""
+
+from __future__ import annotations
+
+from numbers import Integral, Real
+
+import numpy as np
+from sklearn.base import BaseEstimator, ClusterMixin, _fit_context
+from sklearn.cluster import DBSCAN, HDBSCAN
+from sklearn.utils._param_validation import Interval
+
+from .._validation import read_columns
+from ._radar_dbscan import _consecutive_labels
+
+_OPTIONAL = ("sequence", "keep")
+_SEPARATION = 1e5  # m between windows laid side by side for one DBSCAN call
+
+
+def _window_ids(c, window):
+    """Consecutive id per (sequence, time window of ``window`` s from the sequence start)."""
+    t = c["t"]
+    sequence = np.zeros(len(t)) if c["sequence"] is None else c["sequence"]
+    _, code = np.unique(sequence, return_inverse=True)
+    code = code.ravel()
+    start = np.full(code.max() + 1 if len(code) else 0, np.inf)
+    np.minimum.at(start, code, t)
+    bins = np.floor((t - start[code]) / window).astype(np.int64)
+    return np.unique(np.c_[code, bins], axis=0, return_inverse=True)[1].ravel()
+
+
+class _WindowedClusterer(ClusterMixin, BaseEstimator):
+    """Shared input handling: columns x, y (m), v_r (m/s), t (s), optional sequence and keep."""
+
+    def _features(self, X, reset):
+        X, c = read_columns(self, X, ("x", "y", "v_r", "t"), _OPTIONAL, reset=reset)
+        active = np.ones(len(c["x"]), dtype=bool) if c["keep"] is None else c["keep"] != 0
+        features = np.c_[c["x"], c["y"], c["v_r"] / self.vr_scale]
+        return features, _window_ids(c, self.window), active
+
+
+class WindowedDBSCAN(_WindowedClusterer):
+    """scikit-learn's DBSCAN on (x, y, v_r / vr_scale), each ``window`` of each sequence on its own.
+
+    The baseline a radar engineer would reach for first: a detection's
+    neighbourhood is Euclidean in x-y and scaled Doppler, and clusters cannot
+    span time windows (there is no sliding window), so an object becomes one
+    cluster per window.  Rows with ``keep = False`` are noise.
+
+    Parameters
+    ----------
+    eps : float, default=1.0
+        Neighbourhood radius in (m, m, v_r / vr_scale).
+    min_samples : int, default=3
+        Including the point itself.
+    vr_scale : float, default=1.0
+        Doppler difference, m/s, that counts like 1 m.
+    window : float, default=0.25
+        Window length, s.
+
+    Attributes
+    ----------
+    labels_ : ndarray of shape (n_detections,)
+    n_features_in_ : int
+    feature_names_in_ : ndarray of str
+        When X is a DataFrame.
+    """
+
+    _parameter_constraints: dict = {
+        "eps": [Interval(Real, 0, None, closed="neither")],
+        "min_samples": [Interval(Integral, 1, None, closed="left")],
+        "vr_scale": [Interval(Real, 0, None, closed="neither")],
+        "window": [Interval(Real, 0, None, closed="neither")],
+    }
+
+    def __init__(self, eps=1.0, min_samples=3, vr_scale=1.0, window=0.25):
+        self.eps = eps
+        self.min_samples = min_samples
+        self.vr_scale = vr_scale
+        self.window = window
+
+    @_fit_context(prefer_skip_nested_validation=True)
+    def fit(self, X, y=None):
+        """Cluster every window; one scikit-learn call with the windows laid far apart."""
+        features, window_id, active = self._features(X, reset=True)
+        labels = np.full(len(features), -1, dtype=np.int64)
+        if active.any():
+            laid_out = features[active] - features[active].min(axis=0)
+            laid_out[:, 0] += _SEPARATION * window_id[active]
+            labels[active] = DBSCAN(eps=self.eps, min_samples=self.min_samples).fit_predict(laid_out)
+        self.labels_ = _consecutive_labels(labels)
+        return self
+
+
+class WindowedHDBSCAN(_WindowedClusterer):
+    """scikit-learn's HDBSCAN on (x, y, v_r / vr_scale), each ``window`` of each sequence on its own.
+
+    Parameters
+    ----------
+    min_cluster_size : int, default=3
+    min_samples : int, default=None
+        None: equal to ``min_cluster_size``.
+    cluster_selection_epsilon : float, default=0.0
+        Clusters closer than this (m, in the scaled space) are merged.
+    vr_scale : float, default=1.0
+        Doppler difference, m/s, that counts like 1 m.
+    window : float, default=0.25
+        Window length, s.
+
+    Attributes
+    ----------
+    labels_ : ndarray of shape (n_detections,)
+    n_features_in_ : int
+    feature_names_in_ : ndarray of str
+        When X is a DataFrame.
+    """
+
+    _parameter_constraints: dict = {
+        "min_cluster_size": [Interval(Integral, 2, None, closed="left")],
+        "min_samples": [Interval(Integral, 1, None, closed="left"), None],
+        "cluster_selection_epsilon": [Interval(Real, 0, None, closed="left")],
+        "vr_scale": [Interval(Real, 0, None, closed="neither")],
+        "window": [Interval(Real, 0, None, closed="neither")],
+    }
+
+    def __init__(self, min_cluster_size=3, min_samples=None, cluster_selection_epsilon=0.0, vr_scale=1.0, window=0.25):
+        self.min_cluster_size = min_cluster_size
+        self.min_samples = min_samples
+        self.cluster_selection_epsilon = cluster_selection_epsilon
+        self.vr_scale = vr_scale
+        self.window = window
+
+    @_fit_context(prefer_skip_nested_validation=True)
+    def fit(self, X, y=None):
+        """Cluster every window with its own HDBSCAN."""
+        features, window_id, active = self._features(X, reset=True)
+        labels = np.full(len(features), -1, dtype=np.int64)
+        rows = np.flatnonzero(active)
+        order = rows[np.argsort(window_id[rows], kind="stable")]
+        offset = 0
+        for part in np.split(order, np.flatnonzero(np.diff(window_id[order])) + 1):
+            if len(part) < max(self.min_cluster_size, 2):
+                continue
+            found = HDBSCAN(
+                min_cluster_size=self.min_cluster_size,
+                min_samples=self.min_samples,
+                cluster_selection_epsilon=float(self.cluster_selection_epsilon),
+                copy=True,
+            ).fit_predict(features[part])
+            labels[part] = np.where(found >= 0, found + offset, -1)
+            offset += max(found.max() + 1, 0)
+        self.labels_ = _consecutive_labels(labels)
+        return self
