@@ -50,7 +50,7 @@ def test_windowed_hdbscan_equals_sklearn_per_window():
     labels = WindowedHDBSCAN(min_cluster_size=4, vr_scale=2.0).fit(X).labels_
     for _, rows in X.groupby(_windows(X)).indices.items():
         features = np.c_[X["x"].to_numpy()[rows], X["y"].to_numpy()[rows], X["v_r"].to_numpy()[rows] / 2.0]
-        reference = HDBSCAN(min_cluster_size=4).fit_predict(features)
+        reference = HDBSCAN(min_cluster_size=4, copy=True).fit_predict(features)
         assert _same_partition(labels[rows], reference)
 
 
