@@ -26,6 +26,8 @@ from ._velocity import estimate_velocities
 #: Array layout of ClusterMerger: RadarDBSCAN's, then the line-of-sight columns.
 MERGER_LAYOUT = {**ARRAY_LAYOUT, "azimuth_sc": 0.0, "sensor_yaw": 0.0}
 _STAGE1_COLUMNS = ("x", "y", "v_r", "t", "sequence", "keep", "range_sc", "heading")
+#: m/s: no road user is assumed faster; bounds the pairs the continuation criterion examines.
+MAX_SPEED = 40.0
 
 
 def _stage1_labels(stage1, columns):
@@ -204,9 +206,10 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
         roots = np.full(len(rows), -1, dtype=np.int64)
         if len(clusters.ids) == 0:
             return roots, []
-        max_speed = 40.0  # m/s: bounds how far a continued centre can move within eps_t2
-        reach = self.eps_d + (2 * max_speed * self.eps_t2 if self.mode == "continuation" else 0.0)
-        frames = [self._pair_frames(a, b, clusters, t) for a, b in candidate_pairs(clusters, x, y, self.eps_t2, reach)]
+        # Continued centres may drift apart from the detections around s_B by up to
+        # MAX_SPEED * eps_t2 each; Eq. 6 compares detections directly.
+        reach = self.eps_d + (2 * MAX_SPEED * self.eps_t2 if self.mode == "continuation" else 0.0)
+        frames = [self._pair_frames(a, b, clusters, t) for a, b in candidate_pairs(clusters, x, y, t, self.eps_t2, reach)]
         frames = [f for f in frames if f is not None]
         if self.mode == "velocity":
             edges = self._velocity_edges(frames, clusters, x, y, t, v_r, los[rows])

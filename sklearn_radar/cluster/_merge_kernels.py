@@ -36,24 +36,40 @@ def cluster_rows(labels, t):
     return ClusterRows(ids, rows, start, end)
 
 
-def candidate_pairs(clusters, x, y, eps_t2, reach):
+def candidate_pairs(clusters, x, y, t, eps_t2, reach):
     """Pairs (a, b) of clusters, a starting no later than b, that may merge.
 
     b must start less than ``eps_t2`` after a's last detection (or while a
-    lives), and their detections around b's start must come within
-    ``reach`` (m) of each other (a coarse bound; the criteria decide).
+    lives), and the bounding boxes of their detections around b's start
+    (a within ``[s_b - eps_t2, s_b + eps_t2]``, b within
+    ``[s_b, s_b + eps_t2]``) must come within ``reach`` (m) of each other: a
+    coarse bound, the criteria decide.
     """
     order = np.argsort(clusters.start, kind="stable")
+    times = [t[rows] for rows in clusters.rows]
+
+    def box(k, low, high):
+        rows = clusters.rows[k][np.searchsorted(times[k], low, "left") : np.searchsorted(times[k], high, "right")]
+        if len(rows) == 0:
+            return None
+        return x[rows].min(), x[rows].max(), y[rows].min(), y[rows].max()
+
     pairs = []
-    centre = np.array([[x[r].mean(), y[r].mean()] for r in clusters.rows]) if clusters.rows else np.zeros((0, 2))
-    span = np.array([max(np.ptp(x[r]), np.ptp(y[r])) for r in clusters.rows]) if clusters.rows else np.zeros(0)
     for position, b in enumerate(order):
         earlier = order[:position]
-        if len(earlier) == 0:
+        start_b = clusters.start[b]
+        alive = earlier[(clusters.end[earlier] > start_b - eps_t2) & (clusters.start[earlier] <= start_b)]
+        if len(alive) == 0:
             continue
-        alive = (clusters.end[earlier] > clusters.start[b] - eps_t2) & (clusters.start[earlier] <= clusters.start[b])
-        near = np.hypot(*(centre[earlier] - centre[b]).T) <= reach + span[earlier] + span[b]
-        pairs.extend((int(a), int(b)) for a in earlier[alive & near])
+        box_b = box(b, start_b, start_b + eps_t2)
+        for a in alive:
+            box_a = box(a, start_b - eps_t2, start_b + eps_t2)
+            if box_a is None:
+                continue
+            gap_x = max(box_a[0] - box_b[1], box_b[0] - box_a[1], 0.0)
+            gap_y = max(box_a[2] - box_b[3], box_b[2] - box_a[3], 0.0)
+            if gap_x * gap_x + gap_y * gap_y <= reach * reach:
+                pairs.append((int(a), int(b)))
     return pairs
 
 
