@@ -1,0 +1,31 @@
+"""The paper's experiments (Scheiner et al. 2019, Tables III and IV) as data, pipelines and search spaces.
+
+:data:`PAPER_EXPERIMENTS` holds experiments #1-#13 (method, coordinate
+system, filtering, stage, the paper's V1 score and setting);
+:func:`experiment_pipeline` builds the scikit-learn Pipeline of an
+experiment and :func:`search_space` its Bayesian-optimisation ranges.
+"""
+
+from ._paper import (
+    PAPER_EXPERIMENTS,
+    PIPELINE_COLUMNS,
+    PaperExperiment,
+    derived_params,
+    experiment_pipeline,
+    get_experiment,
+    paper_experiments,
+    paper_params,
+    search_space,
+)
+
+__all__ = [
+    "PAPER_EXPERIMENTS",
+    "PIPELINE_COLUMNS",
+    "PaperExperiment",
+    "derived_params",
+    "experiment_pipeline",
+    "get_experiment",
+    "paper_experiments",
+    "paper_params",
+    "search_space",
+]
