@@ -52,6 +52,33 @@ def _parser():
     )
     stats.add_argument("--data", required=True, help="RadarScenes data folder (or its parent)")
     stats.set_defaults(run=_stats)
+
+    reproduce = commands.add_parser(
+        "reproduce",
+        help="re-run the paper's experiments and write a report",
+        description="Re-run the experiments #1-#13 of Scheiner et al. (ITSC 2019), the filter evaluation and "
+        "scikit-learn baselines; write report.md, results.json, params.json and figures.",
+    )
+    reproduce.add_argument("--data", help="RadarScenes data folder (default: simulate one)")
+    reproduce.add_argument("--out", default="sklearn-radar-report", help="output folder (default: sklearn-radar-report)")
+    reproduce.add_argument("--n-iter", type=int, help="Bayesian-optimisation iterations per experiment (default 10; 100 with --full)")
+    reproduce.add_argument("--n-jobs", type=int, help="candidates evaluated in parallel")
+    reproduce.add_argument("--experiments", help="comma-separated: filter, 1-13 (ranges like 2-9), filter-effect, baselines")
+    reproduce.add_argument("--full", action="store_true", help="the paper's budget (100 iterations, 30 random) on ~1M detections")
+    reproduce.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
+    reproduce.set_defaults(run=_reproduce)
+
+    cluster = commands.add_parser(
+        "cluster",
+        help="cluster a RadarScenes folder with saved parameters",
+        description="Apply a setting saved by 'sklearn-radar reproduce' (params.json) and write the devkit's "
+        "per-point predictions JSON (schema 2), keyed by detection uuid.",
+    )
+    cluster.add_argument("--data", required=True, help="RadarScenes data folder (or its parent)")
+    cluster.add_argument("--params", required=True, help="params.json written by 'sklearn-radar reproduce'")
+    cluster.add_argument("--out", required=True, help="predictions file to write (JSON)")
+    cluster.add_argument("--experiment", type=int, help="which saved experiment (default: the best)")
+    cluster.set_defaults(run=_cluster)
     return parser
 
 
@@ -71,4 +98,25 @@ def _stats(args) -> int:
     from .datasets import format_statistics, load_radarscenes, scene_statistics
 
     print(format_statistics(*scene_statistics(load_radarscenes(args.data))))
+    return 0
+
+
+def _reproduce(args) -> int:
+    from .reproduce import reproduce
+
+    if args.n_iter is not None and args.n_iter < 1:
+        raise ValueError(f"--n-iter must be at least 1, got {args.n_iter}")
+    start = time.perf_counter()
+    reproduce(args.data, args.out, n_iter=args.n_iter, n_jobs=args.n_jobs, experiments=args.experiments,
+              full=args.full, seed=args.seed)  # fmt: skip
+    print(f"wrote {args.out}/report.md, results.json, params.json and figures in {time.perf_counter() - start:.0f} s")
+    return 0
+
+
+def _cluster(args) -> int:
+    from .reproduce import cluster_radarscenes
+
+    summary = cluster_radarscenes(args.data, args.params, args.out, experiment=args.experiment)
+    print(f"experiment #{summary['experiment']}: {summary['n_detections']} detections in "
+          f"{summary['n_clusters']} clusters; wrote {summary['out']}")
     return 0

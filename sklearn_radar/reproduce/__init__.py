@@ -1,0 +1,6 @@
+"""The main job: re-run the paper's experiments (``sklearn-radar reproduce``) and apply a tuned pipeline."""
+
+from ._apply import cluster_radarscenes, load_params, write_predictions
+from ._run import ALL_EXPERIMENTS, parse_experiments, reproduce
+
+__all__ = ["ALL_EXPERIMENTS", "cluster_radarscenes", "load_params", "parse_experiments", "reproduce", "write_predictions"]
