@@ -58,11 +58,12 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
     * ``"xy"`` (Eq. 4): ``sqrt(dx^2 + dy^2) < eps_xy`` and ``|dv_r| < eps_vr``;
     * ``"xyv"`` (Eq. 5): ``sqrt(dx^2 + dy^2 + dv_r^2 / vr_scale^2) < eps_xyv``.
 
-    The spatial and Doppler comparisons are strict and the time comparison
-    inclusive, as printed in the paper.  A detection is a core point when
+    The spatial and Doppler comparisons are strict, as Eqs. 3-5 print them;
+    the time comparison is inclusive, as the paper's text says ("smaller or
+    equal"), although its equations print ``<``.  A detection is a core point when
     ``|v_r| > vr_min`` and it has at least ``N_min(r)`` neighbours counting
     itself (as scikit-learn does), with ``N_min(r)`` from Eq. 2 (see
-    :func:`min_points_at_range`; fixed ``min_samples`` when ``alpha_r = 0``).
+    :func:`~sklearn_radar.cluster.min_points_at_range`; fixed ``min_samples`` when ``alpha_r = 0``).
     Clusters are the connected core points plus their border points; a
     border point joins its closest core neighbour.  Because neighbours must be
     close in time, an object seen for 20 s forms one cluster, and detections
@@ -88,7 +89,7 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
     alpha_r : float, default=0.0
         Slope of the range-adaptive minimum (Eq. 2); 0 fixes it at ``min_samples``.
     range_scaling : {"reciprocal", "linear"}, default="reciprocal"
-        Form of Eq. 2, see :func:`min_points_at_range`.  The paper prints
+        Form of Eq. 2, see :func:`~sklearn_radar.cluster.min_points_at_range`.  The paper prints
         the linear form (N_min grows with range) but describes the
         reciprocal one (remote objects give fewer reflections, so need fewer
         points).  Measured on simulated data

@@ -82,11 +82,11 @@ def load_radarscenes(path, sequences=None) -> Bunch:
     -------
     bunch : :class:`~sklearn.utils.Bunch`
         ``data`` (DataFrame, one row per detection with the columns of
-        :data:`~sklearn_radar._schema.DETECTION_COLUMNS`; positions in m,
+        ``sklearn_radar._schema.DETECTION_COLUMNS``; positions in m,
         angles in rad, velocities in m/s, timestamps in µs), ``target``
         (int64 instance label, -1 for background), ``groups`` (int64
         sequence number), ``odometry`` (DataFrame with
-        :data:`~sklearn_radar._schema.ODOMETRY_COLUMNS`), ``sensors``
+        ``sklearn_radar._schema.ODOMETRY_COLUMNS``), ``sensors``
         (mounting in m and rad, indexed by ``sensor_id``), ``sequences``
         (``sequence``, ``name``, ``category``) and ``DESCR``.
 

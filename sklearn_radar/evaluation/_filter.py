@@ -450,7 +450,9 @@ def filter_grid(
         ``background_removed``, ``objects_removed`` : DataFrame of float
             Shares in [0, 1] on the same grid.
         ``frame`` : str
+            The coordinate system used, "frame" (FCS) or "car" (CCS).
         ``n_background``, ``n_objects`` : int
+            Number of background and object rows.
         ``elapsed_s`` : float
             Wall time of the enumeration, s.
 

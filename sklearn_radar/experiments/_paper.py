@@ -320,23 +320,23 @@ def search_space(number):
     ``vr_scale`` span two orders of magnitude (the paper finds 1.03 and 13.5
     for the same parameter), so they are searched log-uniformly.
 
-    ==========================  ==================  ======  =====================  ==========
-    key                         range               unit    prior                  experiments
-    ==========================  ==================  ======  =====================  ==========
-    ``cluster__eps_xy``         [0.2, 3.0]          m       uniform                2-5, 7
-    ``cluster__eps_vr``         [0.5, 20]           m/s     log-uniform            2-5, 7
-    ``cluster__eps_xyv``        [0.2, 3.0]          m       uniform                6, 8, 9
-    ``cluster__vr_scale``       [0.3, 20]           m/s     log-uniform            6, 8, 9
-    ``cluster__min_samples``    {2, ..., 8}         points  integer                2-6 (fixed N_min)
-    ``cluster__min_samples``    [1.5, 8.0]          points  uniform (N_min,50)     7-9
-    ``cluster__alpha_r``        [0, 1]              1       uniform                7-9
-    ``cluster__vr_min``         [0, 1.5]            m/s     uniform                2-9
-    ``merge__eps_d``            [0.2, 3.0]          m       uniform                12, 13
-    ``merge__eps_phi``          [0.05, 1.5]         rad     uniform                12
-    ``merge__eps_v``            [0.2, 6.0]          m/s     uniform                12, 13
-    ``merge__eps_t2``           [0.1, 1.0]          s       uniform                12, 13
-    ``merge__min_samples``      {1, 2, 3}           clusters integer               12, 13
-    ==========================  ==================  ======  =====================  ==========
+    ==========================  ==================  ========  =====================  ==========
+    key                         range               unit      prior                  experiments
+    ==========================  ==================  ========  =====================  ==========
+    ``cluster__eps_xy``         [0.2, 3.0]          m         uniform                2-5, 7
+    ``cluster__eps_vr``         [0.5, 20]           m/s       log-uniform            2-5, 7
+    ``cluster__eps_xyv``        [0.2, 3.0]          m         uniform                6, 8, 9
+    ``cluster__vr_scale``       [0.3, 20]           m/s       log-uniform            6, 8, 9
+    ``cluster__min_samples``    {2, ..., 8}         points    integer                2-6 (fixed N_min)
+    ``cluster__min_samples``    [1.5, 8.0]          points    uniform (N_min,50)     7-9
+    ``cluster__alpha_r``        [0, 1]              1         uniform                7-9
+    ``cluster__vr_min``         [0, 1.5]            m/s       uniform                2-9
+    ``merge__eps_d``            [0.2, 3.0]          m         uniform                12, 13
+    ``merge__eps_phi``          [0.05, 1.5]         rad       uniform                12
+    ``merge__eps_v``            [0.2, 6.0]          m/s       uniform                12, 13
+    ``merge__eps_t2``           [0.1, 1.0]          s         uniform                12, 13
+    ``merge__min_samples``      {1, 2, 3}           clusters  integer                12, 13
+    ==========================  ==================  ========  =====================  ==========
 
     eps_t is fixed at 0.25 s, as in the paper.  The experiments without
     optimisation return ``{}`` (``BayesSearchCV`` rejects an empty space;
