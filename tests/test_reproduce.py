@@ -120,3 +120,11 @@ def test_experiment_lists_parse_ranges_in_run_order():
     assert parse_experiments("baselines,3-5,filter") == ["filter", "3", "4", "5", "baselines"]
     with pytest.raises(ValueError, match="range"):
         parse_experiments("5-2")
+
+
+def test_a_single_training_sequence_is_tuned_on_one_fold(tmp_path):
+    folder = tmp_path / "two"
+    write_radarscenes(make_scenes(n_sequences=2, duration=3.0, random_state=4), folder)
+    assert main(["reproduce", "--data", str(folder), "--out", str(tmp_path / "out"), "--n-iter", "2", "--experiments", "3"]) == 0
+    results = json.loads((tmp_path / "out" / "results.json").read_text())
+    assert results["meta"]["data"]["train_sequences"] and len(results["experiments"]["3"]["convergence"]) == 2

@@ -261,10 +261,14 @@ def _tune(run, context, estimator, space, label):
     scenes, train = context["scenes"], context["train"]
     budget = run.budget
     groups = scenes.groups[train]
-    folds = GroupKFold(n_splits=min(budget.cv, len(np.unique(groups)))).split(train, groups=groups)
+    n_folds = min(budget.cv, len(np.unique(groups)))
     # A clusterer labels the data it is fitted on, and the scorer fits on the scored fold: fitting the
     # "training" side of a fold first would be wasted work, so each fold is its own training side.
-    cv = [(rows, rows) for _, rows in folds]
+    # With a single training sequence the one fold is all of it.
+    if n_folds < 2:
+        cv = [(np.arange(len(train)), np.arange(len(train)))]
+    else:
+        cv = [(rows, rows) for _, rows in GroupKFold(n_splits=n_folds).split(train, groups=groups)]
     search = make_bayes_search(
         estimator, space, n_iter=budget.n_iter, n_initial_points=budget.n_initial_points,
         cv=cv, n_jobs=run.n_jobs, random_state=run.seed,
