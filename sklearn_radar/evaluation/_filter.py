@@ -23,6 +23,7 @@ from joblib import Parallel, delayed
 from sklearn.utils import Bunch
 
 from ..preprocessing import FrameTransform, doppler_density_keep, neighbor_counts
+from ..preprocessing._doppler_density_filter import check_rule
 
 __all__ = [
     "PAPER_TABLE_II",
@@ -91,21 +92,6 @@ def _check_window(window, min_kept):
         raise ValueError(f"window must be a positive number of seconds, got {window!r}")
     if not isinstance(min_kept, Real) or not 0 <= min_kept <= 1:
         raise ValueError(f"min_kept must be a share in [0, 1], got {min_kept!r}")
-
-
-def _check_rule(threshold_ratios, min_neighbors):
-    ratios = np.asarray(threshold_ratios, dtype=np.float64).ravel()
-    n_min = np.asarray(min_neighbors).ravel()
-    if len(ratios) == 0 or len(ratios) != len(n_min):
-        raise ValueError(
-            "threshold_ratios and min_neighbors must be non-empty and of equal length, "
-            f"got {len(ratios)} and {len(n_min)}"
-        )
-    if not np.all(ratios > 0):
-        raise ValueError(f"threshold_ratios must be positive, got {threshold_ratios!r}")
-    if n_min.dtype.kind not in "iu" or not np.all(n_min >= 1):
-        raise ValueError(f"min_neighbors must be integers >= 1, got {min_neighbors!r}")
-    return ratios, n_min
 
 
 def _check_grid(values, name, allow_zero):
@@ -375,7 +361,7 @@ def _check_common(X, target, dt, causal, threshold_ratios, min_neighbors, window
     if not isinstance(verbose, Integral):
         raise ValueError(f"verbose must be an int, got {verbose!r}")
     _check_window(window, min_kept)
-    ratios, n_min = _check_rule(threshold_ratios, min_neighbors)
+    ratios, n_min = check_rule(threshold_ratios, min_neighbors)
     return target, ratios, n_min
 
 
