@@ -26,14 +26,12 @@ class ClusterRows:
 def cluster_rows(labels, t):
     """Group the rows of each non-noise label, in time order."""
     clustered = np.flatnonzero(labels >= 0)
+    if len(clustered) == 0:
+        return ClusterRows(np.zeros(0, dtype=np.int64), [], np.zeros(0), np.zeros(0))
     order = clustered[np.lexsort((t[clustered], labels[clustered]))]
     ids, first = np.unique(labels[order], return_index=True)
-    rows = np.split(order, first[1:])
-    start = np.array([t[r[0]] for r in rows]) if len(rows) and len(order) else np.zeros(0)
-    end = np.array([t[r[-1]] for r in rows]) if len(rows) and len(order) else np.zeros(0)
-    if len(order) == 0:
-        return ClusterRows(np.zeros(0, dtype=np.int64), [], np.zeros(0), np.zeros(0))
-    return ClusterRows(ids, rows, start, end)
+    last = np.r_[first[1:], len(order)] - 1
+    return ClusterRows(ids, np.split(order, first[1:]), t[order[first]], t[order[last]])
 
 
 def candidate_pairs(clusters, x, y, t, eps_t2, reach):

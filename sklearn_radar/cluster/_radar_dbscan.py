@@ -282,10 +282,8 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
         roots = np.full(len(rows), -1, dtype=np.int64)
         core = np.empty(len(rows), dtype=bool)
         clustered = emitted >= 0
-        _, first = np.unique(emitted[clustered], return_index=True)
-        first_position = np.full(emitted.max() + 1 if clustered.any() else 0, -1, dtype=np.int64)
-        first_position[np.unique(emitted[clustered])] = order[np.flatnonzero(clustered)[first]]
-        roots[order[clustered]] = first_position[emitted[clustered]]
+        _, first, inverse = np.unique(emitted[clustered], return_index=True, return_inverse=True)
+        roots[order[clustered]] = order[np.flatnonzero(clustered)[first]][inverse.ravel()]
         core[order] = core_sorted
         return rows, roots, core
 
