@@ -12,13 +12,11 @@ from sklearn.utils.validation import check_memory
 
 from .._validation import ARRAY_LAYOUT, read_columns, sequence_slices
 from ._merge_kernels import (
-    candidate_pairs,
-    cluster_rows,
-    continuation,
+    cluster_runs,
+    continuation_edges,
     merge_components,
-    min_distance,
-    predict,
-    scan_centres,
+    time_compatible_pairs,
+    velocity_frames,
 )
 from ._radar_dbscan import RadarDBSCAN, _consecutive_labels
 from ._velocity import estimate_velocities
@@ -26,8 +24,6 @@ from ._velocity import estimate_velocities
 #: Array layout of ClusterMerger: RadarDBSCAN's, then the line-of-sight columns.
 MERGER_LAYOUT = {**ARRAY_LAYOUT, "azimuth_sc": 0.0, "sensor_yaw": 0.0}
 _STAGE1_COLUMNS = ("x", "y", "v_r", "t", "sequence", "keep", "range_sc", "heading")
-#: m/s: no road user is assumed faster; bounds the pairs the continuation criterion examines.
-MAX_SPEED = 40.0
 
 
 def _stage1_labels(stage1, columns):
@@ -201,96 +197,42 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
 
     def _merge_sequence(self, rows, c, stage1_labels, los):
         """Root row (global row number of a cluster's representative) per row of one sequence."""
-        x, y, t, v_r = c["x"][rows], c["y"][rows], c["t"][rows], c["v_r"][rows]
-        clusters = cluster_rows(stage1_labels[rows], t)
+        runs = cluster_runs(stage1_labels[rows], c["x"][rows], c["y"][rows], c["t"][rows])
         roots = np.full(len(rows), -1, dtype=np.int64)
-        if len(clusters.ids) == 0:
+        if len(runs.ids) == 0:
             return roots, []
-        # Continued centres may drift apart from the detections around s_B by up to
-        # MAX_SPEED * eps_t2 each; Eq. 6 compares detections directly.
-        reach = self.eps_d + (2 * MAX_SPEED * self.eps_t2 if self.mode == "continuation" else 0.0)
-        frames = [self._pair_frames(a, b, clusters, t) for a, b in candidate_pairs(clusters, x, y, t, self.eps_t2, reach)]
-        frames = [f for f in frames if f is not None]
+        pair_a, pair_b = time_compatible_pairs(runs, self.eps_t2)
         if self.mode == "velocity":
-            edges = self._velocity_edges(frames, clusters, x, y, t, v_r, los[rows])
+            merge = self._velocity_merges(runs, pair_a, pair_b, c["v_r"][rows], los[rows])
         else:
-            edges = self._continuation_edges(frames, clusters, x, y, t)
-        component = merge_components(len(clusters.ids), edges, self.min_samples)
-        representative = np.array([member_rows[0] for member_rows in clusters.rows])
-        for k, member_rows in enumerate(clusters.rows):
-            roots[member_rows] = rows[representative[component[k]]]
-        return roots, [(int(clusters.ids[a]), int(clusters.ids[b])) for a, b in edges]
+            merge = continuation_edges(runs, pair_a, pair_b, self.eps_d, self.eps_v, self.eps_t2,
+                                       self.unknown_velocity == "accept")  # fmt: skip
+        edges = list(zip(pair_a[merge].tolist(), pair_b[merge].tolist()))
+        component = merge_components(len(runs.ids), edges, self.min_samples)
+        cluster_of_position = np.repeat(np.arange(len(runs.ids)), runs.run_end - runs.run_start)
+        representative = runs.order[runs.run_start]  # earliest detection of each cluster
+        roots[runs.order] = rows[representative[component[cluster_of_position]]]
+        return roots, [(int(runs.ids[a]), int(runs.ids[b])) for a, b in edges]
 
-    def _pair_frames(self, a, b, clusters, t):
-        """Decision time tau of the pair and the rows each criterion may use; None if dt >= eps_t2.
-
-        B (starting at s_B) is judged at ``tau = min(end of B, s_B + eps_t2)``:
-        only detections at or before tau are used.
-        """
-        start_b = clusters.start[b]
-        tau = min(clusters.end[b], start_b + self.eps_t2)
-        rows_a = clusters.rows[a]
-        past_a = rows_a[t[rows_a] <= tau]
-        before_b = past_a[t[past_a] <= start_b]
-        alive = len(past_a) > len(before_b)
-        gap = 0.0 if alive else start_b - t[before_b[-1]]
-        if gap >= self.eps_t2:
-            return None
-        rows_b = clusters.rows[b]
-        return a, b, tau, past_a, rows_b[t[rows_b] <= tau]
-
-    def _velocity_edges(self, frames, clusters, x, y, t, v_r, los):
-        """Eq. 6 for every candidate pair; all velocities are estimated in one batch."""
-        windows = []  # (pair index, rows of A within the eps_t2 frame, rows of B)
-        for k, (a, b, tau, past_a, rows_b) in enumerate(frames):
-            frame_a = past_a[t[past_a] >= clusters.start[b] - self.eps_t2]
-            if len(frame_a) and min_distance(x[frame_a], y[frame_a], x[rows_b], y[rows_b]) < self.eps_d:
-                windows.append((k, frame_a, rows_b))
-        if not windows:
-            return []
-        rows = np.concatenate([np.concatenate([frame_a, rows_b]) for _, frame_a, rows_b in windows])
-        group = np.concatenate([np.r_[np.full(len(fa), 2 * i), np.full(len(rb), 2 * i + 1)] for i, (_, fa, rb) in enumerate(windows)])
+    def _velocity_merges(self, runs, pair_a, pair_b, v_r, los):
+        """Eq. 6 for every pair; the velocities of all frames close enough in space are estimated in one batch."""
+        merge = np.zeros(len(pair_a), dtype=bool)
+        frames = velocity_frames(runs, pair_a, pair_b, self.eps_d, self.eps_t2)
+        if len(frames) == 0:
+            return merge
+        # Rows of A's frame (group 2i) and of B's (group 2i + 1), in time order, for every kept pair i.
+        first = np.c_[frames[:, 1], frames[:, 3]].ravel()
+        length = np.c_[frames[:, 2] - frames[:, 1], frames[:, 4] - frames[:, 3]].ravel()
+        group = np.repeat(np.arange(len(first)), length)
+        position = np.arange(len(group)) - np.repeat(np.cumsum(length) - length, length) + np.repeat(first, length)
+        rows = runs.order[position]
         vx, vy, _, groups = estimate_velocities(v_r[rows], los[rows], group)
-        velocity = np.full((2 * len(windows), 2), np.nan)
+        velocity = np.full((len(first), 2), np.nan)
         velocity[groups.astype(np.int64)] = np.c_[vx, vy]
-        edges = []
-        for i, (k, _, _) in enumerate(windows):
-            va, vb = velocity[2 * i], velocity[2 * i + 1]
-            if not (np.all(np.isfinite(va)) and np.all(np.isfinite(vb))):
-                merge = self.unknown_velocity == "accept"
-            else:
-                dphi = abs((np.arctan2(va[1], va[0]) - np.arctan2(vb[1], vb[0]) + np.pi) % (2 * np.pi) - np.pi)
-                merge = dphi < self.eps_phi and abs(np.hypot(*va) - np.hypot(*vb)) < self.eps_v
-            if merge:
-                edges.append(frames[k][:2])
-        return edges
-
-    def _continuation_edges(self, frames, clusters, x, y, t):
-        """The continuation criterion for every candidate pair; tracks are fitted once per (cluster, cut)."""
-        centres, fitted = {}, {}
-
-        def track(cluster, rows):
-            """Continuation from the first len(rows) detections of a cluster (a time-sorted prefix)."""
-            if cluster not in centres:
-                centres[cluster] = scan_centres(clusters.rows[cluster], x, y, t)
-            times, cx, cy = centres[cluster]
-            n_scans = int(np.searchsorted(times, t[rows[-1]], side="right"))
-            if (cluster, n_scans) not in fitted:
-                fitted[cluster, n_scans] = continuation(times[:n_scans], cx[:n_scans], cy[:n_scans])
-            return fitted[cluster, n_scans]
-
-        edges = []
-        for a, b, tau, past_a, rows_b in frames:
-            end_a, position_a, velocity_a = track(a, past_a)
-            end_b, position_b, velocity_b = track(b, rows_b)
-            at = clusters.start[b] + np.array([0.0, 0.5, 1.0]) * self.eps_t2
-            gap = predict(end_a, position_a, velocity_a, at) - predict(end_b, position_b, velocity_b, at)
-            if np.min(np.hypot(gap[:, 0], gap[:, 1])) >= self.eps_d:
-                continue
-            if not (np.all(np.isfinite(velocity_a)) and np.all(np.isfinite(velocity_b))):
-                merge = self.unknown_velocity == "accept"
-            else:
-                merge = np.hypot(*(velocity_a - velocity_b)) < self.eps_v
-            if merge:
-                edges.append((a, b))
-        return edges
+        va, vb = velocity[0::2], velocity[1::2]
+        known = np.isfinite(va).all(axis=1) & np.isfinite(vb).all(axis=1)
+        with np.errstate(invalid="ignore"):
+            dphi = np.abs((np.arctan2(va[:, 1], va[:, 0]) - np.arctan2(vb[:, 1], vb[:, 0]) + np.pi) % (2 * np.pi) - np.pi)
+            agree = (dphi < self.eps_phi) & (np.abs(np.hypot(*va.T) - np.hypot(*vb.T)) < self.eps_v)
+        merge[frames[:, 0]] = np.where(known, agree, self.unknown_velocity == "accept")
+        return merge

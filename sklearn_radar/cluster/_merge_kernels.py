@@ -1,130 +1,264 @@
-"""Cluster-level features for stage 2: per-cluster tracks, centre continuation, pair search.
+"""Cluster-level kernels for stage 2: per-cluster tracks, the pair criteria, merging.
 
 Everything here works on one sequence and uses, for a decision at time tau,
-only detections at or before tau.
+only detections at or before tau.  The detections of every stage-1 cluster
+form one run of a flat array sorted by (cluster, time); the pair loops are
+numba kernels, because a tuned stage 1 can leave thousands of small clusters
+and tens of thousands of pairs per sequence (a Python loop over them took
+12-16 s per 30 s sequence).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
-SMOOTHING_WINDOW = 3  # scans, moving average of the centres
+from .._neighbors import time_range
+
+SMOOTHING_WINDOW = 3  # scans, centred moving average of the centres (the kernels hard-code half-width 1)
 
 
 @dataclass
-class ClusterRows:
-    """The detections of each stage-1 cluster of one sequence, sorted by time."""
+class ClusterRuns:
+    """The detections of each stage-1 cluster of one sequence, as runs of a flat, (cluster, time)-sorted array."""
 
-    ids: np.ndarray  # cluster labels, sorted
-    rows: list  # per cluster: row positions sorted by time
-    start: np.ndarray  # s, first detection time
-    end: np.ndarray  # s, last detection time
+    ids: np.ndarray  # cluster labels, ascending
+    order: np.ndarray  # flat position -> row, sorted by (cluster, time, row)
+    run_start: np.ndarray  # first flat position of each cluster
+    run_end: np.ndarray  # one past the last
+    t: np.ndarray  # s, time of each flat position
+    x: np.ndarray  # m
+    y: np.ndarray  # m
+    scan_t: np.ndarray  # s, per (cluster, scan time): the scan's time ...
+    scan_x: np.ndarray  # m, ... and the mean position of the cluster's detections in it
+    scan_y: np.ndarray
+    scan_start: np.ndarray  # first scan of each cluster
+    scan_end: np.ndarray
+
+    @property
+    def start(self):
+        """s, first detection time of each cluster."""
+        return self.t[self.run_start]
+
+    @property
+    def end(self):
+        """s, last detection time of each cluster."""
+        return self.t[self.run_end - 1]
 
 
-def cluster_rows(labels, t):
-    """Group the rows of each non-noise label, in time order."""
+def cluster_runs(labels, x, y, t):
+    """Sort the non-noise rows by (label, time) and summarise every cluster's scans."""
     clustered = np.flatnonzero(labels >= 0)
-    if len(clustered) == 0:
-        return ClusterRows(np.zeros(0, dtype=np.int64), [], np.zeros(0), np.zeros(0))
     order = clustered[np.lexsort((t[clustered], labels[clustered]))]
-    ids, first = np.unique(labels[order], return_index=True)
-    last = np.r_[first[1:], len(order)] - 1
-    return ClusterRows(ids, np.split(order, first[1:]), t[order[first]], t[order[last]])
+    sorted_labels, sorted_t = labels[order], t[order]
+    ids, run_start = np.unique(sorted_labels, return_index=True)
+    run_end = np.r_[run_start[1:], len(order)].astype(np.int64)
+    new_scan = np.r_[True, (sorted_labels[1:] != sorted_labels[:-1]) | (sorted_t[1:] != sorted_t[:-1])] if len(order) else np.zeros(0, bool)
+    scan_of_row = np.cumsum(new_scan) - 1
+    count = np.bincount(scan_of_row)
+    scan_first = np.flatnonzero(new_scan)
+    scan_cluster = np.searchsorted(ids, sorted_labels[scan_first])
+    scan_start = np.searchsorted(scan_cluster, np.arange(len(ids)), side="left")
+    scan_end = np.searchsorted(scan_cluster, np.arange(len(ids)), side="right")
+    return ClusterRuns(
+        ids=ids, order=order, run_start=run_start.astype(np.int64), run_end=run_end,
+        t=np.ascontiguousarray(sorted_t, dtype=np.float64),
+        x=np.ascontiguousarray(x[order], dtype=np.float64), y=np.ascontiguousarray(y[order], dtype=np.float64),
+        scan_t=np.ascontiguousarray(sorted_t[scan_first], dtype=np.float64),
+        scan_x=np.bincount(scan_of_row, x[order]) / count, scan_y=np.bincount(scan_of_row, y[order]) / count,
+        scan_start=scan_start.astype(np.int64), scan_end=scan_end.astype(np.int64),
+    )  # fmt: skip
 
 
-def candidate_pairs(clusters, x, y, t, eps_t2, reach):
-    """Pairs (a, b) of clusters, a starting no later than b, that may merge.
+@numba.njit(cache=True, nogil=True)
+def _time_compatible_pairs(start, end, eps_t2):
+    """Pairs (a, b): a starts no later than b (ties: by index) and has a detection after s_b - eps_t2."""
+    by_start = np.argsort(start, kind="mergesort")
+    first_a, second_b = [], []
+    for position in range(len(by_start)):
+        b = by_start[position]
+        for earlier in range(position):
+            a = by_start[earlier]
+            if end[a] > start[b] - eps_t2:
+                first_a.append(a)
+                second_b.append(b)
+    return np.array(first_a, dtype=np.int64), np.array(second_b, dtype=np.int64)
 
-    b must start less than ``eps_t2`` after a's last detection (or while a
-    lives), and the bounding boxes of their detections around b's start
-    (a within ``[s_b - eps_t2, s_b + eps_t2]``, b within
-    ``[s_b, s_b + eps_t2]``) must come within ``reach`` (m) of each other: a
-    coarse bound, the criteria decide.
+
+def time_compatible_pairs(runs, eps_t2):
+    """Pairs (a, b) of clusters, a starting no later than b, alive within ``eps_t2`` (s) of b's start."""
+    if len(runs.ids) < 2:
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    return _time_compatible_pairs(np.ascontiguousarray(runs.start), np.ascontiguousarray(runs.end), float(eps_t2))
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _pair_frame(a, b, t, run_start, run_end, eps_t2):
+    """Decision time tau of pair (a, b) and its row ranges; ``ok`` is False when A ended eps_t2 or more before s_B.
+
+    Returns (ok, tau, end of A's rows up to tau, end of B's rows up to tau):
+    A's past is ``[run_start[a], past_a_end)``, B's part ``[run_start[b], b_end)``.
     """
-    order = np.argsort(clusters.start, kind="stable")
-    times = [t[rows] for rows in clusters.rows]
+    start_b = t[run_start[b]]
+    tau = min(t[run_end[b] - 1], start_b + eps_t2)
+    lo, past_a_end = time_range(t, run_start[a], run_end[a], -np.inf, tau)
+    lo, before_b_end = time_range(t, run_start[a], past_a_end, -np.inf, start_b)
+    alive = past_a_end > before_b_end
+    gap = 0.0 if alive else start_b - t[before_b_end - 1]
+    lo, b_end = time_range(t, run_start[b], run_end[b], -np.inf, tau)
+    return gap < eps_t2, tau, past_a_end, b_end
 
-    def box(k, low, high):
-        rows = clusters.rows[k][np.searchsorted(times[k], low, "left") : np.searchsorted(times[k], high, "right")]
-        if len(rows) == 0:
-            return None
-        return x[rows].min(), x[rows].max(), y[rows].min(), y[rows].max()
 
-    pairs = []
-    for position, b in enumerate(order):
-        earlier = order[:position]
-        start_b = clusters.start[b]
-        alive = earlier[(clusters.end[earlier] > start_b - eps_t2) & (clusters.start[earlier] <= start_b)]
-        if len(alive) == 0:
+@numba.njit(cache=True, nogil=True)
+def _velocity_frames(pair_a, pair_b, t, x, y, run_start, run_end, eps_d, eps_t2):
+    """Eq. 6's frames: A's rows in [s_B - eps_t2, tau], B's rows up to tau, kept when d_min < eps_d (m).
+
+    Returns a (n_kept, 5) array of (pair index, A's first, A's end, B's first, B's end) flat positions.
+    """
+    kept = np.empty((len(pair_a), 5), dtype=np.int64)
+    n_kept = 0
+    eps_d2 = eps_d * eps_d
+    for k in range(len(pair_a)):
+        a, b = pair_a[k], pair_b[k]
+        ok, tau, past_a_end, b_end = _pair_frame(a, b, t, run_start, run_end, eps_t2)
+        if not ok:
             continue
-        box_b = box(b, start_b, start_b + eps_t2)
-        for a in alive:
-            box_a = box(a, start_b - eps_t2, start_b + eps_t2)
-            if box_a is None:
-                continue
-            gap_x = max(box_a[0] - box_b[1], box_b[0] - box_a[1], 0.0)
-            gap_y = max(box_a[2] - box_b[3], box_b[2] - box_a[3], 0.0)
-            if gap_x * gap_x + gap_y * gap_y <= reach * reach:
-                pairs.append((int(a), int(b)))
-    return pairs
+        a_first, a_end = time_range(t, run_start[a], past_a_end, t[run_start[b]] - eps_t2, np.inf)
+        if a_first == a_end:
+            continue
+        close = False
+        for i in range(a_first, a_end):
+            for j in range(run_start[b], b_end):
+                if (x[i] - x[j]) ** 2 + (y[i] - y[j]) ** 2 < eps_d2:
+                    close = True
+                    break
+            if close:
+                break
+        if close:
+            kept[n_kept] = (k, a_first, a_end, run_start[b], b_end)
+            n_kept += 1
+    return kept[:n_kept]
 
 
-def scan_centres(rows, x, y, t):
-    """Times and mean (x, y) of one cluster's detections per scan, in time order."""
-    times, inverse = np.unique(t[rows], return_inverse=True)
-    count = np.bincount(inverse)
-    return times, np.bincount(inverse, x[rows]) / count, np.bincount(inverse, y[rows]) / count
+def velocity_frames(runs, pair_a, pair_b, eps_d, eps_t2):
+    """Candidate pairs of Eq. 6 with their detection frames (see :func:`_velocity_frames`)."""
+    return _velocity_frames(pair_a, pair_b, runs.t, runs.x, runs.y, runs.run_start, runs.run_end, float(eps_d), float(eps_t2))
 
 
-def moving_average(values, window=SMOOTHING_WINDOW):
-    """Centred moving average whose window shrinks symmetrically at the ends.
+@numba.njit(cache=True, nogil=True, inline="always")
+def _smoothed(values, last, n):
+    """Centred 3-scan moving average at scan ``last`` of a track of ``n`` scans (window shrinks at the ends)."""
+    if last == 0 or last == n - 1:
+        return values[last]
+    return (values[last - 1] + values[last] + values[last + 1]) / 3.0
 
-    A symmetric window keeps a straight track straight up to its last point;
-    padding the ends instead would bend it and bias the end velocity.
+
+@numba.njit(cache=True, nogil=True)
+def _continuation(scan_t, scan_x, scan_y, first, n):
+    """End time, end centre and end velocity (m/s; nan if unknown) of the first ``n`` scans of a track.
+
+    The per-scan centres are smoothed by a centred moving average; the
+    velocity is the derivative, at the last centre, of the cubic through
+    the last four smoothed centres (the end piece of a cubic spline,
+    evaluated exactly) or the slope of the line fitted to the last two or
+    three.  A single scan has no velocity.
     """
-    n = len(values)
-    cumulative = np.concatenate([[0.0], np.cumsum(values)])
-    half = np.minimum(np.minimum(np.arange(n), n - 1 - np.arange(n)), window // 2)
-    lo, hi = np.arange(n) - half, np.arange(n) + half + 1
-    return (cumulative[hi] - cumulative[lo]) / (hi - lo)
-
-
-def continuation(times, cx, cy):
-    """End time, end centre and end velocity of a cluster's smoothed centre track.
-
-    The per-scan centres are smoothed by a moving average; the velocity is
-    the derivative, at the last centre, of the cubic through the last four
-    smoothed centres -- the end piece of a cubic spline, evaluated exactly
-    instead of by fine resampling -- or of the line through the last two or
-    three when fewer exist.  With a single scan the velocity is unknown
-    (nan).  Only centres up to the track's end are used: nothing later.
-    """
-    n = len(times)
+    last = first + n - 1
+    end_x, end_y = scan_x[last], scan_y[last]
     if n == 1:
-        return times[0], np.array([cx[0], cy[0]]), np.array([np.nan, np.nan])
-    tail = slice(max(n - 4 - SMOOTHING_WINDOW, 0), n)  # enough for the last 4 smoothed centres
-    t_tail, x_tail, y_tail = times[tail], moving_average(cx[tail]), moving_average(cy[tail])
-    k = min(4, len(t_tail))
-    lag = t_tail[-k:] - t_tail[-1]
+        return scan_t[last], end_x, end_y, np.nan, np.nan
+    k = min(4, n)
+    lag = np.empty(k)
+    sx = np.empty(k)
+    sy = np.empty(k)
+    for i in range(k):
+        scan = n - k + i
+        lag[i] = scan_t[first + scan] - scan_t[last]
+        sx[i] = _smoothed(scan_x[first:last + 1], scan, n)
+        sy[i] = _smoothed(scan_y[first:last + 1], scan, n)
+    vx = 0.0
+    vy = 0.0
     if k == 4:
-        basis = np.vander(lag, 4, increasing=True)  # cubic in time, origin at the last centre
-        velocity = np.linalg.solve(basis, np.c_[x_tail[-k:], y_tail[-k:]])[1]
+        # Derivative at lag 0 (the last node) of the Lagrange interpolant: sum of w_i * value_i.
+        for i in range(4):
+            if i == 3:
+                w = 0.0
+                for m in range(3):
+                    w += 1.0 / (lag[3] - lag[m])
+            else:
+                w = 1.0 / (lag[i] - lag[3])
+                for m in range(3):
+                    if m != i:
+                        w *= (lag[3] - lag[m]) / (lag[i] - lag[m])
+            vx += w * sx[i]
+            vy += w * sy[i]
     else:
-        velocity = np.polyfit(lag, np.c_[x_tail[-k:], y_tail[-k:]], 1)[0]
-    return times[-1], np.array([x_tail[-1], y_tail[-1]]), velocity
+        mean_lag, mean_x, mean_y = lag.mean(), sx.mean(), sy.mean()
+        spread = 0.0
+        for i in range(k):
+            spread += (lag[i] - mean_lag) ** 2
+            vx += (lag[i] - mean_lag) * (sx[i] - mean_x)
+            vy += (lag[i] - mean_lag) * (sy[i] - mean_y)
+        vx /= spread
+        vy /= spread
+    return scan_t[last], end_x, end_y, vx, vy
 
 
-def predict(track_end, position, velocity, at):
-    """Constant-velocity continuation of a centre to the times ``at`` (s); unknown velocity stays put."""
-    v = np.nan_to_num(velocity)
-    return position[None, :] + (np.asarray(at)[:, None] - track_end) * v[None, :]
+@numba.njit(cache=True, nogil=True)
+def _scans_up_to(scan_t, first, end, tau):
+    lo, hi = time_range(scan_t, first, end, -np.inf, tau)
+    return hi - first
 
 
-def min_distance(a_x, a_y, b_x, b_y):
-    """Smallest distance between two point sets, m."""
-    return float(np.sqrt(np.min((a_x[:, None] - b_x[None, :]) ** 2 + (a_y[:, None] - b_y[None, :]) ** 2)))
+@numba.njit(cache=True, nogil=True)
+def _continuation_edges(pair_a, pair_b, t, run_start, run_end, scan_t, scan_x, scan_y, scan_start, scan_end,
+                        eps_d, eps_v, eps_t2, accept_unknown):  # fmt: skip
+    """The continuation criterion for every pair: continued centres within eps_d (m), velocities within eps_v (m/s)."""
+    merge = np.zeros(len(pair_a), dtype=np.bool_)
+    for k in range(len(pair_a)):
+        a, b = pair_a[k], pair_b[k]
+        ok, tau, past_a_end, b_end = _pair_frame(a, b, t, run_start, run_end, eps_t2)
+        if not ok:
+            continue
+        n_a = _scans_up_to(scan_t, scan_start[a], scan_end[a], tau)
+        n_b = _scans_up_to(scan_t, scan_start[b], scan_end[b], tau)
+        end_a, xa, ya, vxa, vya = _continuation(scan_t, scan_x, scan_y, scan_start[a], n_a)
+        end_b, xb, yb, vxb, vyb = _continuation(scan_t, scan_x, scan_y, scan_start[b], n_b)
+        known = np.isfinite(vxa) and np.isfinite(vya) and np.isfinite(vxb) and np.isfinite(vyb)
+        pa_x, pa_y = (vxa, vya) if np.isfinite(vxa) and np.isfinite(vya) else (0.0, 0.0)
+        pb_x, pb_y = (vxb, vyb) if np.isfinite(vxb) and np.isfinite(vyb) else (0.0, 0.0)
+        start_b = t[run_start[b]]
+        d_pred = np.inf
+        for fraction in (0.0, 0.5, 1.0):
+            at = start_b + fraction * eps_t2
+            dx = (xa + (at - end_a) * pa_x) - (xb + (at - end_b) * pb_x)
+            dy = (ya + (at - end_a) * pa_y) - (yb + (at - end_b) * pb_y)
+            d_pred = min(d_pred, np.sqrt(dx * dx + dy * dy))
+        if d_pred >= eps_d:
+            continue
+        if known:
+            merge[k] = np.sqrt((vxa - vxb) ** 2 + (vya - vyb) ** 2) < eps_v
+        else:
+            merge[k] = accept_unknown
+    return merge
+
+
+def continuation_edges(runs, pair_a, pair_b, eps_d, eps_v, eps_t2, accept_unknown):
+    """Boolean per pair: does the continuation criterion merge it? (see :func:`_continuation_edges`)."""
+    return _continuation_edges(
+        pair_a, pair_b, runs.t, runs.run_start, runs.run_end, runs.scan_t, runs.scan_x, runs.scan_y,
+        runs.scan_start, runs.scan_end, float(eps_d), float(eps_v), float(eps_t2), bool(accept_unknown),
+    )  # fmt: skip
+
+
+def track_continuation(runs, cluster, tau):
+    """(end time s, end centre m, end velocity m/s) of ``cluster``'s track from its scans up to ``tau`` (s)."""
+    first, end = runs.scan_start[cluster], runs.scan_end[cluster]
+    n = int(np.searchsorted(runs.scan_t[first:end], tau, side="right"))
+    end_t, x, y, vx, vy = _continuation(runs.scan_t, runs.scan_x, runs.scan_y, first, n)
+    return end_t, np.array([x, y]), np.array([vx, vy])
 
 
 def merge_components(n_clusters, edges, min_samples):

@@ -1,11 +1,24 @@
 """ClusterMerger (stage 2): merges what stage 1 split, keeps different road users apart, never looks ahead."""
 
+import importlib.util
+from pathlib import Path
+
 import numpy as np
 import pandas as pd
 import pytest
 
 from sklearn_radar import ClusterMerger, RadarDBSCAN
 
+
+def _load_reference():
+    """The plain per-pair implementation next to this file (tests run with --import-mode=importlib)."""
+    spec = importlib.util.spec_from_file_location("_merger_reference", Path(__file__).with_name("_merger_reference.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+reference = _load_reference()
 STAGE1 = RadarDBSCAN(metric="xy", eps_xy=1.0, eps_vr=5.0, min_samples=2, vr_min=0.0)
 
 
@@ -130,3 +143,60 @@ def test_memory_runs_stage_1_once_for_many_stage_2_settings(tmp_path):
 def test_velocity_mode_needs_the_line_of_sight_columns():
     with pytest.raises(ValueError, match="azimuth_sc"):
         ClusterMerger(mode="velocity", stage1=STAGE1).fit(_split_by_a_gap().drop(columns="azimuth_sc"))
+
+
+@pytest.fixture(scope="module")
+def simulated_stage1():
+    """Two simulated sequences through frame transform, filter and a loose stage 1 (many small clusters)."""
+    from sklearn_radar import DopplerDensityFilter, FrameTransform
+    from sklearn_radar.datasets import make_scenes
+
+    scenes = make_scenes(n_sequences=2, duration=6.0, random_state=3)
+    X = DopplerDensityFilter().fit_transform(FrameTransform().fit_transform(scenes.data))
+    stage1 = RadarDBSCAN(metric="xyv", eps_xyv=0.9, vr_scale=1.0, min_samples=2, vr_min=0.2)
+    return X, stage1
+
+
+@pytest.mark.parametrize("mode", ["continuation", "velocity"])
+@pytest.mark.parametrize(
+    "params",
+    [
+        dict(eps_d=0.94, eps_phi=0.403, eps_v=2.72, eps_t2=0.35, unknown_velocity="reject"),
+        dict(eps_d=2.5, eps_phi=0.8, eps_v=4.0, eps_t2=1.0, unknown_velocity="accept"),
+        dict(eps_d=2.0, eps_phi=0.2, eps_v=2.0, eps_t2=0.25, unknown_velocity="reject"),
+    ],
+)
+def test_merges_equal_a_plain_per_pair_implementation(simulated_stage1, mode, params):
+    X, stage1 = simulated_stage1
+    model = ClusterMerger(mode=mode, stage1=stage1, **params).fit(X)
+    found = {(int(s), int(a), int(b)) for s, a, b in model.merges_}
+    expected = set()
+    los = (X["azimuth_sc"] + X["sensor_yaw"] + X["heading"]).to_numpy()
+    for sequence in np.unique(X["sequence"]):
+        rows = (X["sequence"] == sequence).to_numpy()
+        columns = [X[name].to_numpy()[rows] for name in ("x", "y", "t", "v_r")]
+        pairs = reference.reference_merges(model.stage1_labels_[rows], *columns, los[rows], mode=mode, **params)
+        expected |= {(int(sequence), a, b) for a, b in pairs}
+    assert len(expected) > 0  # the comparison is not vacuous
+    assert found == expected
+
+
+def test_track_continuation_equals_the_numpy_cubic_and_line(simulated_stage1):
+    from sklearn_radar.cluster._merge_kernels import cluster_runs, track_continuation
+
+    X, stage1 = simulated_stage1
+    rows = (X["sequence"] == X["sequence"].iloc[0]).to_numpy()
+    x, y, t = (X[name].to_numpy()[rows] for name in ("x", "y", "t"))
+    labels = stage1.fit(X[rows]).labels_
+    runs = cluster_runs(labels, x, y, t)
+    n_checked = 0
+    for k, label in enumerate(runs.ids):
+        member = np.flatnonzero(labels == label)
+        for tau in np.unique(t[member])[:8]:  # every prefix length from 1 to 8 scans
+            end, centre, velocity = track_continuation(runs, k, tau)
+            ref_end, ref_centre, ref_velocity = reference.reference_continuation(member[t[member] <= tau], x, y, t)
+            assert end == ref_end
+            np.testing.assert_allclose(centre, ref_centre, rtol=0, atol=1e-9)
+            np.testing.assert_allclose(velocity, ref_velocity, rtol=1e-7, atol=1e-7)
+            n_checked += 1
+    assert n_checked > 100
