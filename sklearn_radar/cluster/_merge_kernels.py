@@ -17,8 +17,6 @@ import numpy as np
 
 from .._neighbors import time_range
 
-SMOOTHING_WINDOW = 3  # scans, centred moving average of the centres (the kernels hard-code half-width 1)
-
 
 @dataclass
 class ClusterRuns:
@@ -55,7 +53,8 @@ def cluster_runs(labels, x, y, t):
     sorted_labels, sorted_t = labels[order], t[order]
     ids, run_start = np.unique(sorted_labels, return_index=True)
     run_end = np.r_[run_start[1:], len(order)].astype(np.int64)
-    new_scan = np.r_[True, (sorted_labels[1:] != sorted_labels[:-1]) | (sorted_t[1:] != sorted_t[:-1])] if len(order) else np.zeros(0, bool)
+    new_scan = np.ones(len(order), dtype=bool)  # a scan of a cluster: a run of equal (label, time)
+    new_scan[1:] = (sorted_labels[1:] != sorted_labels[:-1]) | (sorted_t[1:] != sorted_t[:-1])
     scan_of_row = np.cumsum(new_scan) - 1
     count = np.bincount(scan_of_row)
     scan_first = np.flatnonzero(new_scan)
@@ -148,11 +147,15 @@ def velocity_frames(runs, pair_a, pair_b, eps_d, eps_t2):
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def _smoothed(values, last, n):
-    """Centred 3-scan moving average at scan ``last`` of a track of ``n`` scans (window shrinks at the ends)."""
-    if last == 0 or last == n - 1:
-        return values[last]
-    return (values[last - 1] + values[last] + values[last + 1]) / 3.0
+def _smoothed(values, scan, n):
+    """Centred 3-scan moving average at ``scan`` of a track of ``n`` scans (the window shrinks at the ends).
+
+    A symmetric window keeps a straight track straight up to its last
+    point; padding the ends instead would bend it and bias the end velocity.
+    """
+    if scan == 0 or scan == n - 1:
+        return values[scan]
+    return (values[scan - 1] + values[scan] + values[scan + 1]) / 3.0
 
 
 @numba.njit(cache=True, nogil=True)
