@@ -128,3 +128,13 @@ def test_a_single_training_sequence_is_tuned_on_one_fold(tmp_path):
     assert main(["reproduce", "--data", str(folder), "--out", str(tmp_path / "out"), "--n-iter", "2", "--experiments", "3"]) == 0
     results = json.loads((tmp_path / "out" / "results.json").read_text())
     assert results["meta"]["data"]["train_sequences"] and len(results["experiments"]["3"]["convergence"]) == 2
+
+
+def test_the_report_says_reduced_budget_only_for_a_reduced_run(tiny_report, tmp_path):
+    from sklearn_radar.reproduce._report import write_report
+
+    results = json.loads((tiny_report / "results.json").read_text())
+    assert "reduced budget" in (tiny_report / "report.md").read_text()  # 2 iterations
+    results["meta"]["budget"]["n_iter"] = 100
+    write_report(tmp_path, results)
+    assert "reduced budget" not in (tmp_path / "report.md").read_text()
