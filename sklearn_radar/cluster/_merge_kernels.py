@@ -229,9 +229,10 @@ def _continuation_edges(pair_a, pair_b, t, run_start, run_end, scan_t, scan_x, s
         n_b = _scans_up_to(scan_t, scan_start[b], scan_end[b], tau)
         end_a, xa, ya, vxa, vya = _continuation(scan_t, scan_x, scan_y, scan_start[a], n_a)
         end_b, xb, yb, vxb, vyb = _continuation(scan_t, scan_x, scan_y, scan_start[b], n_b)
-        known = np.isfinite(vxa) and np.isfinite(vya) and np.isfinite(vxb) and np.isfinite(vyb)
-        pa_x, pa_y = (vxa, vya) if np.isfinite(vxa) and np.isfinite(vya) else (0.0, 0.0)
-        pb_x, pb_y = (vxb, vyb) if np.isfinite(vxb) and np.isfinite(vyb) else (0.0, 0.0)
+        known_a = np.isfinite(vxa) and np.isfinite(vya)
+        known_b = np.isfinite(vxb) and np.isfinite(vyb)
+        pa_x, pa_y = (vxa, vya) if known_a else (0.0, 0.0)  # an unknown velocity continues standing still
+        pb_x, pb_y = (vxb, vyb) if known_b else (0.0, 0.0)
         start_b = t[run_start[b]]
         d_pred = np.inf
         for fraction in (0.0, 0.5, 1.0):
@@ -241,7 +242,7 @@ def _continuation_edges(pair_a, pair_b, t, run_start, run_end, scan_t, scan_x, s
             d_pred = min(d_pred, np.sqrt(dx * dx + dy * dy))
         if d_pred >= eps_d:
             continue
-        if known:
+        if known_a and known_b:
             merge[k] = np.sqrt((vxa - vxb) ** 2 + (vya - vyb) ** 2) < eps_v
         else:
             merge[k] = accept_unknown
