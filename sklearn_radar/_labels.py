@@ -1,0 +1,71 @@
+"""Label bookkeeping shared by every estimator and the schema: one implementation each.
+
+* :func:`rank_by_first_appearance` numbers distinct keys 0, 1, ... in the
+  order of their first row (the numbering of ``labels_`` and of
+  :func:`~sklearn_radar.instance_target`);
+* :func:`consecutive_labels` applies it to cluster roots, keeping -1 (noise);
+* :func:`roots_to_rows` turns per-subset roots (positions within a subset of
+  rows) into global row numbers, the step that joins per-sequence results.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def rank_by_first_appearance(keys) -> np.ndarray:
+    """For each element of ``keys``, the rank of its value by first appearance.
+
+    Parameters
+    ----------
+    keys : array-like of shape (n,)
+        Any sortable values (ints, strings).
+
+    Returns
+    -------
+    rank : ndarray of int64, shape (n,)
+        0 for every element equal to ``keys[0]``, 1 for the next distinct
+        value met, and so on.
+    """
+    keys = np.asarray(keys)
+    if keys.size == 0:
+        return np.zeros(0, dtype=np.int64)
+    _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
+    rank = np.empty(len(first), dtype=np.int64)
+    rank[np.argsort(first, kind="stable")] = np.arange(len(first))
+    return rank[inverse.ravel()]
+
+
+def consecutive_labels(roots) -> np.ndarray:
+    """Cluster ids 0, 1, ... in order of each cluster's first row; negative roots become -1.
+
+    Parameters
+    ----------
+    roots : array-like of int, shape (n,)
+        Any cluster key per row (a root row, a stage-1 id), -1 for noise.
+
+    Returns
+    -------
+    labels : ndarray of int64, shape (n,)
+    """
+    roots = np.asarray(roots)
+    labels = np.full(len(roots), -1, dtype=np.int64)
+    clustered = roots >= 0
+    labels[clustered] = rank_by_first_appearance(roots[clustered])
+    return labels
+
+
+def roots_to_rows(rows, local_roots, out) -> None:
+    """Write ``rows[local_roots]`` into ``out[rows]`` where a local root exists (>= 0).
+
+    Parameters
+    ----------
+    rows : ndarray of int, shape (m,)
+        Global row numbers of one subset (e.g. one sequence).
+    local_roots : ndarray of int, shape (m,)
+        Root of each row of the subset as a position within ``rows``, -1 for none.
+    out : ndarray of int64
+        Global roots, updated in place; rows without a root are left as they are.
+    """
+    found = local_roots >= 0
+    out[rows[found]] = rows[local_roots[found]]
