@@ -56,6 +56,8 @@ from dataclasses import dataclass
 import numpy as np
 import pandas as pd
 
+from ._labels import rank_by_first_appearance
+
 
 @dataclass(frozen=True)
 class Column:
@@ -155,6 +157,150 @@ EGO_FIELDS = (
 MOUNTING_FIELDS = (("x", "sensor_x"), ("y", "sensor_y"), ("yaw", "sensor_yaw"))
 
 
+#: Working columns written by FrameTransform and read by the later stages:
+#: x and y (m, car or frame coordinates), v_r (ego-motion-compensated radial
+#: velocity, m/s), t (s) and heading (rad, the car's yaw in the x-y axes).
+WORK_COLUMNS = (
+    Column("x", "float64", "m", "x in the working frame (car frame or the sequence frame)"),
+    Column("y", "float64", "m", "y in the working frame"),
+    Column("v_r", "float64", "m/s", "ego-motion-compensated radial velocity, negative = approaching"),
+    Column("t", "float64", "s", "scan time, timestamp * 1e-6"),
+    Column("heading", "float64", "rad", "yaw of the car's x axis in the working x-y axes (0 in the car frame)"),
+    Column("keep", "bool", "-", "False where DopplerDensityFilter (Eq. 1) removes the detection"),
+)
+
+
+@dataclass(frozen=True)
+class ArrayLayout:
+    """The positions of the columns in plain-array input, and which may be absent.
+
+    A DataFrame is read by column name; a plain numeric array (scikit-learn's
+    common checks, quick experiments) by position in :attr:`columns`.  An
+    array may be narrower than the layout.  An absent trailing column that
+    has a neutral value in :attr:`neutral` takes it (one sequence, every
+    detection kept, car axes, ...); any other absent column is *missing*:
+    an estimator that needs it raises a ValueError naming it, and one that
+    does not need it never reads it.  No measured quantity (a range, an
+    angle) is ever made up.
+
+    Parameters
+    ----------
+    name : str
+        Used in error messages.
+    columns : tuple of str
+        Column names in positional order.
+    neutral : mapping of str to float
+        The value of each column that may be left out of an array.
+    """
+
+    name: str
+    columns: tuple
+    neutral: dict
+
+    def position(self, name: str) -> int:
+        """Position of column ``name`` in an array of this layout."""
+        return self.columns.index(name)
+
+
+@dataclass(frozen=True)
+class ColumnsRead:
+    """The columns one estimator reads: those it always needs and those it uses when present.
+
+    Parameters
+    ----------
+    required : tuple of str
+        A DataFrame must hold them; an array must hold them or their layout
+        must give them a neutral value.
+    optional : tuple of str
+        Read when present; absent ones are None, or their neutral value in
+        an array.
+    layout : ArrayLayout
+        How a plain array holds them.
+    """
+
+    required: tuple
+    optional: tuple
+    layout: ArrayLayout
+
+    @property
+    def names(self) -> tuple:
+        """Every column read, required first."""
+        return self.required + self.optional
+
+
+#: Raw detections as FrameTransform reads them from an array: the measurement,
+#: then mounting and odometry.  Left out, mounting and odometry are 0 (sensor
+#: at the car origin looking forward, the car at rest at the frame origin),
+#: azimuth 0 (boresight), Doppler 0, timestamp 0 (one scan) and sequence 0.
+RAW_LAYOUT = ArrayLayout(
+    name="raw detection array",
+    columns=(
+        "range_sc",
+        "azimuth_sc",
+        "vr",
+        "timestamp",
+        "sensor_x",
+        "sensor_y",
+        "sensor_yaw",
+        "ego_x_seq",
+        "ego_y_seq",
+        "ego_yaw_seq",
+        "ego_vx",
+        "ego_yaw_rate",
+        "sequence",
+    ),
+    neutral={
+        "azimuth_sc": 0.0,
+        "vr": 0.0,
+        "timestamp": 0.0,
+        "sensor_x": 0.0,
+        "sensor_y": 0.0,
+        "sensor_yaw": 0.0,
+        "ego_x_seq": 0.0,
+        "ego_y_seq": 0.0,
+        "ego_yaw_seq": 0.0,
+        "ego_vx": 0.0,
+        "ego_yaw_rate": 0.0,
+        "sequence": 0.0,
+    },
+)
+
+#: Working detections as FrameTransform writes them to an array and every later
+#: stage reads them.  Left out, y, v_r and t are 0 (points in one plane, no
+#: Doppler, one scan), sequence 0, keep 1 (every detection kept) and heading 0
+#: (the car axes are the x-y axes).  ``range_sc`` (Eq. 2), ``azimuth_sc`` and
+#: ``sensor_yaw`` (line of sight, Eq. 6) have no neutral value: a parameter
+#: that needs them raises when they are missing.
+WORK_LAYOUT = ArrayLayout(
+    name="working detection array",
+    columns=("x", "y", "v_r", "t", "sequence", "keep", "range_sc", "heading", "azimuth_sc", "sensor_yaw"),
+    neutral={"y": 0.0, "v_r": 0.0, "t": 0.0, "sequence": 0.0, "keep": 1.0, "heading": 0.0},
+)
+
+_WORK = ("x", "y", "v_r", "t")
+
+#: FrameTransform (stage 0).
+FRAME_TRANSFORM_READS = ColumnsRead(
+    required=tuple(name for name in RAW_LAYOUT.columns if name != "sequence"),
+    optional=("sequence",),
+    layout=RAW_LAYOUT,
+)
+#: DopplerDensityFilter (Eq. 1).
+FILTER_READS = ColumnsRead(required=_WORK, optional=("sequence",), layout=WORK_LAYOUT)
+#: RadarDBSCAN (Eqs. 2-5); ``range_sc`` is needed when ``alpha_r > 0``.
+STAGE1_READS = ColumnsRead(
+    required=_WORK, optional=("sequence", "keep", "range_sc", "heading"), layout=WORK_LAYOUT
+)
+#: ClusterMerger (stage 2); ``azimuth_sc`` and ``sensor_yaw`` are needed by ``mode="velocity"``.
+MERGER_READS = ColumnsRead(
+    required=_WORK,
+    optional=STAGE1_READS.optional + ("azimuth_sc", "sensor_yaw"),
+    layout=WORK_LAYOUT,
+)
+#: The scikit-learn baselines per time window.
+WINDOWED_READS = ColumnsRead(required=_WORK, optional=("sequence", "keep"), layout=WORK_LAYOUT)
+
+
 def column_names(columns):
     """Names of a tuple of :class:`Column`."""
     return [column.name for column in columns]
@@ -247,10 +393,7 @@ def instance_target(track_id, sequence=None) -> np.ndarray:
     keys = track_id[is_object]
     if sequence is not None:
         keys = np.char.add(np.asarray(sequence)[is_object].astype(str), np.char.add(":", keys))
-    _, first, inverse = np.unique(keys, return_index=True, return_inverse=True)
-    rank = np.empty(len(first), dtype=np.int64)
-    rank[np.argsort(first, kind="stable")] = np.arange(len(first))
-    target[is_object] = rank[inverse.ravel()]
+    target[is_object] = rank_by_first_appearance(keys)
     return target
 
 

@@ -2,10 +2,10 @@
 
 The estimators work on the detection table (:mod:`sklearn_radar._schema`)
 and read the columns they need by name.  A plain numeric array is accepted
-as well (scikit-learn's common checks and quick experiments use one); its
-columns are read by position in :data:`ARRAY_LAYOUT`, missing trailing
-columns take their defaults, and each stage writes its result back at its
-own position, so that a Pipeline of arrays stays consistent.
+as well (scikit-learn's common checks and quick experiments use one).  What
+each estimator reads, and how an array holds it, is one contract defined in
+:mod:`sklearn_radar._schema` (:class:`~sklearn_radar._schema.ColumnsRead`,
+:data:`~sklearn_radar._schema.WORK_LAYOUT`): here it is only applied.
 """
 
 from __future__ import annotations
@@ -14,25 +14,10 @@ import numpy as np
 import pandas as pd
 from sklearn.utils.validation import validate_data
 
-#: Working columns written by FrameTransform, read by the later stages:
-#: x and y (m, car or frame coordinates), v_r (ego-motion-compensated radial
-#: velocity, m/s), t (s) and heading (rad, the car's yaw in the x-y axes).
-WORK_COLUMNS = ("x", "y", "v_r", "t", "heading")
-
-#: Positions of the columns in a plain array, and their defaults when absent.
-ARRAY_LAYOUT = {
-    "x": 0.0,
-    "y": 0.0,
-    "v_r": 0.0,
-    "t": 0.0,
-    "sequence": 0.0,
-    "keep": 1.0,
-    "range_sc": 50.0,
-    "heading": 0.0,
-}
+from ._schema import WORK_LAYOUT, ColumnsRead
 
 
-def read_columns(estimator, X, required, optional=(), *, reset, layout=None):
+def read_columns(estimator, X, reads: ColumnsRead, *, reset):
     """Validate ``X`` and return ``(X, columns)``, columns as float64 arrays by name.
 
     Parameters
@@ -41,58 +26,88 @@ def read_columns(estimator, X, required, optional=(), *, reset, layout=None):
         Receives ``n_features_in_`` (and ``feature_names_in_``) via
         :func:`~sklearn.utils.validation.validate_data`.
     X : DataFrame or array-like of shape (n_samples, n_features)
-    required, optional : sequence of str
-        Columns to read.  A DataFrame must hold every required column; an
-        absent optional column is returned as None.  An array is read by
-        position in ``layout`` and absent positions (required or optional)
-        take their defaults.
+        Detections.
+    reads : ColumnsRead
+        The columns to read.  A DataFrame must hold every required column;
+        an absent optional column is returned as None.  An array is read by
+        position in ``reads.layout``: an absent column takes its neutral
+        value, or is None (optional) or an error (required) when it has none.
     reset : bool
         True in ``fit``, False afterwards.
-    layout : dict, default=None
-        ``{name: default}`` in positional order; :data:`ARRAY_LAYOUT` if None.
+
+    Returns
+    -------
+    X : DataFrame or ndarray
+        The validated input.
+    columns : dict of str to ndarray or None
+        Every column of ``reads``.
     """
-    layout = ARRAY_LAYOUT if layout is None else layout
+    name = type(estimator).__name__
     if isinstance(X, pd.DataFrame):
         validate_data(estimator, X, skip_check_array=True, reset=reset)
         if len(X) == 0:
-            raise ValueError(f"{type(estimator).__name__}: X has 0 rows; at least 1 is required")
-        missing = [name for name in required if name not in X.columns]
+            raise ValueError(f"{name}: X has 0 rows; at least 1 is required")
+        missing = [column for column in reads.required if column not in X.columns]
         if missing:
-            raise ValueError(f"{type(estimator).__name__}: X is missing the column(s) {missing}")
-        names = list(required) + [name for name in optional if name in X.columns]
-        columns = {name: _numeric_column(X[name], name, estimator) for name in names}
-        columns.update({name: None for name in optional if name not in X.columns})
+            raise ValueError(f"{name}: X is missing the column(s) {missing}")
+        present = [column for column in reads.names if column in X.columns]
+        columns = {column: None for column in reads.names}
+        columns.update({column: _numeric_column(X[column], column, estimator) for column in present})
         return X, columns
     X = validate_data(estimator, X, reset=reset, dtype=np.float64)
-    positions = list(layout)
+    layout = reads.layout
     columns = {}
-    for name in list(required) + list(optional):
-        position = positions.index(name)
+    for column in reads.names:
+        position = layout.position(column)
         if position < X.shape[1]:
-            columns[name] = X[:, position]
+            columns[column] = X[:, position]
+        elif column in layout.neutral:
+            columns[column] = np.full(X.shape[0], layout.neutral[column], dtype=np.float64)
+        elif column in reads.required:
+            raise ValueError(
+                f"{name}: the {layout.name} has {X.shape[1]} column(s); column {column!r} "
+                f"(position {position}) is required"
+            )
         else:
-            columns[name] = np.full(X.shape[0], layout[name], dtype=np.float64)
+            columns[column] = None
     return X, columns
 
 
-def write_columns(X, new_columns, layout=None):
+def write_columns(X, new_columns, layout=WORK_LAYOUT):
     """``X`` with ``new_columns`` added (DataFrame) or written at their positions (array).
 
     Rows are never added, dropped or reordered, and ``X`` is not modified.
-    An array is padded with the defaults of ``layout`` up to the last
-    written position.
+    An array is widened up to the last written position; the columns in
+    between take their neutral values (a ValueError names one that has none).
+
+    Parameters
+    ----------
+    X : DataFrame or ndarray of shape (n_samples, n_features)
+        The input of a transformer.
+    new_columns : dict of str to array-like of shape (n_samples,)
+        Columns to add or overwrite.
+    layout : ArrayLayout, default=WORK_LAYOUT
+        Positions of the columns of an array.
+
+    Returns
+    -------
+    Xt : DataFrame or ndarray
+        X with the new columns.
     """
     if isinstance(X, pd.DataFrame):
         return X.assign(**{name: np.asarray(values) for name, values in new_columns.items()})
-    layout = ARRAY_LAYOUT if layout is None else layout
-    positions = list(layout)
-    width = max(X.shape[1], max(positions.index(name) for name in new_columns) + 1)
+    width = max(X.shape[1], max(layout.position(name) for name in new_columns) + 1)
     out = np.empty((X.shape[0], width), dtype=np.float64)
     out[:, : X.shape[1]] = X
     for position in range(X.shape[1], width):
-        out[:, position] = layout[positions[position]]
+        column = layout.columns[position]
+        if column in new_columns:
+            continue
+        if column not in layout.neutral:
+            raise ValueError(f"cannot widen the {layout.name}: column {column!r} has no neutral value")
+        out[:, position] = layout.neutral[column]
     for name, values in new_columns.items():
-        out[:, positions.index(name)] = values
+        out[:, layout.position(name)] = values
     return out
 
 

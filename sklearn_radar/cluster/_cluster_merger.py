@@ -10,7 +10,8 @@ from sklearn.base import BaseEstimator, ClusterMixin, _fit_context, clone
 from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
 from sklearn.utils.validation import check_memory
 
-from .._validation import ARRAY_LAYOUT, read_columns, sequence_slices
+from .._schema import MERGER_READS, STAGE1_READS
+from .._validation import read_columns, sequence_slices
 from ._merge_kernels import (
     cluster_runs,
     continuation_edges,
@@ -21,9 +22,6 @@ from ._merge_kernels import (
 from ._radar_dbscan import RadarDBSCAN, _consecutive_labels
 from ._velocity import estimate_velocities
 
-#: Array layout of ClusterMerger: RadarDBSCAN's, then the line-of-sight columns.
-MERGER_LAYOUT = {**ARRAY_LAYOUT, "azimuth_sc": 0.0, "sensor_yaw": 0.0}
-_STAGE1_COLUMNS = ("x", "y", "v_r", "t", "sequence", "keep", "range_sc", "heading")
 
 
 def _stage1_labels(stage1, columns):
@@ -109,7 +107,9 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
     ``azimuth_sc`` and ``sensor_yaw`` (rad): a detection's line of sight is
     ``azimuth_sc + sensor_yaw + heading``.  A plain array is read by
     position ``[x, y, v_r, t, sequence, keep, range_sc, heading, azimuth_sc,
-    sensor_yaw]``.
+    sensor_yaw]`` (:data:`~sklearn_radar._schema.WORK_LAYOUT`); the velocity
+    mode raises when the line-of-sight columns are missing, rather than
+    assume a boresight view.
 
     Examples
     --------
@@ -171,12 +171,11 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
         -------
         self : ClusterMerger
         """
-        optional = _STAGE1_COLUMNS[4:] + (("azimuth_sc", "sensor_yaw") if self.mode == "velocity" else ())
-        X, c = read_columns(self, X, _STAGE1_COLUMNS[:4], optional, reset=True, layout=MERGER_LAYOUT)
+        X, c = read_columns(self, X, MERGER_READS, reset=True)
         if self.mode == "velocity" and (c["azimuth_sc"] is None or c["sensor_yaw"] is None):
             raise ValueError("ClusterMerger: mode='velocity' needs the columns 'azimuth_sc' and 'sensor_yaw' (rad)")
         stage1 = clone(self.stage1) if self.stage1 is not None else RadarDBSCAN()
-        stage1_labels = check_memory(self.memory).cache(_stage1_labels)(stage1, {name: c[name] for name in _STAGE1_COLUMNS})
+        stage1_labels = check_memory(self.memory).cache(_stage1_labels)(stage1, {name: c[name] for name in STAGE1_READS.names})
         stage1_labels = np.asarray(stage1_labels)
         sequence = np.zeros(len(stage1_labels)) if c["sequence"] is None else c["sequence"]
         los = None

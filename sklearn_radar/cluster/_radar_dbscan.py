@@ -10,11 +10,9 @@ from sklearn.base import BaseEstimator, ClusterMixin, _fit_context
 from sklearn.utils._param_validation import Interval, StrOptions
 
 from .._neighbors import build_grid
+from .._schema import STAGE1_READS
 from .._validation import read_columns, sequence_slices
 from ._radar_dbscan_kernels import BOX_UNROTATED, METRIC_CODES, causal_sequence, causal_update, dbscan_sorted
-
-_REQUIRED = ("x", "y", "v_r", "t")
-_OPTIONAL = ("sequence", "keep", "range_sc", "heading")
 
 
 def min_points_at_range(range_m, min_samples, alpha_r, range_scaling="reciprocal"):
@@ -127,7 +125,9 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
     columns ``x``, ``y`` (m), ``v_r`` (m/s), ``t`` (s) and, when present,
     ``sequence``, ``keep``, ``range_sc`` (m, needed when ``alpha_r > 0``) and
     ``heading`` (rad).  A plain array is read by position
-    ``[x, y, v_r, t, sequence, keep, range_sc, heading]``.  With one
+    ``[x, y, v_r, t, sequence, keep, range_sc, heading]``
+    (:data:`~sklearn_radar._schema.WORK_LAYOUT`); ``alpha_r > 0`` raises when
+    ``range_sc`` is missing rather than assume a range.  With one
     sequence, ``eps_t=None``, ``alpha_r=0`` and ``vr_min=-inf`` the result is
     scikit-learn's DBSCAN on (x, y) with ``metric="xy"`` and a huge
     ``eps_vr``, on (x, y, v_r / vr_scale) with ``metric="xyv"``, and the
@@ -201,7 +201,7 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
         -------
         self : RadarDBSCAN
         """
-        X, c = read_columns(self, X, _REQUIRED, _OPTIONAL, reset=True)
+        X, c = read_columns(self, X, STAGE1_READS, reset=True)
         self.__dict__.pop("_stream", None)  # a batch fit ends any stream
         n = len(c["x"])
         active, min_points, can_be_core = self._point_rules(c)
@@ -246,7 +246,7 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
             ``labels_`` holds the labels of the rows of X (-1 for noise).
         """
         first_call = not hasattr(self, "_stream")
-        X, c = read_columns(self, X, _REQUIRED, _OPTIONAL, reset=first_call)
+        X, c = read_columns(self, X, STAGE1_READS, reset=first_call)
         if first_call:
             self._stream = ScanStream(self)
         self.labels_ = self._stream._label(c)

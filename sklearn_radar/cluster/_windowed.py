@@ -9,10 +9,10 @@ from sklearn.base import BaseEstimator, ClusterMixin, _fit_context
 from sklearn.cluster import DBSCAN, HDBSCAN
 from sklearn.utils._param_validation import Interval
 
+from .._schema import WINDOWED_READS
 from .._validation import read_columns
 from ._radar_dbscan import _consecutive_labels
 
-_OPTIONAL = ("sequence", "keep")
 _SEPARATION = 1e5  # m between windows laid side by side for one DBSCAN call
 
 
@@ -32,7 +32,7 @@ class _WindowedClusterer(ClusterMixin, BaseEstimator):
     """Shared input handling: columns x, y (m), v_r (m/s), t (s), optional sequence and keep."""
 
     def _features(self, X, reset):
-        X, c = read_columns(self, X, ("x", "y", "v_r", "t"), _OPTIONAL, reset=reset)
+        X, c = read_columns(self, X, WINDOWED_READS, reset=reset)
         active = np.ones(len(c["x"]), dtype=bool) if c["keep"] is None else c["keep"] != 0
         features = np.c_[c["x"], c["y"], c["v_r"] / self.vr_scale]
         return features, _window_ids(c, self.window), active

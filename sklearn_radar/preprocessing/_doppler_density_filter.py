@@ -11,6 +11,7 @@ from sklearn.utils._param_validation import Interval
 from sklearn.utils.validation import check_is_fitted
 
 from .._neighbors import build_grid, count_neighbors
+from .._schema import FILTER_READS
 from .._validation import read_columns, sequence_slices, write_columns
 
 
@@ -133,8 +134,9 @@ class DopplerDensityFilter(TransformerMixin, BaseEstimator):
     Reads the columns ``x``, ``y`` (m), ``v_r`` (m/s), ``t`` (s) written by
     :class:`FrameTransform`, and ``sequence`` if present.  Returns X with a
     boolean column ``keep``.  A plain array is read by position
-    ``[x, y, v_r, t, sequence]`` (absent columns: v_r = t = sequence = 0) and
-    the result carries ``keep`` (1.0 or 0.0) at position 5.
+    ``[x, y, v_r, t, sequence]`` of :data:`~sklearn_radar._schema.WORK_LAYOUT`
+    (absent columns: y = v_r = t = sequence = 0) and the result carries
+    ``keep`` (1.0 or 0.0) at its position there, 5.
 
     Examples
     --------
@@ -190,7 +192,7 @@ class DopplerDensityFilter(TransformerMixin, BaseEstimator):
         self : DopplerDensityFilter
         """
         self._rule()
-        read_columns(self, X, ("x", "y", "v_r", "t"), ("sequence",), reset=True)
+        read_columns(self, X, FILTER_READS, reset=True)
         return self
 
     def transform(self, X):
@@ -207,7 +209,7 @@ class DopplerDensityFilter(TransformerMixin, BaseEstimator):
         """
         check_is_fitted(self)
         ratios, min_neighbors = self._rule()
-        X, c = read_columns(self, X, ("x", "y", "v_r", "t"), ("sequence",), reset=False)
+        X, c = read_columns(self, X, FILTER_READS, reset=False)
         counts = neighbor_counts(
             c["x"], c["y"], c["t"], c["sequence"], self.d_xy, self.dt, self.causal, int(min_neighbors.max()), self.n_jobs
         )

@@ -7,27 +7,8 @@ from sklearn.base import BaseEstimator, TransformerMixin, _fit_context
 from sklearn.utils._param_validation import StrOptions
 from sklearn.utils.validation import check_is_fitted
 
+from .._schema import FRAME_TRANSFORM_READS
 from .._validation import read_columns, write_columns
-
-#: Columns FrameTransform reads; a plain array holds them in this order
-#: (absent trailing columns default to 0: sensor at the car origin, ego at rest).
-INPUT_LAYOUT = {
-    "range_sc": 0.0,
-    "azimuth_sc": 0.0,
-    "vr": 0.0,
-    "timestamp": 0.0,
-    "sensor_x": 0.0,
-    "sensor_y": 0.0,
-    "sensor_yaw": 0.0,
-    "ego_x_seq": 0.0,
-    "ego_y_seq": 0.0,
-    "ego_yaw_seq": 0.0,
-    "ego_vx": 0.0,
-    "ego_yaw_rate": 0.0,
-    "sequence": 0.0,
-}
-_REQUIRED = tuple(name for name in INPUT_LAYOUT if name != "sequence")
-
 
 class FrameTransform(TransformerMixin, BaseEstimator):
     """Give every detection working coordinates x, y (m), v_r (m/s), t (s) and heading (rad).
@@ -78,9 +59,11 @@ class FrameTransform(TransformerMixin, BaseEstimator):
     ``t`` and ``heading`` added (overwritten if present).  A plain array is read by
     position in the order ``range_sc, azimuth_sc, vr, timestamp, sensor_x,
     sensor_y, sensor_yaw, ego_x_seq, ego_y_seq, ego_yaw_seq, ego_vx,
-    ego_yaw_rate, sequence`` (absent trailing columns are 0), and the result
-    is the array ``[x, y, v_r, t, sequence, keep, range_sc, heading]`` (keep
-    = 1) that the later stages read by position.
+    ego_yaw_rate, sequence`` (:data:`~sklearn_radar._schema.RAW_LAYOUT`;
+    absent trailing columns are 0: sensor at the car origin, car at rest, one
+    scan), and the result is the array ``[x, y, v_r, t, sequence, keep,
+    range_sc, heading, azimuth_sc, sensor_yaw]`` (keep = 1) that the later
+    stages read by position (:data:`~sklearn_radar._schema.WORK_LAYOUT`).
 
     Examples
     --------
@@ -111,7 +94,7 @@ class FrameTransform(TransformerMixin, BaseEstimator):
         -------
         self : FrameTransform
         """
-        read_columns(self, X, _REQUIRED, ("sequence",), reset=True, layout=INPUT_LAYOUT)
+        read_columns(self, X, FRAME_TRANSFORM_READS, reset=True)
         return self
 
     def transform(self, X):
@@ -125,11 +108,11 @@ class FrameTransform(TransformerMixin, BaseEstimator):
         -------
         Xt : DataFrame or ndarray
             A DataFrame with the columns added, or the array
-            ``[x, y, v_r, t, sequence, keep, range_sc, heading]`` of shape
-            (n_detections, 8).
+            ``[x, y, v_r, t, sequence, keep, range_sc, heading, azimuth_sc, sensor_yaw]``
+            of shape (n_detections, 10) (:data:`~sklearn_radar._schema.WORK_LAYOUT`).
         """
         check_is_fitted(self)
-        X, c = read_columns(self, X, _REQUIRED, ("sequence",), reset=False, layout=INPUT_LAYOUT)
+        X, c = read_columns(self, X, FRAME_TRANSFORM_READS, reset=False)
         angle = c["azimuth_sc"] + c["sensor_yaw"]
         cos_a, sin_a = np.cos(angle), np.sin(angle)
         x = c["sensor_x"] + c["range_sc"] * cos_a
@@ -149,7 +132,8 @@ class FrameTransform(TransformerMixin, BaseEstimator):
         if hasattr(X, "columns"):
             return write_columns(X, work)
         sequence = c["sequence"] if c["sequence"] is not None else np.zeros(len(x))
-        return write_columns(np.empty((len(x), 0)), {**work, "sequence": sequence, "range_sc": c["range_sc"]})
+        line_of_sight = {"range_sc": c["range_sc"], "azimuth_sc": c["azimuth_sc"], "sensor_yaw": c["sensor_yaw"]}
+        return write_columns(np.empty((len(x), 0)), {**work, "sequence": sequence, **line_of_sight})
 
     def __sklearn_tags__(self):
         tags = super().__sklearn_tags__()

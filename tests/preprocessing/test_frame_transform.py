@@ -107,8 +107,9 @@ def test_sequences_are_transformed_independently(scenes):
 def test_plain_array_is_read_by_position():
     r, az = np.array([1.0, 2.0]), np.array([0.0, np.pi / 2])
     Xt = FrameTransform().fit_transform(np.c_[r, az])
-    # [x, y, v_r, t, sequence, keep, range_sc, heading]
-    np.testing.assert_allclose(Xt, [[1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 0.0], [0.0, 2.0, 0.0, 0.0, 0.0, 1.0, 2.0, 0.0]], atol=1e-12)
+    # [x, y, v_r, t, sequence, keep, range_sc, heading, azimuth_sc, sensor_yaw]
+    expected = [[1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0], [0.0, 2.0, 0.0, 0.0, 0.0, 1.0, 2.0, 0.0, np.pi / 2, 0.0]]
+    np.testing.assert_allclose(Xt, expected, atol=1e-12)
 
 
 def test_missing_column_or_odometry_is_a_clear_error(scenes):
