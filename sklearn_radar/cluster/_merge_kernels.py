@@ -16,6 +16,7 @@ import numba
 import numpy as np
 
 from .._neighbors import time_range
+from .._union_find import find, union_keep_smaller
 
 
 @dataclass
@@ -265,29 +266,49 @@ def track_continuation(runs, cluster, tau):
     return end_t, np.array([x, y]), np.array([vx, vy])
 
 
-def merge_components(n_clusters, edges, min_samples):
-    """DBSCAN over clusters: cores have >= min_samples - 1 merge partners; returns a root per cluster."""
+@numba.njit(cache=True, nogil=True)
+def _merge_components(n_clusters, edges, min_samples):
+    """Kernel of :func:`merge_components`; ``edges`` is an (n_edges, 2) int64 array of cluster indices."""
     degree = np.zeros(n_clusters, dtype=np.int64)
-    for a, b in edges:
-        degree[a] += 1
-        degree[b] += 1
+    for k in range(len(edges)):
+        degree[edges[k, 0]] += 1
+        degree[edges[k, 1]] += 1
     core = degree + 1 >= min_samples
     parent = np.arange(n_clusters)
-
-    def find(i):
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
-    for a, b in edges:
-        if core[a] and core[b]:
-            ra, rb = find(a), find(b)
-            parent[max(ra, rb)] = min(ra, rb)
-    root = np.array([find(i) for i in range(n_clusters)])
-    for a, b in edges:  # a non-core cluster joins a core partner
+    for k in range(len(edges)):
+        if core[edges[k, 0]] and core[edges[k, 1]]:
+            union_keep_smaller(parent, edges[k, 0], edges[k, 1])
+    root = np.empty(n_clusters, dtype=np.int64)
+    for i in range(n_clusters):
+        root[i] = find(parent, i)
+    for k in range(len(edges)):  # a non-core cluster joins a core partner
+        a, b = edges[k, 0], edges[k, 1]
         if core[a] and not core[b] and root[b] == b:
             root[b] = root[a]
         elif core[b] and not core[a] and root[a] == a:
             root[a] = root[b]
     return root
+
+
+def merge_components(n_clusters, edges, min_samples):
+    """DBSCAN over clusters: cores have >= min_samples - 1 merge partners; returns a root per cluster.
+
+    Core clusters joined by an edge share the smallest cluster index as
+    their root (the union-find of :mod:`sklearn_radar._union_find`); a
+    non-core cluster takes the root of its first core partner.
+
+    Parameters
+    ----------
+    n_clusters : int
+        Number of stage-1 clusters of the sequence.
+    edges : sequence of (int, int)
+        Pairs of cluster indices that the merge criterion accepts.
+    min_samples : int
+        Minimum number of clusters in a core cluster's neighbourhood, itself included.
+
+    Returns
+    -------
+    root : ndarray of int64, shape (n_clusters,)
+    """
+    edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
+    return _merge_components(int(n_clusters), edges, int(min_samples))

@@ -1,4 +1,4 @@
-"""Numba kernels of RadarDBSCAN: neighbourhood criteria (Eqs. 3-5), core points, union-find.
+"""Numba kernels of RadarDBSCAN: neighbourhood criteria (Eqs. 3-5), core points, causal updates.
 
 All kernels work on the points of one sequence sorted by (grid cell, time)
 as produced by :func:`sklearn_radar._neighbors.build_grid`.  Neighbours are
@@ -14,6 +14,7 @@ import numba
 import numpy as np
 
 from .._neighbors import neighbor_cells, point_cells, time_range
+from .._union_find import find, union_keep_smaller
 
 BOX, XY, XYV, BOX_UNROTATED = 0, 1, 2, 3
 METRIC_CODES = {"box": BOX, "xy": XY, "xyv": XYV}
@@ -57,26 +58,6 @@ def _pair_distance(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_sc
 
 
 @numba.njit(cache=True, nogil=True)
-def find(parent, i):
-    """Root of i, with path halving."""
-    while parent[i] != i:
-        parent[i] = parent[parent[i]]
-        i = parent[i]
-    return i
-
-
-@numba.njit(cache=True, nogil=True)
-def union_keep_smaller(parent, i, j):
-    """Merge the sets of i and j; the smaller root survives (the older cluster wins)."""
-    a = find(parent, i)
-    b = find(parent, j)
-    if a < b:
-        parent[b] = a
-    elif b < a:
-        parent[a] = b
-
-
-@numba.njit(cache=True, nogil=True)
 def dbscan_sorted(x, y, v, t, cos_h, sin_h, min_points, can_be_core, cell_x, cell_y, cell_keys, cell_start, cell_end,
                   metric, eps_xy, eps_vr, vr_scale, eps_xyv, eps_t):  # fmt: skip
     """DBSCAN on grid-sorted points; returns (root per point or -1, core flags).
@@ -98,7 +79,7 @@ def dbscan_sorted(x, y, v, t, cos_h, sin_h, min_points, can_be_core, cell_x, cel
     for i in range(n):
         if not can_be_core[i]:
             continue
-        need = max(int(math.ceil(min_points[i])) - 1, 0)
+        need = max(math.ceil(min_points[i]) - 1, 0)
         count = 0
         for k in range(9):
             c = cells[point_cell[i], k]
@@ -207,7 +188,7 @@ def causal_update(x, y, v, t, cos_h, sin_h, min_points, can_be_core, core, clust
     for i in range(first_new, n):
         if not can_be_core[i]:
             continue
-        need = max(int(math.ceil(min_points[i])) - 1, 0)
+        need = max(math.ceil(min_points[i]) - 1, 0)
         count = 0
         for j in range(n):
             if count >= need:
