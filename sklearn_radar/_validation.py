@@ -111,6 +111,22 @@ def write_columns(X, new_columns, layout=WORK_LAYOUT):
     return out
 
 
+def check_filter_rule(threshold_ratios, min_neighbors):
+    """Eq. 1's ratios eta_1 / eta_i and neighbour minima N_i as arrays; ValueError names a bad one."""
+    ratios = np.asarray(threshold_ratios, dtype=np.float64).ravel()
+    min_neighbors_ = np.asarray(min_neighbors).ravel()
+    if len(ratios) == 0 or len(ratios) != len(min_neighbors_):
+        raise ValueError(
+            "threshold_ratios and min_neighbors must be non-empty and of equal length, "
+            f"got {len(ratios)} and {len(min_neighbors_)}"
+        )
+    if not np.all(ratios > 0):
+        raise ValueError(f"threshold_ratios must be positive, got {threshold_ratios!r}")
+    if min_neighbors_.dtype.kind not in "iu" or not np.all(min_neighbors_ >= 1):
+        raise ValueError(f"min_neighbors must be integers >= 1, got {min_neighbors!r}")
+    return ratios, min_neighbors_
+
+
 def _numeric_column(series, name, estimator):
     values = series.to_numpy()
     if values.dtype.kind == "b":

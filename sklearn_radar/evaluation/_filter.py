@@ -22,8 +22,8 @@ import pandas as pd
 from joblib import Parallel, delayed
 from sklearn.utils import Bunch
 
+from .._validation import check_filter_rule
 from ..preprocessing import FrameTransform, doppler_density_keep, neighbor_counts
-from ..preprocessing._doppler_density_filter import check_rule
 
 __all__ = [
     "PAPER_TABLE_II",
@@ -350,6 +350,39 @@ def _scores(c, counts, vr_threshold, target, ratios, n_min, windows, min_kept):
     return errors, rates["background_removed"], rates["objects_removed"]
 
 
+def _measure(tasks, target, windows, dt, causal, ratios, n_min, min_kept, n_jobs):
+    """Score filter settings, sharing the neighbour counts of each (frame, d_xy).
+
+    Parameters
+    ----------
+    tasks : list of (columns, d_xy, vr_thresholds)
+        Working columns of one frame, one radius d_xy (m) and the Doppler
+        thresholds eta_1 (m/s) to score with its counts.
+    target, windows, dt, causal, ratios, n_min, min_kept
+        As in :func:`filter_grid`; ``windows`` the prepared error windows.
+    n_jobs : int or None
+        Tasks processed in parallel (joblib threads; the count kernel
+        releases the GIL).
+
+    Yields
+    ------
+    (k, errors, background_removed, objects_removed)
+        Per finished task k (in completion order), arrays over its thresholds.
+    """
+    cap = int(n_min.max())
+
+    def measure(k):
+        c, d_xy, vr_thresholds = tasks[k]
+        counts = _counts(c, d_xy, dt, causal, cap)
+        cells = [_scores(c, counts, vr, target, ratios, n_min, windows, min_kept) for vr in vr_thresholds]
+        errors, background, objects = (np.array(values) for values in zip(*cells))
+        return k, errors, background, objects
+
+    yield from Parallel(n_jobs=n_jobs, prefer="threads", return_as="generator_unordered")(
+        delayed(measure)(k) for k in range(len(tasks))
+    )
+
+
 def _check_common(X, target, dt, causal, threshold_ratios, min_neighbors, window, min_kept, verbose):
     if not isinstance(X, pd.DataFrame):
         raise ValueError(f"X must be the raw detection DataFrame, got {type(X).__name__}")
@@ -361,7 +394,7 @@ def _check_common(X, target, dt, causal, threshold_ratios, min_neighbors, window
     if not isinstance(verbose, Integral):
         raise ValueError(f"verbose must be an int, got {verbose!r}")
     _check_window(window, min_kept)
-    ratios, n_min = check_rule(threshold_ratios, min_neighbors)
+    ratios, n_min = check_filter_rule(threshold_ratios, min_neighbors)
     return target, ratios, n_min
 
 
@@ -464,20 +497,14 @@ def filter_grid(
     d_values = _check_grid(d_xys, "d_xys", allow_zero=False)
     c = _working_columns(X, frame)
     windows = _Windows(target, c["t"], window)  # independent of the filter setting
-    cap = int(n_min.max())
-
-    def column(j):
-        counts = _counts(c, d_values[j], dt, causal, cap)
-        return j, [_scores(c, counts, vr, target, ratios, n_min, windows, min_kept) for vr in vr_values]
 
     errors = np.zeros((len(vr_values), len(d_values)), dtype=np.int64)
     background = np.zeros(errors.shape)
     objects = np.zeros(errors.shape)
-    results = Parallel(n_jobs=n_jobs, prefer="threads", return_as="generator_unordered")(
-        delayed(column)(j) for j in range(len(d_values))
-    )
-    for done, (j, cells) in enumerate(results, start=1):
-        errors[:, j], background[:, j], objects[:, j] = (np.array(v) for v in zip(*cells))
+    tasks = [(c, d_xy, vr_values) for d_xy in d_values]
+    results = _measure(tasks, target, windows, dt, causal, ratios, n_min, min_kept, n_jobs)
+    for done, (j, cell_errors, cell_background, cell_objects) in enumerate(results, start=1):
+        errors[:, j], background[:, j], objects[:, j] = cell_errors, cell_background, cell_objects
         if verbose > 0:
             print(f"filter grid [{frame}] d_xy={d_values[j]:.2f} m: {done}/{len(d_values)} done", flush=True)
 
@@ -571,23 +598,17 @@ def filter_settings_table(
     working = {name: _working_columns(X, name) for name in table["frame"].unique()}
     # t does not depend on the frame, so neither do the error windows.
     windows = _Windows(target, next(iter(working.values()))["t"], window)
-    cap = int(n_min.max())
     groups = list(table.groupby(["frame", "d_xy"], sort=False).groups.items())
-
-    def measure(frame_name, d_xy, rows):
-        c = working[frame_name]
-        counts = _counts(c, d_xy, dt, causal, cap)
-        vr = table.loc[rows, "vr_threshold"].to_numpy(dtype=np.float64)
-        return rows, [_scores(c, counts, v, target, ratios, n_min, windows, min_kept) for v in vr], frame_name, d_xy
-
+    tasks = [
+        (working[frame_name], d_xy, table.loc[rows, "vr_threshold"].to_numpy(dtype=np.float64))
+        for (frame_name, d_xy), rows in groups
+    ]
     table["removal_rate"] = np.nan
     table["object_removal_rate"] = np.nan
     table["errors"] = 0
-    results = Parallel(n_jobs=n_jobs, prefer="threads", return_as="generator_unordered")(
-        delayed(measure)(f, d, rows) for (f, d), rows in groups
-    )
-    for done, (rows, cells, frame_name, d_xy) in enumerate(results, start=1):
-        errors, background, objects = (np.array(v) for v in zip(*cells))
+    results = _measure(tasks, target, windows, dt, causal, ratios, n_min, min_kept, n_jobs)
+    for done, (k, errors, background, objects) in enumerate(results, start=1):
+        (frame_name, d_xy), rows = groups[k]
         table.loc[rows, "removal_rate"] = 100.0 * background
         table.loc[rows, "object_removal_rate"] = 100.0 * objects
         table.loc[rows, "errors"] = errors

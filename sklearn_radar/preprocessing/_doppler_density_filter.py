@@ -12,7 +12,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from .._neighbors import build_grid, count_neighbors
 from .._schema import FILTER_READS
-from .._validation import read_columns, sequence_slices, write_columns
+from .._validation import check_filter_rule, read_columns, sequence_slices, write_columns
 
 
 def doppler_density_keep(v_r, n_neighbors, vr_threshold=0.10, threshold_ratios=(1, 5, 10, 50), min_neighbors=(2, 3, 4, 10)):
@@ -50,22 +50,6 @@ def doppler_density_keep(v_r, n_neighbors, vr_threshold=0.10, threshold_ratios=(
     for ratio, n_min in zip(threshold_ratios, min_neighbors):
         remove |= (speed < vr_threshold / ratio) & (n < n_min)
     return ~remove
-
-
-def check_rule(threshold_ratios, min_neighbors):
-    """Eq. 1's ratios eta_1 / eta_i and neighbour minima N_i as arrays; ValueError names a bad one."""
-    ratios = np.asarray(threshold_ratios, dtype=np.float64).ravel()
-    min_neighbors_ = np.asarray(min_neighbors).ravel()
-    if len(ratios) == 0 or len(ratios) != len(min_neighbors_):
-        raise ValueError(
-            "threshold_ratios and min_neighbors must be non-empty and of equal length, "
-            f"got {len(ratios)} and {len(min_neighbors_)}"
-        )
-    if not np.all(ratios > 0):
-        raise ValueError(f"threshold_ratios must be positive, got {threshold_ratios!r}")
-    if min_neighbors_.dtype.kind not in "iu" or not np.all(min_neighbors_ >= 1):
-        raise ValueError(f"min_neighbors must be integers >= 1, got {min_neighbors!r}")
-    return ratios, min_neighbors_
 
 
 def neighbor_counts(x, y, t, sequence, d_xy, dt, causal=False, cap=10, n_jobs=None):
@@ -218,7 +202,7 @@ class DopplerDensityFilter(TransformerMixin, BaseEstimator):
 
     def _rule(self):
         """The thresholds of Eq. 1 as arrays, validated."""
-        return check_rule(self.threshold_ratios, self.min_neighbors)
+        return check_filter_rule(self.threshold_ratios, self.min_neighbors)
 
     def __sklearn_tags__(self):
         tags = super().__sklearn_tags__()
