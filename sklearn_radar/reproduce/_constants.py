@@ -1,0 +1,75 @@
+"""The experiment numbers, step keys and paper figures that the run and the report refer to, in one place.
+
+The experiment numbers are read from the paper's metadata
+(:data:`sklearn_radar.experiments.PAPER_EXPERIMENTS`) where it says what an
+experiment is: the expert setting is the one fixed setting derived from no
+other, the best stage-1 method is the one that the control experiments and
+stage 2 build on, and so on.
+"""
+
+from __future__ import annotations
+
+from ..experiments import PAPER_EXPERIMENTS, get_experiment
+
+#: Every experiment number (1-13), in run order.
+NUMBERS = tuple(e.number for e in PAPER_EXPERIMENTS)
+
+#: The stage-1 (point clustering, Table III) experiments.
+STAGE1 = tuple(e.number for e in PAPER_EXPERIMENTS if e.stage == 1)
+
+#: The stage-2 (cluster merging, Table IV) experiments: #12 and #13.
+STAGE2 = tuple(e.number for e in PAPER_EXPERIMENTS if e.stage == 2)
+
+#: The expert setting (#1): fixed, derived from no other experiment.
+EXPERT = next(e.number for e in PAPER_EXPERIMENTS if not e.tuned and e.derived_from is None)
+
+#: The best stage-1 method (#8), whose setting the controls (#10, #11) and stage 2 (#12, #13) reuse.
+BEST_STAGE1 = get_experiment(STAGE2[0]).derived_from
+
+#: The control experiments that take #8's setting instead of a search: #10 and #11.
+DERIVED_FROM_BEST = tuple(e.number for e in PAPER_EXPERIMENTS if not e.tuned and e.derived_from == BEST_STAGE1)
+
+#: #8's setting on unfiltered data (#10): the filter-effect comparison runs it beside #8.
+BEST_STAGE1_UNFILTERED = next(n for n in DERIVED_FROM_BEST if not get_experiment(n).filtered)
+
+#: The FCS box baseline (#3): the input of the scikit-learn baselines and the "baseline" panel of Fig. 6.
+FCS_BASELINE = 3
+
+#: The paper's Bayesian-optimisation budget (30 random points + 70 guided).
+PAPER_N_ITER = 100
+
+#: Step keys of ``--experiments`` besides the experiment numbers.
+FILTER = "filter"
+FILTER_EFFECT = "filter-effect"
+BASELINES = "baselines"
+
+#: Every step key, in the order they run.
+ALL_EXPERIMENTS = (FILTER, *(str(n) for n in NUMBERS), FILTER_EFFECT, BASELINES)
+
+#: The coordinate systems of Table I: the ``frame`` argument of the filter evaluation, and their names.
+FRAMES = ("frame", "car")
+FRAME_NAMES = {"frame": "FCS", "car": "CCS"}
+
+#: ``best_source`` of a search record: the search's own optimum, or the paper's setting scored beside it.
+SOURCE_SEARCH = "search"
+SOURCE_PAPER = "the paper's setting (scored beside the search)"
+
+__all__ = [
+    "ALL_EXPERIMENTS",
+    "BASELINES",
+    "BEST_STAGE1",
+    "BEST_STAGE1_UNFILTERED",
+    "DERIVED_FROM_BEST",
+    "EXPERT",
+    "FCS_BASELINE",
+    "FILTER",
+    "FILTER_EFFECT",
+    "FRAMES",
+    "FRAME_NAMES",
+    "NUMBERS",
+    "PAPER_N_ITER",
+    "SOURCE_PAPER",
+    "SOURCE_SEARCH",
+    "STAGE1",
+    "STAGE2",
+]

@@ -1,0 +1,57 @@
+"""What a reproduce run keeps in memory beside its results: the data, the split, labels and intermediate tables."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+
+@dataclass(slots=True, kw_only=True)
+class RunContext:
+    """The in-memory state of a run that ``results.json`` does not hold; the figures are drawn from it.
+
+    Every field is declared here: a step that needs to hand something to a
+    later step or to a figure adds a field, it does not invent a key.
+
+    Attributes
+    ----------
+    scenes : Bunch
+        The data (:func:`~sklearn_radar.datasets.make_scenes` or
+        :func:`~sklearn_radar.datasets.load_radarscenes`): ``data``,
+        ``target``, ``groups``.
+    X : DataFrame
+        The estimators' input: the measured columns of ``scenes.data`` (no
+        labels, no strings: cheap to hash for caching).
+    train, test : ndarray of int
+        Row indices of the training and the test half.
+    target : ndarray of int
+        The pre-clustered target of every detection.
+    cache : str or None, default=None
+        Pipeline cache folder of the run.
+    labels : dict of int to ndarray, default={}
+        Test-half cluster labels by experiment number.
+    filter_grids : dict of str to Bunch or None, default=None
+        :func:`~sklearn_radar.evaluation.filter_grid` per coordinate system
+        (``"frame"``, ``"car"``), once the filter evaluation ran.
+    best_stage1 : dict or None, default=None
+        The tuned setting (``cluster__`` parameters) of the best stage-1
+        method, #8 (:data:`~sklearn_radar.reproduce._constants.BEST_STAGE1`),
+        once it ran: #10, #11, the stage-2 experiments and the filter effect
+        reuse it.
+    """
+
+    scenes: Any
+    X: pd.DataFrame
+    train: np.ndarray
+    test: np.ndarray
+    target: np.ndarray
+    cache: str | None = None
+    labels: dict[int, np.ndarray] = field(default_factory=dict)
+    filter_grids: dict[str, Any] | None = None
+    best_stage1: dict[str, Any] | None = None
+
+
+__all__ = ["RunContext"]
