@@ -6,6 +6,10 @@ optimisation on the training half of the sequences (grouped cross-validation)
 and scored on the held-out half with the radar V-measure against the
 pre-clustered target.  Results are written after every experiment, atomically,
 so an interrupted run keeps what it finished.
+
+The results are typed (:mod:`._results`), the in-memory state is a
+:class:`~._context.RunContext`, and the report is built from the sections of
+:mod:`._sections`.
 """
 
 from __future__ import annotations
@@ -30,45 +34,66 @@ from ..evaluation import filter_grid, filter_settings_table
 from ..experiments import derived_params, experiment_pipeline, get_experiment, paper_params, search_space
 from ..metrics import precluster_target, radar_v_measure, radar_v_measure_scorer
 from ..model_selection import ProgressPrinter, make_bayes_search, sequence_train_test_split
+from ._constants import (
+    ALL_EXPERIMENTS,
+    BASELINES,
+    BEST_STAGE1,
+    BEST_STAGE1_UNFILTERED,
+    FCS_BASELINE,
+    FILTER,
+    FILTER_EFFECT,
+    FRAMES,
+    NUMBERS,
+    SOURCE_PAPER,
+    SOURCE_SEARCH,
+)
+from ._context import RunContext
 from ._io import atomic_write_text, check_writable
-from ._report import write_figures, write_report
-
-#: Every experiment key, in the order they run.
-ALL_EXPERIMENTS = ("filter",) + tuple(str(n) for n in range(1, 14)) + ("filter-effect", "baselines")
-
-
-@dataclass
-class Budget:
-    """Data size and optimisation budget of a run."""
-
-    n_sequences: int
-    duration: float  # s per simulated sequence
-    n_iter: int
-    n_initial_points: int
-    cv: int
-    label: str
-
-    @classmethod
-    def default(cls, n_iter=None):
-        n_iter = 10 if n_iter is None else n_iter
-        return cls(4, 20.0, n_iter, max(1, round(0.3 * n_iter)), 2, "reduced (default run)")
-
-    @classmethod
-    def full(cls, n_iter=None):
-        n_iter = 100 if n_iter is None else n_iter
-        return cls(17, 30.0, n_iter, max(1, round(0.3 * n_iter)), 3, "the paper's (--full)")
+from ._report import write_report
+from ._results import (
+    BaselineResult,
+    BestRemoval,
+    Budget,
+    ClusteringCost,
+    DataMeta,
+    ExperimentResult,
+    FilterEffectFigures,
+    FilterEffectResult,
+    FilterGridResult,
+    FilterResult,
+    FilterSettingRow,
+    GridTable,
+    RunMeta,
+    RunResults,
+    SearchRecord,
+)
 
 
 @dataclass
 class Run:
-    """State of one reproduce run: data, split, targets and the results gathered so far."""
+    """One reproduce run: where it writes, its budget and settings, and the results gathered so far.
+
+    Attributes
+    ----------
+    out : Path
+        Output folder.
+    budget : Budget
+    seed : int
+    n_jobs : int or None
+        Candidates evaluated in parallel.
+    stream : file-like
+        Progress output.
+    results : RunResults
+    started : float
+        ``time.perf_counter()`` at the start.
+    """
 
     out: Path
     budget: Budget
     seed: int
     n_jobs: int | None
     stream: object
-    results: dict = field(default_factory=dict)
+    results: RunResults
     started: float = field(default_factory=time.perf_counter)
 
 
@@ -76,24 +101,39 @@ def parse_experiments(text):
     """``"filter,1-8,13,baselines"`` -> the experiment keys, in run order; ValueError names unknown ones."""
     if text is None:
         return list(ALL_EXPERIMENTS)
+    first, last = min(NUMBERS), max(NUMBERS)
     chosen = set()
     for part in (p.strip() for p in text.split(",") if p.strip()):
         if "-" in part and part not in ALL_EXPERIMENTS:
             low, _, high = part.partition("-")
-            if not (low.isdigit() and high.isdigit()) or not 1 <= int(low) <= int(high) <= 13:
-                raise ValueError(f"unknown experiment range {part!r}; experiments are 1-13, filter, filter-effect, baselines")
+            if not (low.isdigit() and high.isdigit()) or not first <= int(low) <= int(high) <= last:
+                raise ValueError(
+                    f"unknown experiment range {part!r}; experiments are {first}-{last}, "
+                    f"{FILTER}, {FILTER_EFFECT}, {BASELINES}"
+                )
             chosen.update(str(n) for n in range(int(low), int(high) + 1))
         elif part in ALL_EXPERIMENTS:
             chosen.add(part)
         else:
-            raise ValueError(f"unknown experiment {part!r}; choose from {', '.join(ALL_EXPERIMENTS)} (ranges like 1-8 work)")
+            raise ValueError(
+                f"unknown experiment {part!r}; choose from {', '.join(ALL_EXPERIMENTS)} (ranges like 1-8 work)"
+            )
     if not chosen:
         raise ValueError("--experiments is empty")
     return [key for key in ALL_EXPERIMENTS if key in chosen]
 
 
-def reproduce(data=None, out="sklearn-radar-report", *, n_iter=None, n_jobs=None, experiments=None, full=False,
-              seed=0, stream=None):  # fmt: skip
+def reproduce(
+    data=None,
+    out="sklearn-radar-report",
+    *,
+    n_iter=None,
+    n_jobs=None,
+    experiments=None,
+    full=False,
+    seed=0,
+    stream=None,
+):
     """Run the paper's experiments and write ``report.md``, ``results.json``, ``params.json`` and figures.
 
     Parameters
@@ -113,57 +153,71 @@ def reproduce(data=None, out="sklearn-radar-report", *, n_iter=None, n_jobs=None
     full : bool, default=False
         The paper's budget on about a million simulated detections.
     seed : int, default=0
+        Random seed of the simulated data, the split and the searches.
     stream : file-like, default=None
         Progress output; None: standard output.
 
     Returns
     -------
     results : dict
-        What ``results.json`` holds.
+        What ``results.json`` holds, and ``figures``: the figures drawn.
     """
+    started = time.perf_counter()
     keys = parse_experiments(experiments)
     out = Path(out)
     check_writable(out)
     budget = Budget.full(n_iter) if full else Budget.default(n_iter)
-    run = Run(out=out, budget=budget, seed=seed, n_jobs=n_jobs, stream=stream or sys.stdout)
+    stream = stream or sys.stdout
     scenes, source = _data(data, budget, seed)
-    run.results = {"meta": _meta(run, scenes, source), "experiments": {}}
     train, test = sequence_train_test_split(scenes.groups, random_state=seed)
-    run.results["meta"]["data"].update(
-        n_train=int(len(train)), n_test=int(len(test)),
-        train_sequences=sorted(int(s) for s in np.unique(scenes.groups[train])),
-        test_sequences=sorted(int(s) for s in np.unique(scenes.groups[test])),
-    )  # fmt: skip
-    _say(run, f"data: {source}, {len(scenes.data):,} detections in {len(np.unique(scenes.groups))} sequences; "
-              f"train {len(train):,} / test {len(test):,}; budget: {budget.label}, {budget.n_iter} iterations")  # fmt: skip
+    meta = RunMeta(
+        version=__version__,
+        seed=seed,
+        budget=budget,
+        data=DataMeta(
+            source=source,
+            n_detections=len(scenes.data),
+            n_sequences=len(np.unique(scenes.groups)),
+            n_train=len(train),
+            n_test=len(test),
+            train_sequences=sorted(int(s) for s in np.unique(scenes.groups[train])),
+            test_sequences=sorted(int(s) for s in np.unique(scenes.groups[test])),
+        ),
+    )
+    results = RunResults(meta=meta)
+    run = Run(out=out, budget=budget, seed=seed, n_jobs=n_jobs, stream=stream, results=results, started=started)
+    _say(
+        run,
+        f"data: {source}, {len(scenes.data):,} detections in {meta.data.n_sequences} sequences; "
+        f"train {len(train):,} / test {len(test):,}; budget: {budget.label}, {budget.n_iter} iterations",
+    )
     target = precluster_target(scenes.data, scenes.target)
     # The estimators' input: the measured columns only (no labels, no strings: cheap to hash for caching).
     X = scenes.data[[c for c in scenes.data.columns if c not in ("uuid", "track_id", "label_id")]]
-    context = {"scenes": scenes, "X": X, "train": train, "test": test, "target": target, "labels": {}}
+    context = RunContext(scenes=scenes, X=X, train=train, test=test, target=target)
     with tempfile.TemporaryDirectory(prefix="sklearn-radar-cache-") as cache:
-        context["cache"] = cache
+        context.cache = cache
         try:
             for position, key in enumerate(keys, start=1):
                 _say(run, f"[{position}/{len(keys)}] {_title(key)}")
                 start = time.perf_counter()
                 _RUNNERS[_runner_of(key)](run, context, key)
-                run.results["meta"]["completed"].append(key)
+                meta.completed.append(key)
                 _say(run, f"[{position}/{len(keys)}] {_title(key)} done in {time.perf_counter() - start:.1f} s")
                 _save(run)
         except KeyboardInterrupt:
-            run.results["meta"]["interrupted"] = True
+            meta.interrupted = True
             _say(run, "interrupted: writing the finished results")
             _finish(run, context)
             raise
     _finish(run, context)
-    return run.results
+    return run.results.to_json_dict(figures=True)
 
 
 def _finish(run, context):
-    run.results["meta"]["wall_time_s"] = time.perf_counter() - run.started
+    run.results.meta.wall_time_s = time.perf_counter() - run.started
     _save(run)
-    write_figures(run.out, run.results, context)
-    write_report(run.out, run.results)
+    write_report(run.out, run.results, context)
 
 
 def _data(data, budget, seed):
@@ -173,32 +227,20 @@ def _data(data, budget, seed):
     return load_radarscenes(data), f"RadarScenes folder {data}"
 
 
-def _meta(run, scenes, source):
-    return {
-        "version": __version__,
-        "seed": run.seed,
-        "budget": {"label": run.budget.label, "n_iter": run.budget.n_iter,
-                   "n_initial_points": run.budget.n_initial_points, "cv_folds": run.budget.cv},
-        "data": {"source": source, "n_detections": int(len(scenes.data)),
-                 "n_sequences": int(len(np.unique(scenes.groups)))},
-        "completed": [],
-        "interrupted": False,
-    }  # fmt: skip
-
-
 def _say(run, text):
     print(text, file=run.stream, flush=True)
 
 
 def _save(run):
-    atomic_write_text(run.out / "results.json", json.dumps(run.results, indent=1, default=_json_default))
-    experiments = {key: {"experiment": value["number"], "v1_test": value["v1_test"], "params": value["params"],
-                         "stage1_params": value.get("stage1_params")}
-                   for key, value in run.results["experiments"].items()}  # fmt: skip
-    if experiments:
-        best = max(experiments, key=lambda key: experiments[key]["v1_test"])
-        saved = {"best": best, "experiments": experiments}
-        atomic_write_text(run.out / "params.json", json.dumps(saved, indent=1, default=_json_default))
+    """Write ``results.json`` and, once an experiment ran, ``params.json`` (read by ``sklearn-radar cluster``)."""
+    atomic_write_text(run.out / "results.json", _dumps(run.results.to_json_dict()))
+    saved = run.results.to_params_dict()
+    if saved is not None:
+        atomic_write_text(run.out / "params.json", _dumps(saved))
+
+
+def _dumps(document):
+    return json.dumps(document, indent=1, default=_json_default)
 
 
 def _json_default(value):
@@ -212,34 +254,44 @@ def _json_default(value):
 def _title(key):
     if key.isdigit():
         return f"experiment #{key}: {get_experiment(int(key)).method}"
-    return {"filter": "filter evaluation (Tables I and II)", "filter-effect": "the filter's effect on clustering",
-            "baselines": "scikit-learn baselines (DBSCAN, HDBSCAN per 0.25 s window)"}[key]  # fmt: skip
+    return {
+        FILTER: "filter evaluation (Tables I and II)",
+        FILTER_EFFECT: "the filter's effect on clustering",
+        BASELINES: "scikit-learn baselines (DBSCAN, HDBSCAN per 0.25 s window)",
+    }[key]
 
 
 def _runner_of(key):
     return "experiment" if key.isdigit() else key
 
 
+def _native(params):
+    """Parameters with numpy scalars as Python numbers."""
+    return {key: (value.item() if isinstance(value, np.generic) else value) for key, value in params.items()}
+
+
 # ----------------------------------------------------------------------------- the experiments
 
 
 def _run_filter(run, context, key):
-    scenes = context["scenes"]
+    scenes = context.scenes
     start = time.perf_counter()
-    grids = {frame: filter_grid(scenes.data, scenes.target, frame=frame, n_jobs=run.n_jobs, verbose=0)
-             for frame in ("frame", "car")}  # fmt: skip
-    table_ii = filter_settings_table(scenes.data, scenes.target, n_jobs=run.n_jobs)
-    context["filter_grids"] = grids
-    run.results["filter"] = {
-        "table_i": {frame: {"errors": g.errors.to_dict(orient="split"),
-                            "background_removed": g.background_removed.to_dict(orient="split")}
-                    for frame, g in grids.items()},  # fmt: skip
-        "table_ii": table_ii.to_dict(orient="records"),
-        "best_removal_with_zero_errors": {
-            frame: _best_removal(g, 0) for frame, g in grids.items()
-        },
-        "wall_time_s": time.perf_counter() - start,
+    grids = {
+        frame: filter_grid(scenes.data, scenes.target, frame=frame, n_jobs=run.n_jobs, verbose=0) for frame in FRAMES
     }
+    table_ii = filter_settings_table(scenes.data, scenes.target, n_jobs=run.n_jobs)
+    context.filter_grids = grids
+    run.results.filter = FilterResult(
+        table_i={
+            frame: FilterGridResult(
+                errors=GridTable.from_frame(g.errors), background_removed=GridTable.from_frame(g.background_removed)
+            )
+            for frame, g in grids.items()
+        },
+        table_ii=[FilterSettingRow(**row) for row in table_ii.to_dict(orient="records")],
+        best_removal_with_zero_errors={frame: _best_removal(g, 0) for frame, g in grids.items()},
+        wall_time_s=time.perf_counter() - start,
+    )
 
 
 def _best_removal(grid, max_errors):
@@ -247,27 +299,27 @@ def _best_removal(grid, max_errors):
     if not allowed.notna().any().any():
         return None
     vr, d_xy = allowed.stack().idxmax()
-    return {"vr_threshold": float(vr), "d_xy": float(d_xy), "background_removed": float(allowed.loc[vr, d_xy])}
+    return BestRemoval(vr_threshold=float(vr), d_xy=float(d_xy), background_removed=float(allowed.loc[vr, d_xy]))
 
 
 def _score(context, pipeline):
     """Fit-predict on the test half; radar V-measure against the pre-clustered target."""
-    scenes, test = context["scenes"], context["test"]
-    labels = pipeline.fit_predict(context["X"].iloc[test])
-    return radar_v_measure(context["target"][test], labels, groups=scenes.groups[test]), labels
+    test = context.test
+    labels = pipeline.fit_predict(context.X.iloc[test])
+    return radar_v_measure(context.target[test], labels, groups=context.scenes.groups[test]), labels
 
 
 def _tune(run, context, estimator, space, label, start_from=None):
-    """Bayesian optimisation on the training half with grouped CV; returns (best params, search record).
+    """Bayesian optimisation on the training half with grouped CV; returns (best params, SearchRecord).
 
     ``start_from`` (e.g. the paper's optimum) is scored on the same folds as
     one more candidate and wins when the search found nothing better: a
     short search should not report a worse setting than a known one.
     """
-    scenes, train = context["scenes"], context["train"]
+    train = context.train
     budget = run.budget
-    groups = scenes.groups[train]
-    n_folds = min(budget.cv, len(np.unique(groups)))
+    groups = context.scenes.groups[train]
+    n_folds = min(budget.cv_folds, len(np.unique(groups)))
     # A clusterer labels the data it is fitted on, and the scorer fits on the scored fold: fitting the
     # "training" side of a fold first would be wasted work, so each fold is its own training side.
     # With a single training sequence the one fold is all of it.
@@ -276,71 +328,88 @@ def _tune(run, context, estimator, space, label, start_from=None):
     else:
         cv = [(rows, rows) for _, rows in GroupKFold(n_splits=n_folds).split(train, groups=groups)]
     search = make_bayes_search(
-        estimator, space, n_iter=budget.n_iter, n_initial_points=budget.n_initial_points,
-        cv=cv, n_jobs=run.n_jobs, random_state=run.seed,
-    )  # fmt: skip
+        estimator,
+        space,
+        n_iter=budget.n_iter,
+        n_initial_points=budget.n_initial_points,
+        cv=cv,
+        n_jobs=run.n_jobs,
+        random_state=run.seed,
+    )
     printer = ProgressPrinter(budget.n_iter, label=label, stream=run.stream)
     start = time.perf_counter()
+    X, target = context.X.iloc[train], context.target[train]
     # The Gaussian process works on tiny matrices, where multi-threaded BLAS was 20x slower (measured).
     with threadpool_limits(limits=1, user_api="blas"):
-        search.fit(context["X"].iloc[train], context["target"][train], groups=groups, callback=printer)
-    scores = [float(s) for s in search.cv_results_["mean_test_score"]]
-    best = {k: (v.item() if isinstance(v, np.generic) else v) for k, v in search.best_params_.items()}
-    record = {"cv_best": float(search.best_score_), "convergence": scores, "best_source": "search"}
+        search.fit(X, target, groups=groups, callback=printer)
+    convergence = [float(s) for s in search.cv_results_["mean_test_score"]]
+    best, cv_best, source, known = _native(search.best_params_), float(search.best_score_), SOURCE_SEARCH, None
     if start_from:
-        X, target = context["X"].iloc[train], context["target"][train]
         candidate = clone(estimator).set_params(**start_from)
         known = float(np.mean([radar_v_measure_scorer(clone(candidate), X.iloc[rows], target[rows]) for _, rows in cv]))
-        record["cv_start_from"] = known
-        if known >= record["cv_best"]:
+        if known >= cv_best:
             best = {key: start_from[key] for key in space if key in start_from}
-            record.update(cv_best=known, best_source="the paper's setting (scored beside the search)")
-    record["search_wall_time_s"] = time.perf_counter() - start
+            cv_best, source = known, SOURCE_PAPER
+    record = SearchRecord(
+        cv_best=cv_best,
+        convergence=convergence,
+        best_source=source,
+        cv_start_from=known,
+        search_wall_time_s=time.perf_counter() - start,
+    )
     return best, record
 
 
 def _run_experiment(run, context, key):
     number = int(key)
     experiment = get_experiment(number)
-    best8 = context.get("best8", {})
-    stage1_params = None
-    record = {"number": number, "method": experiment.method, "frame": experiment.frame,
-              "filtered": experiment.filtered, "stage": experiment.stage,
-              "paper_v1_percent": experiment.v1_percent, "paper_params": paper_params(number)}  # fmt: skip
+    best = context.best_stage1
     start = time.perf_counter()
+    stage1_params = recorded_stage1 = derived = search = None
     if experiment.stage == 2:
-        stage1_params = best8 or None
-        record["stage1_params"] = stage1_params or paper_params(8)
-    pipeline = experiment_pipeline(number, memory=context["cache"], stage1_params=stage1_params)
-    if number == 1:
-        params = {}
-    elif number in (10, 11):
-        params = derived_params(number, best8 or None)
-        record["derived_from_8"] = "tuned #8" if best8 else "paper's #8 (experiment 8 not run)"
-    else:
+        stage1_params = best  # None: the paper's #8
+        recorded_stage1 = best or paper_params(BEST_STAGE1)
+    pipeline = experiment_pipeline(number, memory=context.cache, stage1_params=stage1_params)
+    if experiment.tuned:
         params, search = _tune(run, context, pipeline, search_space(number), f"#{number}", paper_params(number))
-        record.update(search)
+    elif experiment.derived_from is None:  # the expert setting (#1): the paper's, as it is
+        params = {}
+    else:  # #10, #11: #8's setting, transferred
+        params = derived_params(number, best)
+        derived = f"tuned #{BEST_STAGE1}" if best else f"paper's #{BEST_STAGE1} (experiment {BEST_STAGE1} not run)"
     pipeline.set_params(**params)
     v1, labels = _score(context, pipeline)
-    record.update(params={**paper_params(number), **params} if number != 1 else paper_params(1),
-                  v1_test=v1, wall_time_s=time.perf_counter() - start,
-                  n_clusters_test=int(labels.max() + 1))  # fmt: skip
-    context["labels"][number] = labels
-    if number == 8:
-        context["best8"] = {k: v for k, v in record["params"].items() if k.startswith("cluster__")}
-    run.results["experiments"][key] = record
+    result = ExperimentResult(
+        number=number,
+        method=experiment.method,
+        frame=experiment.frame,
+        filtered=experiment.filtered,
+        stage=experiment.stage,
+        paper_v1_percent=experiment.v1_percent,
+        paper_params=paper_params(number),
+        params={**paper_params(number), **params},
+        v1_test=v1,
+        n_clusters_test=int(labels.max() + 1),
+        wall_time_s=time.perf_counter() - start,
+        stage1_params=recorded_stage1,
+        derived_from_8=derived,
+        search=search,
+    )
+    context.labels[number] = labels
+    if number == BEST_STAGE1:
+        context.best_stage1 = {k: v for k, v in result.params.items() if k.startswith("cluster__")}
+    run.results.experiments[number] = result
     _say(run, f"    #{number}: test V1 {100 * v1:.2f} % (paper {experiment.v1_percent:.2f} %)")
 
 
 def _run_filter_effect(run, context, key):
     """Clustering time and number of clusters with and without the filter, at #8's setting."""
-    scenes, test = context["scenes"], context["test"]
-    params = context.get("best8") or paper_params(8)
-    record = {"setting": params, "setting_source": "tuned #8" if context.get("best8") else "paper's #8"}
-    per_sequence = {}
+    test = context.test
+    params = context.best_stage1 or paper_params(BEST_STAGE1)
+    per_sequence, cost = {}, {}
     for filtered in (True, False):
-        pipeline = experiment_pipeline(8 if filtered else 10, params=params)
-        prepared = pipeline[:-1].fit_transform(context["X"].iloc[test])
+        pipeline = experiment_pipeline(BEST_STAGE1 if filtered else BEST_STAGE1_UNFILTERED, params=params)
+        prepared = pipeline[:-1].fit_transform(context.X.iloc[test])
         clusterer = pipeline[-1]
         clusterer.fit(prepared)  # warm-up: JIT compilation is not clustering time
         times = []
@@ -348,56 +417,73 @@ def _run_filter_effect(run, context, key):
             start = time.perf_counter()
             labels = clusterer.fit(prepared).labels_
             times.append(time.perf_counter() - start)
-        groups = scenes.groups[test]
-        per_sequence[filtered] = {int(g): int(len(np.unique(labels[(groups == g) & (labels >= 0)]))) for g in np.unique(groups)}
-        record["filtered" if filtered else "unfiltered"] = {"clustering_s": min(times), "n_clusters": int(labels.max() + 1)}
-    fewer = [1 - per_sequence[True][g] / per_sequence[False][g] for g in per_sequence[True] if per_sequence[False][g] > 0]
-    record.update(
-        time_saving_percent=100 * (1 - record["filtered"]["clustering_s"] / record["unfiltered"]["clustering_s"]),
-        fewer_clusters_per_sequence_percent=100 * float(np.mean(fewer)) if fewer else float("nan"),
-        fewer_clusters_overall_percent=100 * (1 - record["filtered"]["n_clusters"] / max(record["unfiltered"]["n_clusters"], 1)),
-        paper={"time_saving_percent": 3.1, "fewer_clusters_per_sequence_percent": 23.6, "fewer_clusters_overall_percent": 28.6},
-    )  # fmt: skip
-    run.results["filter_effect"] = record
+        groups = context.scenes.groups[test]
+        per_sequence[filtered] = {
+            int(g): len(np.unique(labels[(groups == g) & (labels >= 0)])) for g in np.unique(groups)
+        }
+        cost[filtered] = ClusteringCost(clustering_s=min(times), n_clusters=int(labels.max() + 1))
+    with_filter, without = per_sequence[True], per_sequence[False]
+    fewer = [1 - with_filter[g] / without[g] for g in with_filter if without[g] > 0]
+    filtered, unfiltered = cost[True], cost[False]
+    run.results.filter_effect = FilterEffectResult(
+        setting=params,
+        setting_source=f"tuned #{BEST_STAGE1}" if context.best_stage1 else f"paper's #{BEST_STAGE1}",
+        filtered=filtered,
+        unfiltered=unfiltered,
+        measured=FilterEffectFigures(
+            time_saving_percent=100 * (1 - filtered.clustering_s / unfiltered.clustering_s),
+            fewer_clusters_per_sequence_percent=100 * float(np.mean(fewer)) if fewer else float("nan"),
+            fewer_clusters_overall_percent=100 * (1 - filtered.n_clusters / max(unfiltered.n_clusters, 1)),
+        ),
+    )
 
 
 _BASELINES = {
     "sklearn DBSCAN per 0.25 s window": (
         WindowedDBSCAN,
-        {"cluster__eps": Real(0.2, 3.0, name="cluster__eps"), "cluster__min_samples": Integer(2, 8, name="cluster__min_samples"),
-         "cluster__vr_scale": Real(0.3, 20.0, prior="log-uniform", name="cluster__vr_scale")},
+        {
+            "cluster__eps": Real(0.2, 3.0, name="cluster__eps"),
+            "cluster__min_samples": Integer(2, 8, name="cluster__min_samples"),
+            "cluster__vr_scale": Real(0.3, 20.0, prior="log-uniform", name="cluster__vr_scale"),
+        },
     ),
     "sklearn HDBSCAN per 0.25 s window": (
         WindowedHDBSCAN,
-        {"cluster__min_cluster_size": Integer(2, 10, name="cluster__min_cluster_size"),
-         "cluster__min_samples": Integer(1, 8, name="cluster__min_samples"),
-         # cluster_selection_epsilon stays 0: scikit-learn 1.9.1's epsilon search crashed on this data.
-         "cluster__vr_scale": Real(0.3, 20.0, prior="log-uniform", name="cluster__vr_scale")},
+        {
+            "cluster__min_cluster_size": Integer(2, 10, name="cluster__min_cluster_size"),
+            "cluster__min_samples": Integer(1, 8, name="cluster__min_samples"),
+            # cluster_selection_epsilon stays 0: scikit-learn 1.9.1's epsilon search crashed on this data.
+            "cluster__vr_scale": Real(0.3, 20.0, prior="log-uniform", name="cluster__vr_scale"),
+        },
     ),
-}  # fmt: skip
+}
 
 
 def _run_baselines(run, context, key):
     """The clusterers a user would otherwise pick, on the same FCS + filter input, same budget and split."""
-    run.results["baselines"] = {}
+    baselines = run.results.baselines = {}
     for name, (clusterer, space) in _BASELINES.items():
         start = time.perf_counter()
-        pipeline = experiment_pipeline(3, memory=context["cache"])
+        pipeline = experiment_pipeline(FCS_BASELINE, memory=context.cache)
         pipeline.steps[-1] = ("cluster", clusterer())
-        params, record = _tune(run, context, pipeline, space, name)
+        params, search = _tune(run, context, pipeline, space, name)
         pipeline.set_params(**params)
         v1, labels = _score(context, pipeline)
-        record.update(params=params, v1_test=v1, wall_time_s=time.perf_counter() - start,
-                      n_clusters_test=int(labels.max() + 1))  # fmt: skip
-        run.results["baselines"][name] = record
+        baselines[name] = BaselineResult(
+            search=search,
+            params=params,
+            v1_test=v1,
+            n_clusters_test=int(labels.max() + 1),
+            wall_time_s=time.perf_counter() - start,
+        )
         _say(run, f"    {name}: test V1 {100 * v1:.2f} %")
 
 
 _RUNNERS = {
-    "filter": _run_filter,
+    FILTER: _run_filter,
     "experiment": _run_experiment,
-    "filter-effect": _run_filter_effect,
-    "baselines": _run_baselines,
+    FILTER_EFFECT: _run_filter_effect,
+    BASELINES: _run_baselines,
 }
 
 __all__ = ["ALL_EXPERIMENTS", "parse_experiments", "reproduce"]
