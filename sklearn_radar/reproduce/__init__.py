@@ -3,4 +3,11 @@
 from ._apply import cluster_radarscenes, load_params, write_predictions
 from ._run import ALL_EXPERIMENTS, parse_experiments, reproduce
 
-__all__ = ["ALL_EXPERIMENTS", "cluster_radarscenes", "load_params", "parse_experiments", "reproduce", "write_predictions"]
+__all__ = [
+    "ALL_EXPERIMENTS",
+    "cluster_radarscenes",
+    "load_params",
+    "parse_experiments",
+    "reproduce",
+    "write_predictions",
+]
