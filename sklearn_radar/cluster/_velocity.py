@@ -51,8 +51,9 @@ from __future__ import annotations
 from numbers import Integral, Real
 
 import numpy as np
+from sklearn.utils._param_validation import Interval, validate_params
 
-__all__ = ["estimate_velocity", "estimate_velocities"]
+__all__ = ["estimate_velocities", "estimate_velocity"]
 
 #: Pairs with ``|sin(theta_j - theta_i)|`` below this are skipped (near-singular 2x2 system).
 _MIN_PAIR_SINE = 1e-3
@@ -61,15 +62,23 @@ _MIN_PAIR_SINE = 1e-3
 _BLOCK_ELEMENTS = 1 << 20
 
 
-def _check_params(min_detections, min_spread, inlier_threshold, max_trials):
-    if isinstance(min_detections, bool) or not isinstance(min_detections, Integral) or min_detections < 2:
-        raise ValueError(f"min_detections must be an integer >= 2, got {min_detections!r}")
-    if not isinstance(min_spread, Real) or not min_spread >= 0:
-        raise ValueError(f"min_spread must be a real number >= 0, got {min_spread!r}")
-    if not isinstance(inlier_threshold, Real) or not inlier_threshold > 0:
-        raise ValueError(f"inlier_threshold must be a real number > 0, got {inlier_threshold!r}")
-    if isinstance(max_trials, bool) or not isinstance(max_trials, Integral) or max_trials < 1:
-        raise ValueError(f"max_trials must be an integer >= 1, got {max_trials!r}")
+#: Seeds :func:`numpy.random.default_rng` accepts (an int must be non-negative).
+_SEEDS = [
+    None,
+    Interval(Integral, 0, None, closed="left"),
+    np.random.Generator,
+    np.random.BitGenerator,
+    np.random.SeedSequence,
+]
+
+#: Constraints of the keyword arguments shared by both public functions.
+_SETTINGS_CONSTRAINTS = {
+    "min_detections": [Interval(Integral, 2, None, closed="left")],
+    "min_spread": [Interval(Real, 0, None, closed="left")],
+    "inlier_threshold": [Interval(Real, 0, None, closed="neither")],
+    "max_trials": [Interval(Integral, 1, None, closed="left")],
+    "random_state": _SEEDS,
+}
 
 
 def _as_1d(v_r, los_angle):
@@ -84,9 +93,7 @@ def _as_1d(v_r, los_angle):
 
 def _reseedable(random_state):
     """True when ``default_rng(random_state)`` gives the same stream every time it is called."""
-    return random_state is not None and not isinstance(
-        random_state, (np.random.Generator, np.random.BitGenerator)
-    )
+    return random_state is not None and not isinstance(random_state, (np.random.Generator, np.random.BitGenerator))
 
 
 def _pairs(n, max_trials, rng, n_sets):
@@ -225,6 +232,10 @@ def _estimate(v_r, theta, group_id, n_groups, min_detections, min_spread, thresh
     return vx, vy, n_inliers
 
 
+@validate_params(
+    {"v_r": ["array-like"], "los_angle": ["array-like"], **_SETTINGS_CONSTRAINTS},
+    prefer_skip_nested_validation=True,
+)
 def estimate_velocity(
     v_r,
     los_angle,
@@ -268,8 +279,9 @@ def estimate_velocity(
         If the number of pairs ``n * (n - 1) / 2`` is at most this, every
         pair is a hypothesis (deterministic); otherwise ``max_trials``
         random pairs are drawn.
-    random_state : int, numpy.random.Generator or None, default=0
-        Passed to :func:`numpy.random.default_rng` to draw the pairs.
+    random_state : int, numpy.random.Generator, BitGenerator, SeedSequence or None, default=0
+        Passed to :func:`numpy.random.default_rng` to draw the pairs; an int
+        must be >= 0.
 
     Returns
     -------
@@ -301,7 +313,6 @@ def estimate_velocity(
     ``sigma_vr / (sqrt(n_inliers) * std(los_angle))``, so it is poor for a
     distant object seen by one sensor.
     """
-    _check_params(min_detections, min_spread, inlier_threshold, max_trials)
     v_r, los_angle = _as_1d(v_r, los_angle)
     finite = np.isfinite(v_r) & np.isfinite(los_angle)
     if not finite.all():
@@ -320,6 +331,10 @@ def estimate_velocity(
     return float(vx[0]), float(vy[0]), int(n_inliers[0])
 
 
+@validate_params(
+    {"v_r": ["array-like"], "los_angle": ["array-like"], "groups": ["array-like"], **_SETTINGS_CONSTRAINTS},
+    prefer_skip_nested_validation=True,
+)
 def estimate_velocities(
     v_r,
     los_angle,
@@ -353,8 +368,8 @@ def estimate_velocities(
     min_detections, min_spread, inlier_threshold, max_trials, random_state
         As in :func:`estimate_velocity`.  An integer (or a
         :class:`numpy.random.SeedSequence`) seeds a fresh generator for each
-        group, exactly as :func:`estimate_velocity`; a Generator or None is
-        one generator shared by all groups.
+        group, exactly as :func:`estimate_velocity`; a Generator, a
+        BitGenerator or None is one generator shared by all groups.
 
     Returns
     -------
@@ -365,7 +380,33 @@ def estimate_velocities(
     unique_groups : ndarray of shape (n_groups,)
         The sorted unique group labels the entries refer to.
     """
-    _check_params(min_detections, min_spread, inlier_threshold, max_trials)
+    return _estimate_velocities(
+        v_r,
+        los_angle,
+        groups,
+        min_detections=min_detections,
+        min_spread=min_spread,
+        inlier_threshold=inlier_threshold,
+        max_trials=max_trials,
+        random_state=random_state,
+    )
+
+
+def _estimate_velocities(
+    v_r,
+    los_angle,
+    groups,
+    *,
+    min_detections=3,
+    min_spread=0.05,
+    inlier_threshold=0.25,
+    max_trials=60,
+    random_state=0,
+):
+    """:func:`estimate_velocities` without its parameter validation, for callers inside the package.
+
+    The settings must satisfy the constraints of the public function.
+    """
     v_r, los_angle = _as_1d(v_r, los_angle)
     groups = np.asarray(groups)
     if groups.shape != v_r.shape:
