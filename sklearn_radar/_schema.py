@@ -55,6 +55,7 @@ from dataclasses import dataclass
 
 import numpy as np
 import pandas as pd
+from sklearn.utils._param_validation import validate_params
 
 from ._labels import rank_by_first_appearance
 
@@ -369,6 +370,10 @@ def check_columns(X, required, where: str = "X") -> None:
         raise ValueError(f"{where} is missing the column(s) {missing}")
 
 
+@validate_params(
+    {"track_id": ["array-like"], "sequence": ["array-like", None]},
+    prefer_skip_nested_validation=True,
+)
 def instance_target(track_id, sequence=None) -> np.ndarray:
     """Integer instance label per detection, -1 for background.
 
@@ -381,18 +386,36 @@ def instance_target(track_id, sequence=None) -> np.ndarray:
     track_id : array-like of str, shape (n_detections,)
         RadarScenes track ids, ``""`` for background.
     sequence : array-like of int, shape (n_detections,), default=None
-        Sequence number of each detection.
+        Sequence number of each detection.  None: all detections belong to
+        one sequence.
 
     Returns
     -------
     target : ndarray of int64, shape (n_detections,)
+        Instance of each detection, -1 for background.
+
+    Raises
+    ------
+    ValueError
+        If ``sequence`` does not have the shape of ``track_id``.
+
+    Examples
+    --------
+    >>> from sklearn_radar import instance_target
+    >>> instance_target(["", "b", "a", "b"]).tolist()
+    [-1, 0, 1, 0]
+    >>> instance_target(["a", "a"], sequence=[1, 2]).tolist()
+    [0, 1]
     """
     track_id = np.asarray(track_id, dtype=object).astype(str)
     target = np.full(track_id.shape, -1, dtype=np.int64)
     is_object = track_id != ""
     keys = track_id[is_object]
     if sequence is not None:
-        keys = np.char.add(np.asarray(sequence)[is_object].astype(str), np.char.add(":", keys))
+        sequence = np.asarray(sequence)
+        if sequence.shape != track_id.shape:
+            raise ValueError(f"sequence must have the shape of track_id {track_id.shape}, got {sequence.shape}")
+        keys = np.char.add(sequence[is_object].astype(str), np.char.add(":", keys))
     target[is_object] = rank_by_first_appearance(keys)
     return target
 
@@ -429,9 +452,30 @@ def attach_context(radar_data: pd.DataFrame, sequence: int, odometry_index, odom
     return make_frame(table, DETECTION_COLUMNS, table="detections")
 
 
+@validate_params({"columns": [tuple, list]}, prefer_skip_nested_validation=True)
 def describe_columns(columns=DETECTION_COLUMNS) -> str:
-    """The column table as reStructuredText-like plain text, for docs and ``--help``."""
-    width = max(len(c.name) for c in columns)
+    """The column table as reStructuredText-like plain text, for docs and ``--help``.
+
+    Parameters
+    ----------
+    columns : tuple or list of Column, default=DETECTION_COLUMNS
+        The columns to describe, e.g. :data:`RADAR_DATA_COLUMNS` or
+        :data:`ODOMETRY_COLUMNS`.
+
+    Returns
+    -------
+    text : str
+        A header line, then one line per column: name, dtype, unit and
+        meaning, aligned.
+
+    Examples
+    --------
+    >>> from sklearn_radar import describe_columns
+    >>> print("\\n".join(describe_columns().splitlines()[:2]))
+    column          dtype    unit   meaning
+    timestamp       int64    µs     scan time; equals the RadarScenes scene key
+    """
+    width = max((len(c.name) for c in columns), default=len("column"))
     lines = [f"{'column':<{width}}  {'dtype':<7}  {'unit':<5}  meaning"]
     lines += [f"{c.name:<{width}}  {c.dtype:<7}  {c.unit:<5}  {c.description}" for c in columns]
     return "\n".join(lines)
