@@ -7,7 +7,7 @@ from numbers import Integral, Real
 import numpy as np
 from joblib import Parallel, delayed
 from sklearn.base import BaseEstimator, TransformerMixin, _fit_context
-from sklearn.utils._param_validation import Interval
+from sklearn.utils._param_validation import Interval, validate_params
 from sklearn.utils.validation import check_is_fitted
 
 from .._neighbors import build_grid, count_neighbors
@@ -15,7 +15,19 @@ from .._schema import FILTER_READS
 from .._validation import check_filter_rule, read_columns, sequence_slices, write_columns
 
 
-def doppler_density_keep(v_r, n_neighbors, vr_threshold=0.10, threshold_ratios=(1, 5, 10, 50), min_neighbors=(2, 3, 4, 10)):
+@validate_params(
+    {
+        "v_r": ["array-like"],
+        "n_neighbors": ["array-like"],
+        "vr_threshold": [Interval(Real, 0, None, closed="left")],
+        "threshold_ratios": ["array-like"],
+        "min_neighbors": ["array-like"],
+    },
+    prefer_skip_nested_validation=True,
+)
+def doppler_density_keep(
+    v_r, n_neighbors, vr_threshold=0.10, threshold_ratios=(1, 5, 10, 50), min_neighbors=(2, 3, 4, 10)
+):
     """Eq. 1: which detections survive the Doppler-density filter.
 
     A detection is removed when it has no neighbour, or when for any i its
@@ -34,31 +46,131 @@ def doppler_density_keep(v_r, n_neighbors, vr_threshold=0.10, threshold_ratios=(
         Neighbour count N (the detection itself excluded); counts capped at
         ``max(min_neighbors)`` give the same result.
     vr_threshold : float, default=0.10
-        eta_1, m/s.
-    threshold_ratios : sequence of float, default=(1, 5, 10, 50)
-        eta_1 / eta_i for each i.
-    min_neighbors : sequence of int, default=(2, 3, 4, 10)
-        N_i for each i.
+        eta_1, m/s, >= 0.
+    threshold_ratios : array-like of float, default=(1, 5, 10, 50)
+        eta_1 / eta_i for each i, each > 0.
+    min_neighbors : array-like of int, default=(2, 3, 4, 10)
+        N_i for each i, each >= 1; as many as ``threshold_ratios``.
 
     Returns
     -------
     keep : ndarray of bool, shape (n_detections,)
+        False where Eq. 1 removes the detection.
+
+    Raises
+    ------
+    ValueError
+        If ``v_r`` and ``n_neighbors`` differ in shape, or
+        ``threshold_ratios`` and ``min_neighbors`` in length.
+
+    See Also
+    --------
+    neighbor_counts : the neighbour counts N.
+    DopplerDensityFilter : the filter as a transformer.
+
+    Examples
+    --------
+    >>> from sklearn_radar.preprocessing import doppler_density_keep
+    >>> doppler_density_keep([0.0, 0.0, 0.5, 0.0], [0, 1, 1, 10]).tolist()
+    [False, False, True, True]
+    """
+    v_r = np.asarray(v_r, dtype=np.float64)
+    n_neighbors = np.asarray(n_neighbors)
+    if v_r.shape != n_neighbors.shape:
+        raise ValueError(f"v_r and n_neighbors must have equal shapes, got {v_r.shape} and {n_neighbors.shape}")
+    ratios, n_min = check_filter_rule(threshold_ratios, min_neighbors)
+    return _doppler_density_keep(v_r, n_neighbors, vr_threshold, ratios, n_min)
+
+
+def _doppler_density_keep(v_r, n_neighbors, vr_threshold, threshold_ratios, min_neighbors):
+    """:func:`doppler_density_keep` without its validation, for callers inside the package.
+
+    ``threshold_ratios`` and ``min_neighbors`` as returned by
+    :func:`~sklearn_radar._validation.check_filter_rule`.
     """
     speed = np.abs(np.asarray(v_r, dtype=np.float64))
     n = np.asarray(n_neighbors)
     remove = n < 1
-    for ratio, n_min in zip(threshold_ratios, min_neighbors):
+    for ratio, n_min in zip(threshold_ratios, min_neighbors, strict=True):
         remove |= (speed < vr_threshold / ratio) & (n < n_min)
     return ~remove
 
 
+@validate_params(
+    {
+        "x": ["array-like"],
+        "y": ["array-like"],
+        "t": ["array-like"],
+        "sequence": ["array-like", None],
+        "d_xy": [Interval(Real, 0, None, closed="neither")],
+        "dt": [Interval(Real, 0, None, closed="left")],
+        "causal": ["boolean"],
+        "cap": [Interval(Integral, 1, None, closed="left")],
+        "n_jobs": [Integral, None],
+    },
+    prefer_skip_nested_validation=True,
+)
 def neighbor_counts(x, y, t, sequence, d_xy, dt, causal=False, cap=10, n_jobs=None):
     """Neighbours within ``d_xy`` (m) and ``dt`` (s) in the same sequence, capped at ``cap``.
 
-    With ``causal=True`` only detections at or before a detection's time
-    count.  Work is linear in the number of detections: a grid of cell
-    ``d_xy`` limits the candidates and counting stops at ``cap``.
+    The neighbour count N of Eq. 1: for each detection, the number of other
+    detections of its sequence within ``d_xy`` in x-y (Euclidean,
+    inclusive) and within ``dt`` in time (inclusive).  Work is linear in the
+    number of detections: a grid of cell ``d_xy`` limits the candidates and
+    counting stops at ``cap``.
+
+    Parameters
+    ----------
+    x, y : array-like of float, shape (n_detections,)
+        Position, m (the ``x`` and ``y`` columns of
+        :class:`~sklearn_radar.FrameTransform`).
+    t : array-like of float, shape (n_detections,)
+        Detection time, s.
+    sequence : array-like of shape (n_detections,) or None
+        Sequence of each detection; detections of different sequences are
+        never neighbours.  None: one sequence.
+    d_xy : float
+        Spatial radius, m, > 0.
+    dt : float
+        Time window, s, >= 0.
+    causal : bool, default=False
+        If True, only detections at or before a detection's time count.
+    cap : int, default=10
+        Counting stops at this many neighbours, >= 1; Eq. 1 needs no more
+        than ``max(min_neighbors)``.
+    n_jobs : int, default=None
+        Sequences processed in parallel (joblib threads; the count kernel
+        releases the GIL).  None means 1.
+
+    Returns
+    -------
+    counts : ndarray of int64, shape (n_detections,)
+        Neighbours of each detection (itself excluded), at most ``cap``.
+
+    Raises
+    ------
+    ValueError
+        If the arrays differ in length.
+
+    See Also
+    --------
+    doppler_density_keep : Eq. 1 applied to the counts.
+
+    Examples
+    --------
+    >>> from sklearn_radar.preprocessing import neighbor_counts
+    >>> neighbor_counts([0.0, 1.0, 5.0], [0.0, 0.0, 0.0], [0.0, 0.1, 0.0], None, d_xy=1.4, dt=0.25).tolist()
+    [1, 1, 0]
     """
+    x, y, t = (np.asarray(values, dtype=np.float64) for values in (x, y, t))
+    shapes = {x.shape, y.shape, t.shape} | ({np.shape(sequence)} if sequence is not None else set())
+    if len(shapes) != 1 or x.ndim != 1:
+        raise ValueError(f"x, y, t and sequence must be 1-D of equal length, got shapes {sorted(shapes)}")
+    return _neighbor_counts(x, y, t, sequence, d_xy, dt, causal, cap, n_jobs)
+
+
+def _neighbor_counts(x, y, t, sequence, d_xy, dt, causal=False, cap=10, n_jobs=None):
+    """:func:`neighbor_counts` without its validation: float64 arrays, for callers inside the package."""
     counts = np.empty(len(x), dtype=np.int64)
     slices = sequence_slices(sequence)
 
