@@ -2,10 +2,27 @@
 
 from __future__ import annotations
 
+from numbers import Real
+
 import numpy as np
 import pandas as pd
+from sklearn.utils._param_validation import Interval, StrOptions, validate_params
 
 
+# RadarDBSCAN's constraints for the parameters passed on to it (its own validation is skipped inside).
+@validate_params(
+    {
+        "X": [pd.DataFrame],
+        "y": ["array-like"],
+        "eps_xy": [Interval(Real, 0, None, closed="neither")],
+        "eps_vr": [Interval(Real, 0, None, closed="neither")],
+        "eps_t": [Interval(Real, 0, None, closed="left")],
+        "vr_min": [Real],
+        "min_samples": [Interval(Real, 1, None, closed="left")],
+        "frame": [StrOptions({"frame", "car"})],
+    },
+    prefer_skip_nested_validation=True,
+)
 def precluster_target(X, y, *, eps_xy=2.0, eps_vr=25.0, eps_t=0.25, vr_min=0.01, min_samples=2, frame="frame"):
     """Split each labelled object into the clusters a liberal DBSCAN finds in it alone.
 
@@ -25,14 +42,17 @@ def precluster_target(X, y, *, eps_xy=2.0, eps_vr=25.0, eps_t=0.25, vr_min=0.01,
     y : array-like of shape (n_detections,)
         Instance per detection, -1 for background.
     eps_xy : float, default=2.0
-        m (box criterion, Eq. 3).
+        Spatial radius of the box criterion (Eq. 3), m, > 0.
     eps_vr : float, default=25.0
-        m/s.
+        Radial-velocity radius of the box criterion, m/s, > 0.
     eps_t : float, default=0.25
-        s.
+        Time window, s, >= 0.
     vr_min : float, default=0.01
-        m/s.
+        Only detections with ``|v_r| > vr_min`` (m/s) can be core points
+        (:class:`~sklearn_radar.RadarDBSCAN`'s ``vr_min``).
     min_samples : float, default=2
+        Minimum number of detections in a core point's neighbourhood,
+        >= 1 (:class:`~sklearn_radar.RadarDBSCAN`'s ``min_samples``).
     frame : {"frame", "car"}, default="frame"
         Coordinates used when X has no working columns yet.
 
@@ -40,13 +60,16 @@ def precluster_target(X, y, *, eps_xy=2.0, eps_vr=25.0, eps_t=0.25, vr_min=0.01,
     -------
     target : ndarray of int64, shape (n_detections,)
         Target cluster per detection (unique over sequences), -1 for background.
+
+    Raises
+    ------
+    ValueError
+        If ``y`` does not have one label per row of ``X``.
     """
     from ..cluster import RadarDBSCAN
     from ..preprocessing import FrameTransform
 
     y = np.asarray(y)
-    if not isinstance(X, pd.DataFrame):
-        raise ValueError("precluster_target: X must be a DataFrame of detections")
     if len(y) != len(X):
         raise ValueError(f"precluster_target: y has {len(y)} labels for {len(X)} detections")
     if not {"x", "y", "v_r", "t"} <= set(X.columns):
