@@ -43,14 +43,57 @@ def load_params(path, experiment=None):
     path = Path(path)
     try:
         saved = json.loads(path.read_text(encoding="utf-8"))
-        chosen = str(experiment) if experiment is not None else saved["best"]
-        setting = saved["experiments"][chosen]
     except FileNotFoundError:
         raise FileNotFoundError(f"parameter file not found: {path}") from None
     except (json.JSONDecodeError, UnicodeDecodeError):
         raise ValueError(f"{path}: not a JSON parameter file written by 'sklearn-radar reproduce'") from None
-    except (KeyError, TypeError):
-        raise ValueError(f"{path}: has no saved setting for experiment {experiment or 'best'!r}") from None
+    except OSError as error:
+        raise OSError(f"cannot read the parameter file {path}: {error.strerror or error}") from None
+    return _checked_setting(saved, path, experiment)
+
+
+def _checked_setting(saved, path, experiment):
+    """The setting of ``experiment`` in a parsed ``params.json``; ValueError names the file and the bad key."""
+
+    def bad(where, problem):
+        return ValueError(f"{path}: {where} {problem} (not a parameter file written by 'sklearn-radar reproduce')")
+
+    if not isinstance(saved, dict):
+        raise bad("the top level", f"must be a JSON object, got {type(saved).__name__}")
+    experiments = saved.get("experiments")
+    if not isinstance(experiments, dict):
+        problem = "is missing" if experiments is None else f"must be an object, got {type(experiments).__name__}"
+        raise bad("the key 'experiments'", problem)
+    if experiment is None:
+        chosen = saved.get("best")
+        if not isinstance(chosen, str) or chosen not in experiments:
+            problem = "is missing" if chosen is None else f"names no saved experiment: {chosen!r}"
+            raise bad("the key 'best'", problem)
+    else:
+        chosen = str(experiment)
+        if chosen not in experiments:
+            saved_keys = ", ".join(sorted(experiments, key=lambda k: (len(k), k))) or "none"
+            raise ValueError(f"{path}: has no saved setting for experiment {experiment} (saved: {saved_keys})")
+    setting = experiments[chosen]
+    where = f"experiments[{chosen!r}]"
+    if not isinstance(setting, dict):
+        raise bad(where, f"must be an object, got {type(setting).__name__}")
+    for key in ("experiment", "params"):
+        if key not in setting:
+            raise bad(where, f"lacks the key {key!r}")
+    number = setting["experiment"]
+    if isinstance(number, bool) or not isinstance(number, int) or str(number) != chosen:
+        raise bad(f"the key 'experiment' of {where}", f"must be the number {chosen}, got {number!r}")
+    try:
+        get_experiment(number)
+    except ValueError:
+        raise bad(f"the key 'experiment' of {where}", f"must be one of the paper's experiments, got {number}") from None
+    for key in ("params", "stage1_params"):
+        value = setting.get(key)
+        if key == "stage1_params" and value is None:
+            continue
+        if not isinstance(value, dict):
+            raise bad(f"the key {key!r} of {where}", f"must be an object of parameters, got {type(value).__name__}")
     return setting
 
 
@@ -80,15 +123,28 @@ def cluster_radarscenes(data, params, out, experiment=None):
     """
     setting = load_params(params, experiment)
     number = setting["experiment"]
+    pipeline = _pipeline(setting, params)
     scenes = load_radarscenes(data)
-    pipeline = experiment_pipeline(
-        number,
-        params={k: v for k, v in setting["params"].items() if k.split("__")[0] in ("cluster", "merge", "filter")},
-        stage1_params=setting.get("stage1_params") if get_experiment(number).stage == 2 else None,
-    )
     labels = pipeline.fit_predict(scenes.data)
     write_predictions(scenes.data["uuid"].to_numpy(), labels, out)
     return {"experiment": number, "n_detections": len(labels), "n_clusters": int(labels.max() + 1), "out": str(out)}
+
+
+def _pipeline(setting, path):
+    """The pipeline of a checked setting; ValueError names the file and the parameter it cannot set."""
+    number = setting["experiment"]
+    where = f"{path}: experiments['{number}']"
+    params = {k: v for k, v in setting["params"].items() if k.split("__")[0] in ("cluster", "merge", "filter")}
+    stage1_params = setting.get("stage1_params") if get_experiment(number).stage == 2 else None
+    known = experiment_pipeline(number).get_params()
+    unknown = sorted(key for key in params if key not in known)
+    if unknown:
+        raise ValueError(f"{where}: key 'params' holds parameters that experiment #{number} does not have: {unknown}")
+    try:
+        return experiment_pipeline(number, params=params, stage1_params=stage1_params)
+    except (ValueError, TypeError) as error:
+        first_line = str(error).splitlines()[0] if str(error) else type(error).__name__
+        raise ValueError(f"{where}: cannot build experiment #{number}'s pipeline: {first_line}") from None
 
 
 def write_predictions(uuids, labels, out):
