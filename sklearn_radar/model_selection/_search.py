@@ -4,10 +4,11 @@ from __future__ import annotations
 
 import sys
 import time
-from numbers import Integral
+from numbers import Integral, Real
 
 import numpy as np
 from sklearn.model_selection import GroupKFold
+from sklearn.utils._param_validation import HasMethods, Interval, validate_params
 
 from .._skopt import BayesSearchCV
 
@@ -56,7 +57,20 @@ class ProgressPrinter:
         self._seen = 0
 
     def __call__(self, result):
-        """Print the candidates added since the last call; never stops the search (returns None)."""
+        """Print the candidates added since the last call; never stops the search.
+
+        Parameters
+        ----------
+        result : scipy.optimize.OptimizeResult
+            skopt's result so far; ``result.func_vals`` holds the negated
+            score of every candidate evaluated (of the current search
+            subspace).
+
+        Returns
+        -------
+        stop : None
+            Never a true value, which would stop the search.
+        """
         # func_vals are the negated scores (skopt minimises); a new search
         # subspace restarts them, then everything in them is new.
         values = -np.asarray(result.func_vals, dtype=np.float64)
@@ -81,6 +95,50 @@ class ProgressBayesSearchCV(BayesSearchCV):
     Identical to ``BayesSearchCV`` except for one added parameter,
     ``progress``: when true, :meth:`fit` prepends a :class:`ProgressPrinter`
     (labelled ``progress`` when it is a string) to the callbacks.
+    :func:`make_bayes_search` builds one with the paper's settings.
+
+    Parameters
+    ----------
+    estimator, search_spaces, optimizer_kwargs, n_iter, scoring, fit_params, n_jobs, n_points, iid, refit, cv, \
+verbose, pre_dispatch, random_state, error_score, return_train_score
+        As in :class:`skopt.BayesSearchCV`, with its defaults.
+    progress : bool or str, default=False
+        If true, :meth:`fit` prints one line per evaluated candidate; a
+        string is printed in brackets at the start of each line.
+
+    Attributes
+    ----------
+    best_estimator_ : estimator
+        The candidate with the best mean cross-validated score, refitted on
+        all of X (when ``refit``).
+    best_index_ : int
+        Row of ``cv_results_`` of the best candidate.
+    best_params_ : dict
+        Parameters of the best candidate.
+    best_score_ : float
+        Mean cross-validated score of the best candidate.
+    cv_results_ : dict of numpy (masked) ndarrays
+        Scores, fit times and parameters of every candidate, as in
+        :class:`sklearn.model_selection.GridSearchCV`.
+    feature_names_in_ : ndarray of str
+        Column names of X, when X is a DataFrame (and ``refit``).
+    multimetric_ : bool
+        Whether more than one score is computed.
+    n_splits_ : int
+        Number of cross-validation folds.
+    optimizer_kwargs_ : dict
+        Arguments the :class:`skopt.Optimizer` of each search space was
+        built with.
+    optimizers_ : list of skopt.Optimizer
+        The optimiser of each search space, with every point it evaluated.
+    refit_time_ : float
+        Seconds spent refitting the best candidate on all of X.
+    scorer_ : callable
+        The scorer used (``scoring``, or the estimator's ``score``).
+
+    See Also
+    --------
+    make_bayes_search : the paper's search as a ProgressBayesSearchCV.
     """
 
     def __init__(
@@ -124,7 +182,28 @@ class ProgressBayesSearchCV(BayesSearchCV):
         self.progress = progress
 
     def fit(self, X, y=None, *, groups=None, callback=None, **fit_params):
-        """Run the search (see :meth:`skopt.BayesSearchCV.fit`), printing progress if asked."""
+        """Run the search (see :meth:`skopt.BayesSearchCV.fit`), printing progress if asked.
+
+        Parameters
+        ----------
+        X : DataFrame or array-like of shape (n_detections, n_columns)
+            The detections.
+        y : array-like of shape (n_detections,), default=None
+            Target per detection (e.g.
+            :func:`~sklearn_radar.metrics.precluster_target`).
+        groups : array-like of shape (n_detections,), default=None
+            Sequence of each detection, for a grouped ``cv``.
+        callback : callable or list of callables, default=None
+            Called after each step with the optimiser's result, after the
+            progress printer; a true return value stops the search.
+        **fit_params : dict
+            Passed to the estimator's ``fit``.
+
+        Returns
+        -------
+        self : ProgressBayesSearchCV
+            The fitted search.
+        """
         callbacks = [] if callback is None else list(callback) if isinstance(callback, (list, tuple)) else [callback]
         if self.progress:
             label = self.progress if isinstance(self.progress, str) else ""
@@ -138,6 +217,24 @@ class ProgressBayesSearchCV(BayesSearchCV):
         return sum(space[1] if isinstance(space, tuple) else self.n_iter for space in self.search_spaces)
 
 
+# Skipping nested validation is safe: the estimator is only stored here, and validated when the search fits it.
+@validate_params(
+    {
+        "estimator": [HasMethods(["fit"])],
+        "search_space": [dict, list],
+        "n_iter": [Interval(Integral, 1, None, closed="left")],
+        "n_initial_points": [Interval(Integral, 0, None, closed="left")],
+        "cv": [Interval(Integral, 2, None, closed="left"), HasMethods(["split", "get_n_splits"]), list],
+        "scoring": [callable, None],
+        "n_jobs": [Integral, None],
+        "n_points": [Interval(Integral, 1, None, closed="left")],
+        "random_state": ["random_state"],
+        "error_score": [Real],
+        "verbose": ["verbose"],
+        "optimizer_kwargs": [dict, None],
+    },
+    prefer_skip_nested_validation=True,
+)
 def make_bayes_search(
     estimator,
     search_space,
@@ -175,15 +272,17 @@ def make_bayes_search(
         :func:`sklearn_radar.experiments.search_space`), or anything
         ``BayesSearchCV`` accepts as ``search_spaces``.
     n_iter : int, default=100
-        Candidates evaluated in total.
+        Candidates evaluated in total, >= 1.
     n_initial_points : int, default=30
         Random candidates before the Gaussian process guides the search
         (``optimizer_kwargs={"n_initial_points": ...}``; skopt's own default
-        of 10 would make a short search purely random).
-    cv : int or cross-validation splitter, default=3
-        An int means :class:`~sklearn.model_selection.GroupKFold` with that
-        many folds: every sequence lies wholly in one fold, the folds being
-        balanced in detections.  ``fit`` then needs ``groups=``.
+        of 10 would make a short search purely random), >= 0.
+    cv : int, cross-validation splitter or list of (train, test) index arrays, default=3
+        An int (>= 2) means :class:`~sklearn.model_selection.GroupKFold`
+        with that many folds: every sequence lies wholly in one fold, the
+        folds being balanced in detections.  ``fit`` then needs ``groups=``.
+        A splitter (with ``split`` and ``get_n_splits``) or a list of
+        folds is used as given.
     scoring : callable or None, default=None
         ``scorer(estimator, X, y)``; None means
         :func:`~sklearn_radar.metrics.radar_v_measure_scorer`.
@@ -191,13 +290,13 @@ def make_bayes_search(
         Fits run in parallel (joblib): the ``cv`` folds of the ``n_points``
         candidates of one step, so at most ``cv * n_points`` at a time.
     n_points : int, default=1
-        Candidates proposed per step; raise it with ``n_jobs`` to use more
+        Candidates proposed per step, >= 1; raise it with ``n_jobs`` to use more
         workers than folds (slightly less sequential guidance).
     random_state : int, RandomState instance or None, default=None
         Seed of the optimiser (random points, acquisition).
     error_score : float, default=0.0
         Score of a candidate whose fit fails.
-    verbose : int, default=0
+    verbose : int or bool, default=0
         0: silent.  1: one progress line per candidate (iteration, score,
         best so far, elapsed seconds; see :class:`ProgressPrinter`).
         ``>= 2``: in addition scikit-learn's own messages at level
@@ -224,7 +323,8 @@ def make_bayes_search(
 
     ``error_score`` covers a candidate that fails on *some* folds only:
     scikit-learn raises when every fit of a step fails, and a Bayesian step
-    is a single candidate.  The radar scorer itself never raises.
+    is a single candidate.  The radar scorer itself never raises for a failing
+    candidate.
 
     With a cached pipeline, pass only the columns it reads
     (:data:`sklearn_radar.experiments.PIPELINE_COLUMNS`): the cache hashes

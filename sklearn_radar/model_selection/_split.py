@@ -2,14 +2,21 @@
 
 from __future__ import annotations
 
-from numbers import Real
-
 import numpy as np
 from sklearn.utils import check_random_state
+from sklearn.utils._param_validation import Interval, RealNotInt, validate_params
 
 __all__ = ["sequence_train_test_split"]
 
 
+@validate_params(
+    {
+        "groups": ["array-like"],
+        "test_size": [Interval(RealNotInt, 0, 1, closed="neither")],
+        "random_state": ["random_state"],
+    },
+    prefer_skip_nested_validation=True,
+)
 def sequence_train_test_split(groups, *, test_size=0.5, random_state=None):
     """Split whole sequences into a training and a test part of balanced detection counts.
 
@@ -50,7 +57,7 @@ def sequence_train_test_split(groups, *, test_size=0.5, random_state=None):
     ------
     ValueError
         If ``groups`` is not 1-D or holds fewer than two sequences, or if
-        ``test_size`` is not in (0, 1).
+        ``test_size`` is not a float in (0, 1).
 
     Examples
     --------
@@ -66,8 +73,6 @@ def sequence_train_test_split(groups, *, test_size=0.5, random_state=None):
     groups = np.asarray(groups)
     if groups.ndim != 1:
         raise ValueError(f"groups must be 1-D (one sequence id per detection), got shape {groups.shape}")
-    if isinstance(test_size, bool) or not isinstance(test_size, Real) or not 0.0 < test_size < 1.0:
-        raise ValueError(f"test_size must be a float in (0, 1), got {test_size!r}")
     sequences, codes, sizes = np.unique(groups, return_inverse=True, return_counts=True)
     if len(sequences) < 2:
         raise ValueError(f"groups must hold at least 2 sequences to split by sequence, got {len(sequences)}")
