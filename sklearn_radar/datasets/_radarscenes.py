@@ -9,7 +9,11 @@ data can be opened with the RadarScenes devkit.
 
 Every malformed input raises :class:`FileNotFoundError` (missing file or
 folder) or :class:`ValueError` naming the file and, where there is one, the
-field.
+field.  Values are checked where they are read: a NaN or infinite number in
+a field of ``radar_data.h5`` (``radar_data`` or ``odometry``) or in the
+mounting of ``sensors.json`` is rejected, as is a ``sequences.json`` that
+lists no sequence or a ``scenes.json`` whose ``sequence_name`` names another
+sequence than its folder.
 """
 
 from __future__ import annotations
@@ -112,10 +116,7 @@ def load_radarscenes(path, sequences=None) -> Bunch:
         odometry=odometry,
         sensors=_sensors_frame(mounting),
         sequences=_sequences_frame(numbers, [catalogue[n] for n in numbers]),
-        DESCR=(
-            f"RadarScenes detections loaded from {data_dir}: {len(numbers)} sequence(s), "
-            f"{len(data)} detection(s)."
-        ),
+        DESCR=(f"RadarScenes detections loaded from {data_dir}: {len(numbers)} sequence(s), {len(data)} detection(s)."),
     )
 
 
@@ -157,8 +158,13 @@ def _json_int(value, file, field):
 
 
 def _json_float(value, file, field):
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise ValueError(f"{file}: field {field!r} must be a number, got {value!r}")
+    finite = isinstance(value, (int, float)) and not isinstance(value, bool)
+    try:
+        finite = finite and bool(np.isfinite(float(value)))
+    except OverflowError:  # an integer beyond the float range
+        finite = False
+    if not finite:
+        raise ValueError(f"{file}: field {field!r} must be a finite number, got {value!r}")
     return float(value)
 
 
@@ -172,8 +178,7 @@ def _read_sensors_json(file: Path) -> dict:
         if sensor_id in mounting:
             raise ValueError(f"{file}: field '{name}.id': sensor id {sensor_id} occurs twice")
         mounting[sensor_id] = {
-            key: _json_float(_field(entry, key, file, name), file, f"{name}.{key}")
-            for key in ("x", "y", "yaw")
+            key: _json_float(_field(entry, key, file, name), file, f"{name}.{key}") for key in ("x", "y", "yaw")
         }
     return dict(sorted(mounting.items()))
 
@@ -190,10 +195,10 @@ def _read_sequences_json(file: Path) -> dict:
         entry = _expect_mapping(entry, file, name)
         category = _field(entry, "category", file, name)
         if category not in _CATEGORIES:
-            raise ValueError(
-                f"{file}: field '{name}.category' must be one of {list(_CATEGORIES)}, got {category!r}"
-            )
+            raise ValueError(f"{file}: field '{name}.category' must be one of {list(_CATEGORIES)}, got {category!r}")
         catalogue[int(match.group(1))] = category
+    if not catalogue:
+        raise ValueError(f"{file}: field 'sequences' lists no sequence")
     return catalogue
 
 
@@ -234,7 +239,9 @@ def _load_sequence(sequence_dir: Path, number: int, mounting: dict):
     _check_sorted(odometry["timestamp"], f"{h5_file} [odometry]")
     _check_mounting(radar["sensor_id"], mounting, h5_file)
     scenes_file = sequence_dir / "scenes.json"
-    odometry_index = _detection_odometry_index(_read_json(scenes_file), radar, len(odometry), scenes_file)
+    scenes_content = _read_json(scenes_file)
+    _check_sequence_name(scenes_content, sequence_dir.name, scenes_file)
+    odometry_index = _detection_odometry_index(scenes_content, radar, len(odometry), scenes_file)
     # Only the sensors present: attach_context sizes a lookup table by the largest id.
     present = {k: mounting[k] for k in np.unique(radar["sensor_id"]).tolist()} or mounting
     detections = attach_context(radar, number, odometry_index, odometry, present)
@@ -276,7 +283,25 @@ def _file_frame(array: np.ndarray, columns, table: str) -> pd.DataFrame:
         if name in _STRING_FIELDS:
             values = _decode_strings(values, f"{table}: field {name!r}")
         fields[name] = values
-    return make_frame(fields, columns, table=table)
+    frame = make_frame(fields, columns, table=table)
+    _check_finite(frame, table)
+    return frame
+
+
+def _check_finite(frame: pd.DataFrame, table: str) -> None:
+    """Policy: a measured value is a finite number; NaN or inf is rejected here, where the file is known."""
+    for name in frame.columns:
+        values = frame[name].to_numpy()
+        if values.dtype.kind != "f":
+            continue
+        bad = np.flatnonzero(~np.isfinite(values))
+        if bad.size:
+            value = values[bad[0]]
+            kind = "NaN" if np.isnan(value) else ("inf" if value > 0 else "-inf")
+            raise ValueError(
+                f"{table}: field {name!r} holds {kind} in row {bad[0]} ({bad.size} non-finite value(s)); "
+                f"RadarScenes values must be finite numbers"
+            )
 
 
 def _decode_strings(values: np.ndarray, where: str) -> np.ndarray:
@@ -291,6 +316,14 @@ def _decode_strings(values: np.ndarray, where: str) -> np.ndarray:
     if not all(isinstance(item, str) for item in decoded):
         raise ValueError(f"{where} must hold strings")
     return np.array(decoded, dtype=object)
+
+
+def _check_sequence_name(content, name: str, file: Path) -> None:
+    """A ``scenes.json`` that names a sequence must name the one whose folder holds it."""
+    if isinstance(content, dict) and "sequence_name" in content and content["sequence_name"] != name:
+        raise ValueError(
+            f"{file}: field 'sequence_name' is {content['sequence_name']!r}, but the file lies in the folder {name}"
+        )
 
 
 def _check_sorted(timestamps: pd.Series, table: str) -> None:
@@ -462,7 +495,7 @@ def write_radarscenes(bunch, path, overwrite=False) -> Path:
     _refuse_occupied(path, overwrite)
     prepared = [
         _prepare_sequence(number, category, data, odometry)
-        for number, category in zip(sequences["sequence"], sequences["category"])
+        for number, category in zip(sequences["sequence"], sequences["category"], strict=True)
     ]
     sensors_json = {
         f"radar_{sensor_id}": {"id": int(sensor_id), **{k: float(row[k]) for k in ("x", "y", "yaw")}}
@@ -496,7 +529,7 @@ def _bunch_tables(bunch):
     for key in ("data", "odometry", "sensors", "sequences"):
         if not isinstance(bunch[key], pd.DataFrame):
             raise ValueError(f"bunch.{key} must be a pandas DataFrame, got {type(bunch[key]).__name__}")
-    data = make_frame(bunch["data"], RADAR_DATA_COLUMNS + (_SEQUENCE_COLUMN,), table="bunch.data")
+    data = make_frame(bunch["data"], (*RADAR_DATA_COLUMNS, _SEQUENCE_COLUMN), table="bunch.data")
     odometry = make_frame(bunch["odometry"], ODOMETRY_COLUMNS, table="bunch.odometry")
     sensors = _bunch_sensors(bunch["sensors"])
     sequences = _bunch_sequences(bunch["sequences"])
@@ -598,9 +631,7 @@ def _encode_strings(values: np.ndarray, where: str) -> np.ndarray:
     encoded = []
     for value in values:
         if not value.isascii() or len(value) > _STRING_BYTES:
-            raise ValueError(
-                f"{where} must hold ASCII strings of at most {_STRING_BYTES} bytes, got {value!r}"
-            )
+            raise ValueError(f"{where} must hold ASCII strings of at most {_STRING_BYTES} bytes, got {value!r}")
         encoded.append(value.encode("ascii"))
     return np.array(encoded, dtype=f"S{_STRING_BYTES}")
 

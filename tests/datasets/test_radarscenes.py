@@ -669,3 +669,81 @@ def test_simulated_scenes_round_trip_and_devkit(tmp_path):
     root = write_radarscenes(bunch, tmp_path / "data")
     assert_bunch_equal(load_radarscenes(root), bunch)
     check_devkit_reads(root, bunch)
+
+
+# --------------------------------------------------------------------------
+# Corrupted values (issue 15, item 5): rejected at load time, naming file and field
+# --------------------------------------------------------------------------
+
+_RADAR_FLOAT_FIELDS = ["range_sc", "azimuth_sc", "rcs", "vr", "vr_compensated", "x_cc", "y_cc", "x_seq", "y_seq"]
+_ODOMETRY_FLOAT_FIELDS = ["x_seq", "y_seq", "yaw_seq", "vx", "yaw_rate"]
+
+
+def _corrupt_h5(dataset, field, value):
+    def corrupt(root):
+        file = root / "sequence_5" / "radar_data.h5"
+        arrays = dict(zip(["radar_data", "odometry"], read_h5(file), strict=True))
+        arrays[dataset][field][1] = value
+        rewrite_h5(file, **arrays)
+        return f"sequence_5/radar_data.h5 \\[{dataset}\\].*{field}.*(NaN|inf)"
+
+    return corrupt
+
+
+def _corrupt_sensor(key, text):
+    def corrupt(root):
+        file = root / "sensors.json"
+        content = json.loads(file.read_text())
+        name = sorted(content)[1]
+        content[name][key] = "@@"
+        file.write_text(json.dumps(content).replace('"@@"', text))
+        return f"sensors.json.*{name}.{key}.*finite"
+
+    return corrupt
+
+
+def _empty_sequences_json(root):
+    (root / "sequences.json").write_text(json.dumps({"sequences": {}}))
+    return "sequences.json.*no sequence"
+
+
+def _scenes_json_of_another_sequence(root):
+    edit_json(root / "sequence_5" / "scenes.json", lambda content: content.update(sequence_name="sequence_2"))
+    return "sequence_5/scenes.json.*sequence_name.*sequence_2"
+
+
+_CORRUPTIONS = {
+    **{
+        f"radar_data.{field}={value}": _corrupt_h5("radar_data", field, value)
+        for field in _RADAR_FLOAT_FIELDS
+        for value in (np.nan, np.inf)
+    },
+    "radar_data.vr=-inf": _corrupt_h5("radar_data", "vr", -np.inf),
+    **{
+        f"odometry.{field}={value}": _corrupt_h5("odometry", field, value)
+        for field in _ODOMETRY_FLOAT_FIELDS
+        for value in (np.nan, -np.inf)
+    },
+    **{
+        f"sensors.{key}={text}": _corrupt_sensor(key, text)
+        for key in ("x", "y", "yaw")
+        for text in ("NaN", "Infinity", "-Infinity", "1e999")
+    },
+    "sensors.x=10**400": _corrupt_sensor("x", "1" + "0" * 400),
+    "empty sequences.json": _empty_sequences_json,
+    "scenes.json of another sequence": _scenes_json_of_another_sequence,
+}
+
+
+@pytest.mark.parametrize("corrupt", list(_CORRUPTIONS.values()), ids=list(_CORRUPTIONS))
+def test_load_rejects_corrupted_values_naming_file_and_field(written, corrupt):
+    root, _ = written
+    message = corrupt(root)
+    with pytest.raises(ValueError, match=message):
+        load_radarscenes(root)
+
+
+def test_load_accepts_a_scenes_json_without_sequence_name(written):
+    root, bunch = written
+    edit_json(root / "sequence_5" / "scenes.json", lambda content: content.pop("sequence_name"))
+    assert_bunch_equal(load_radarscenes(root), bunch)
