@@ -1,6 +1,8 @@
 """Hardening of the command line and the output folders (issue 15, items 4-8)."""
 
 import json
+import os
+import stat
 
 import pytest
 
@@ -81,3 +83,44 @@ def test_good_params_file_still_clusters(small_folder, tmp_path, capsys):
     out = tmp_path / "p.json"
     assert main(["cluster", "--data", str(small_folder), "--params", str(params), "--out", str(out)]) == 0
     assert json.loads(out.read_text())["schema"] == 2
+
+
+# ----------------------------------------------------------------------------- item 6: the umask
+
+
+@pytest.fixture(params=[0o022, 0o027, 0o077], ids=["022", "027", "077"])
+def umask(request):
+    old = os.umask(request.param)
+    yield request.param
+    os.umask(old)
+
+
+def _modes(root):
+    """{relative path: permission bits} of ``root`` and everything below it."""
+    return {str(p.relative_to(root)): stat.S_IMODE(p.stat().st_mode) for p in [root, *root.rglob("*")]}
+
+
+def test_simulate_honours_the_umask(tmp_path, umask, capsys):
+    out = tmp_path / "sim"
+    assert main(["simulate", "--out", str(out), "--n-sequences", "1", "--duration", "1"]) == 0
+    modes = _modes(out)
+    expected = {name: (0o777 if (out / name).is_dir() else 0o666) & ~umask for name in modes}
+    assert modes == expected
+    # ...also when an existing folder is replaced
+    assert main(["simulate", "--out", str(out), "--n-sequences", "1", "--duration", "1", "--overwrite"]) == 0
+    assert _modes(out) == expected
+
+
+def test_cluster_predictions_and_reproduce_files_honour_the_umask(small_folder, tmp_path, umask, capsys):
+    from sklearn_radar.reproduce._io import atomic_write_text, check_writable
+
+    params = tmp_path / "params.json"
+    params.write_text(json.dumps({"best": "8", "experiments": {"8": _setting()}}))
+    out = tmp_path / "p.json"
+    assert main(["cluster", "--data", str(small_folder), "--params", str(params), "--out", str(out)]) == 0
+    assert stat.S_IMODE(out.stat().st_mode) == 0o666 & ~umask
+    folder = tmp_path / "report" / "deeper"
+    check_writable(folder)
+    atomic_write_text(folder / "results.json", "{}")
+    assert stat.S_IMODE(folder.stat().st_mode) == 0o777 & ~umask
+    assert stat.S_IMODE((folder / "results.json").stat().st_mode) == 0o666 & ~umask

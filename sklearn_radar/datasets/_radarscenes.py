@@ -505,6 +505,7 @@ def write_radarscenes(bunch, path, overwrite=False) -> Path:
     path.parent.mkdir(parents=True, exist_ok=True)
     staging = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent))
     try:
+        os.chmod(staging, 0o777 & ~_current_umask())  # mkdtemp creates 0700 whatever the umask
         _write_json(staging / "sensors.json", sensors_json)
         _write_json(staging / "sequences.json", sequences_json)
         for sequence in prepared:
@@ -693,6 +694,20 @@ def _same_sensor_neighbours(scan_time: list, scan_sensor: list):
             next_same[j] = scan_time[i]
         last_scan_of[sensor] = i
     return prev_same, next_same
+
+
+def _current_umask() -> int:
+    """The process's umask, read without changing it where Linux's /proc tells it (``os.umask`` is process-wide)."""
+    try:
+        with open("/proc/self/status", encoding="ascii", errors="replace") as status:
+            for line in status:
+                if line.startswith("Umask:"):
+                    return int(line.split()[1], 8)
+    except (OSError, ValueError, IndexError):
+        pass
+    old = os.umask(0o022)
+    os.umask(old)
+    return old
 
 
 def _write_json(file: Path, content) -> None:
