@@ -11,9 +11,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from numbers import Integral
 
 import pandas as pd
 from sklearn.pipeline import Pipeline
+from sklearn.utils._param_validation import HasMethods, Interval, validate_params
 
 from .._skopt import Integer, Real
 
@@ -60,7 +62,10 @@ PIPELINE_COLUMNS = (
 class PaperExperiment:
     """One row of Table III or IV of Scheiner et al. 2019.
 
-    Attributes
+    Each parameter is kept as the attribute of the same name (a frozen
+    dataclass).
+
+    Parameters
     ----------
     number : int
         Experiment number (#1-#13).
@@ -105,13 +110,27 @@ class PaperExperiment:
 
 
 def _box(eps_xy, eps_vr, min_samples, vr_min, alpha_r=0.0, metric="box"):
-    return {"metric": metric, "eps_xy": eps_xy, "eps_vr": eps_vr, "min_samples": min_samples,
-            "vr_min": vr_min, "alpha_r": alpha_r, "eps_t": EPS_T}
+    return {
+        "metric": metric,
+        "eps_xy": eps_xy,
+        "eps_vr": eps_vr,
+        "min_samples": min_samples,
+        "vr_min": vr_min,
+        "alpha_r": alpha_r,
+        "eps_t": EPS_T,
+    }
 
 
 def _xyv(eps_xyv, vr_scale, min_samples, vr_min, alpha_r=0.0):
-    return {"metric": "xyv", "eps_xyv": eps_xyv, "vr_scale": vr_scale, "min_samples": min_samples,
-            "vr_min": vr_min, "alpha_r": alpha_r, "eps_t": EPS_T}
+    return {
+        "metric": "xyv",
+        "eps_xyv": eps_xyv,
+        "vr_scale": vr_scale,
+        "min_samples": min_samples,
+        "vr_min": vr_min,
+        "alpha_r": alpha_r,
+        "eps_t": EPS_T,
+    }
 
 
 _EPS_PHI_12_DEG = 23.11
@@ -122,38 +141,108 @@ PAPER_EXPERIMENTS = (
     PaperExperiment(2, "Baseline", "car", True, 1, 68.87, _box(0.62, 11.2, 3, 0.23), (1, 3)),
     PaperExperiment(3, "Baseline", "frame", True, 1, 69.19, _box(0.60, 12.3, 3, 0.25), (1, 3)),
     PaperExperiment(4, "Baseline -- unfiltered", "frame", False, 1, 69.19, _box(0.60, 12.3, 3, 0.25), (3,)),
-    PaperExperiment(5, "Euclidean xy-distance", "frame", True, 1, 69.33, _box(0.76, 14.1, 3, 0.31, metric="xy"), (1, 4)),
+    PaperExperiment(
+        5, "Euclidean xy-distance", "frame", True, 1, 69.33, _box(0.76, 14.1, 3, 0.31, metric="xy"), (1, 4)
+    ),
     PaperExperiment(6, "Euclidean xyv_r-distance", "frame", True, 1, 69.47, _xyv(0.72, 13.5, 3, 0.48), (1, 5)),
     PaperExperiment(7, "Adaptive N_min(r)", "frame", True, 1, 70.56, _box(0.76, 8.63, 3.02, 0.46, 0.99), (1, 2, 3)),
-    PaperExperiment(8, "Combined N_min(r) & eps_xyv_r", "frame", True, 1, 71.55, _xyv(1.04, 1.03, 3.87, 1.00, 0.99), (1, 2, 5)),
+    PaperExperiment(
+        8, "Combined N_min(r) & eps_xyv_r", "frame", True, 1, 71.55, _xyv(1.04, 1.03, 3.87, 1.00, 0.99), (1, 2, 5)
+    ),
     PaperExperiment(9, "Combined -- unfiltered", "frame", False, 1, 69.91, _xyv(1.18, 1.01, 3.81, 0.98, 0.99), (2, 5)),
-    PaperExperiment(10, "Best setting -- unfiltered", "frame", False, 1, 69.86, _xyv(1.04, 1.03, 3.87, 1.00, 0.99), (2, 5),
-                    tuned=False, derived_from=8),
-    PaperExperiment(11, "Best setting on baseline", "frame", True, 1, 67.73, _box(1.04, 1.03, 4, 1.00), (1, 3),
-                    tuned=False, derived_from=8),
-    PaperExperiment(12, "Step 2 -- real velocity estimate", "frame", True, 2, 70.36,
-                    {"mode": "velocity", "eps_d": 1.00, "eps_phi": math.radians(_EPS_PHI_12_DEG), "eps_v": 1.04,
-                     "min_samples": 1, "eps_t2": 0.35}, (1, 2, 5, 6), derived_from=8, eps_phi_deg=_EPS_PHI_12_DEG),
-    PaperExperiment(13, "Step 2 -- cluster continuation", "frame", True, 2, 71.79,
-                    {"mode": "continuation", "eps_d": 0.94, "eps_v": 2.72, "min_samples": 1, "eps_t2": 0.35},
-                    (1, 2, 5), derived_from=8),
+    PaperExperiment(
+        10,
+        "Best setting -- unfiltered",
+        "frame",
+        False,
+        1,
+        69.86,
+        _xyv(1.04, 1.03, 3.87, 1.00, 0.99),
+        (2, 5),
+        tuned=False,
+        derived_from=8,
+    ),
+    PaperExperiment(
+        11,
+        "Best setting on baseline",
+        "frame",
+        True,
+        1,
+        67.73,
+        _box(1.04, 1.03, 4, 1.00),
+        (1, 3),
+        tuned=False,
+        derived_from=8,
+    ),
+    PaperExperiment(
+        12,
+        "Step 2 -- real velocity estimate",
+        "frame",
+        True,
+        2,
+        70.36,
+        {
+            "mode": "velocity",
+            "eps_d": 1.00,
+            "eps_phi": math.radians(_EPS_PHI_12_DEG),
+            "eps_v": 1.04,
+            "min_samples": 1,
+            "eps_t2": 0.35,
+        },
+        (1, 2, 5, 6),
+        derived_from=8,
+        eps_phi_deg=_EPS_PHI_12_DEG,
+    ),
+    PaperExperiment(
+        13,
+        "Step 2 -- cluster continuation",
+        "frame",
+        True,
+        2,
+        71.79,
+        {"mode": "continuation", "eps_d": 0.94, "eps_v": 2.72, "min_samples": 1, "eps_t2": 0.35},
+        (1, 2, 5),
+        derived_from=8,
+    ),
 )
 
 
+#: Constraint of an experiment number: one of the paper's experiments, 1-13.
+_NUMBER = [Interval(Integral, 1, len(PAPER_EXPERIMENTS), closed="both")]
+
+
+@validate_params({"number": _NUMBER}, prefer_skip_nested_validation=True)
 def get_experiment(number):
     """The :class:`PaperExperiment` numbered ``number`` (1-13).
 
-    Raises
-    ------
-    ValueError
-        If there is no such experiment.
+    Parameters
+    ----------
+    number : int
+        Experiment, 1-13.
+
+    Returns
+    -------
+    experiment : PaperExperiment
+        Its row of Table III or IV.
+
+    Examples
+    --------
+    >>> from sklearn_radar.experiments import get_experiment
+    >>> get_experiment(8).method
+    'Combined N_min(r) & eps_xyv_r'
     """
+    return _get_experiment(number)
+
+
+def _get_experiment(number):
+    """:func:`get_experiment` without its parameter validation, for callers inside the package."""
     for experiment in PAPER_EXPERIMENTS:
         if experiment.number == number:
             return experiment
     raise ValueError(f"number must be one of the paper's experiments 1-13, got {number!r}")
 
 
+@validate_params({}, prefer_skip_nested_validation=True)
 def paper_experiments():
     """Tables III and IV as one DataFrame, one row per experiment, indexed by number.
 
@@ -168,29 +257,56 @@ def paper_experiments():
     """
     rows = []
     for e in PAPER_EXPERIMENTS:
-        row = {"number": e.number, "method": e.method, "frame": e.frame, "filtered": e.filtered, "stage": e.stage,
-               "v1_percent": e.v1_percent, "tuned": e.tuned, "derived_from": e.derived_from,
-               "equations": e.equations, "eps_phi_deg": e.eps_phi_deg}
-        row.update(paper_params(e.number))
+        row = {
+            "number": e.number,
+            "method": e.method,
+            "frame": e.frame,
+            "filtered": e.filtered,
+            "stage": e.stage,
+            "v1_percent": e.v1_percent,
+            "tuned": e.tuned,
+            "derived_from": e.derived_from,
+            "equations": e.equations,
+            "eps_phi_deg": e.eps_phi_deg,
+        }
+        row.update(_paper_params(e.number))
         rows.append(row)
     table = pd.DataFrame(rows).set_index("number")
     table["derived_from"] = table["derived_from"].astype("Int64")
     return table
 
 
+@validate_params({"number": _NUMBER}, prefer_skip_nested_validation=True)
 def paper_params(number):
     """The paper's setting of experiment ``number`` as :func:`experiment_pipeline` parameters.
+
+    Parameters
+    ----------
+    number : int
+        Experiment, 1-13.
 
     Returns
     -------
     params : dict
         ``{"cluster__eps_xy": 0.60, ...}`` (stage 1) or ``{"merge__eps_d": 0.94, ...}`` (stage 2).
+
+    Examples
+    --------
+    >>> from sklearn_radar.experiments import paper_params
+    >>> paper_params(13)["merge__eps_d"]
+    0.94
     """
-    experiment = get_experiment(number)
+    return _paper_params(number)
+
+
+def _paper_params(number):
+    """:func:`paper_params` without its parameter validation, for callers inside the package."""
+    experiment = _get_experiment(number)
     step = "cluster" if experiment.stage == 1 else "merge"
     return {f"{step}__{key}": value for key, value in experiment.params.items()}
 
 
+@validate_params({"number": _NUMBER, "best_params": [dict, None]}, prefer_skip_nested_validation=True)
 def derived_params(number, best_params=None):
     """Setting of a control experiment derived from experiment #8 (#10 and #11).
 
@@ -202,6 +318,7 @@ def derived_params(number, best_params=None):
     Parameters
     ----------
     number : {10, 11}
+        The control experiment.
     best_params : dict, default=None
         #8's setting as pipeline parameters (e.g. a search's
         ``best_params_``); None means #8's Table III values, which gives the
@@ -211,10 +328,15 @@ def derived_params(number, best_params=None):
     -------
     params : dict
         Pipeline parameters for ``experiment_pipeline(number, params=...)``.
+
+    Raises
+    ------
+    ValueError
+        If ``number`` is an experiment other than 10 and 11.
     """
     if number not in (10, 11):
         raise ValueError(f"only experiments 10 and 11 are derived from #8, got {number!r}")
-    best = paper_params(8)
+    best = _paper_params(8)
     best.update(best_params or {})
     if number == 10:
         return best
@@ -222,7 +344,7 @@ def derived_params(number, best_params=None):
         "cluster__metric": "box",
         "cluster__eps_xy": best["cluster__eps_xyv"],
         "cluster__eps_vr": best["cluster__vr_scale"],
-        "cluster__min_samples": int(round(best["cluster__min_samples"])),
+        "cluster__min_samples": round(float(best["cluster__min_samples"])),
         "cluster__vr_min": best["cluster__vr_min"],
         "cluster__alpha_r": 0.0,
         "cluster__eps_t": best.get("cluster__eps_t", EPS_T),
@@ -232,13 +354,23 @@ def derived_params(number, best_params=None):
 def _stage1_setting(stage1_params):
     """RadarDBSCAN keyword arguments: #8's setting, or ``stage1_params`` (``cluster__`` prefix stripped)."""
     if stage1_params is None:
-        return dict(get_experiment(8).params)
+        return dict(_get_experiment(8).params)
     setting = {"eps_t": EPS_T}
     for key, value in stage1_params.items():
         setting[key.removeprefix("cluster__")] = value
     return setting
 
 
+@validate_params(
+    {
+        "number": _NUMBER,
+        "memory": [None, str, HasMethods(["cache"])],
+        "params": [dict, None],
+        "n_jobs": [Integral, None],
+        "stage1_params": [dict, None],
+    },
+    prefer_skip_nested_validation=True,
+)
 def experiment_pipeline(number, *, memory=None, params=None, n_jobs=None, stage1_params=None):
     """The pipeline of experiment ``number`` at the paper's setting.
 
@@ -294,7 +426,7 @@ def experiment_pipeline(number, *, memory=None, params=None, n_jobs=None, stage1
     from ..cluster import ClusterMerger, RadarDBSCAN
     from ..preprocessing import DopplerDensityFilter, FrameTransform
 
-    experiment = get_experiment(number)
+    experiment = _get_experiment(number)
     if experiment.stage == 1 and stage1_params is not None:
         raise ValueError(f"stage1_params applies to the stage-2 experiments 12 and 13, not to #{number}")
     steps = [
@@ -312,6 +444,7 @@ def experiment_pipeline(number, *, memory=None, params=None, n_jobs=None, stage1
     return pipeline
 
 
+@validate_params({"number": _NUMBER}, prefer_skip_nested_validation=True)
 def search_space(number):
     """Bayesian-optimisation search space of experiment ``number`` (skopt dimensions).
 
@@ -363,7 +496,7 @@ def search_space(number):
     space : dict
         ``{pipeline parameter: skopt.space.Dimension}``.
     """
-    experiment = get_experiment(number)
+    experiment = _get_experiment(number)
     if not experiment.tuned:
         return {}
     if experiment.stage == 2:
