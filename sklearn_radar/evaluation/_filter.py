@@ -21,9 +21,11 @@ import numpy as np
 import pandas as pd
 from joblib import Parallel, delayed
 from sklearn.utils import Bunch
+from sklearn.utils._param_validation import HasMethods, Interval, StrOptions, validate_params
 
 from .._validation import check_filter_rule
-from ..preprocessing import FrameTransform, doppler_density_keep, neighbor_counts
+from ..preprocessing import FrameTransform
+from ..preprocessing._doppler_density_filter import _doppler_density_keep, _neighbor_counts
 
 __all__ = [
     "PAPER_TABLE_II",
@@ -87,11 +89,25 @@ def _as_target(target, n_rows):
     return target
 
 
-def _check_window(window, min_kept):
-    if not isinstance(window, Real) or not np.isfinite(window) or window <= 0:
-        raise ValueError(f"window must be a positive number of seconds, got {window!r}")
-    if not isinstance(min_kept, Real) or not 0 <= min_kept <= 1:
-        raise ValueError(f"min_kept must be a share in [0, 1], got {min_kept!r}")
+#: Constraints of the error-window rule, shared by every function that counts errors.
+_WINDOW_CONSTRAINTS = {
+    "window": [Interval(Real, 0, None, closed="neither")],
+    "min_kept": [Interval(Real, 0, 1, closed="both")],
+}
+
+#: Constraints shared by the grid (Table I) and the settings table (Table II).
+_EVALUATION_CONSTRAINTS = {
+    "X": [pd.DataFrame],
+    "target": ["array-like"],
+    "frame": [StrOptions({"frame", "car"})],
+    "dt": [Interval(Real, 0, None, closed="left")],
+    "causal": ["boolean"],
+    "threshold_ratios": ["array-like"],
+    "min_neighbors": ["array-like"],
+    **_WINDOW_CONSTRAINTS,
+    "n_jobs": [Integral, None],
+    "verbose": ["verbose"],
+}
 
 
 def _check_grid(values, name, allow_zero):
@@ -109,6 +125,7 @@ def _check_grid(values, name, allow_zero):
 # ----------------------------------------------------------------------------
 # Removal rates and errors of one keep mask
 # ----------------------------------------------------------------------------
+@validate_params({"keep": ["array-like"], "target": ["array-like"]}, prefer_skip_nested_validation=True)
 def filter_removal_rates(keep, target) -> dict:
     """Shares of background and of object detections that a filter removed.
 
@@ -141,7 +158,11 @@ def filter_removal_rates(keep, target) -> dict:
     (0.5, 0.5)
     """
     keep = _as_keep(keep)
-    target = _as_target(target, len(keep))
+    return _filter_removal_rates(keep, _as_target(target, len(keep)))
+
+
+def _filter_removal_rates(keep, target):
+    """:func:`filter_removal_rates` of a checked boolean ``keep`` and int64 ``target``, unvalidated."""
     background = target == -1
     n_background = int(background.sum())
     n_objects = int(len(target) - n_background)
@@ -156,6 +177,10 @@ def filter_removal_rates(keep, target) -> dict:
     }
 
 
+@validate_params(
+    {"keep": ["array-like"], "target": ["array-like"], "t": ["array-like"], **_WINDOW_CONSTRAINTS},
+    prefer_skip_nested_validation=True,
+)
 def filter_error_windows(keep, target, t, window=0.15, min_kept=0.75) -> pd.DataFrame:
     """Per object and complete time window: detections, kept detections, error flag.
 
@@ -178,10 +203,10 @@ def filter_error_windows(keep, target, t, window=0.15, min_kept=0.75) -> pd.Data
         Detection time, s (the ``t`` column of
         :class:`~sklearn_radar.FrameTransform`, i.e. ``timestamp * 1e-6``).
     window : float, default=0.15
-        Window length, s.
+        Window length, s, > 0.
     min_kept : float, default=0.75
         Smallest share of an object's detections in a window that must be
-        kept for the window not to be an error.
+        kept for the window not to be an error, in [0, 1].
 
     Returns
     -------
@@ -206,9 +231,13 @@ def filter_error_windows(keep, target, t, window=0.15, min_kept=0.75) -> pd.Data
     --------
     filter_errors : the number of error windows.
     """
+    return _filter_error_windows(keep, target, t, window, min_kept)
+
+
+def _filter_error_windows(keep, target, t, window, min_kept):
+    """:func:`filter_error_windows` without its parameter validation."""
     keep = _as_keep(keep)
     target = _as_target(target, len(keep))
-    _check_window(window, min_kept)
     windows = _Windows(target, t, window)
     kept = windows.kept(keep)
     share = kept / np.maximum(windows.n, 1)  # n >= 1 for every listed window
@@ -285,6 +314,10 @@ class _Windows:
         return kept / np.maximum(self.n, 1) < min_kept
 
 
+@validate_params(
+    {"keep": ["array-like"], "target": ["array-like"], "t": ["array-like"], **_WINDOW_CONSTRAINTS},
+    prefer_skip_nested_validation=True,
+)
 def filter_errors(keep, target, t, window=0.15, min_kept=0.75) -> int:
     """Number of (object, time window) cases in which an object lost too many detections.
 
@@ -304,9 +337,10 @@ def filter_errors(keep, target, t, window=0.15, min_kept=0.75) -> int:
     t : array-like of float, shape (n_detections,)
         Detection time, s.
     window : float, default=0.15
-        Window length, s.
+        Window length, s, > 0.
     min_kept : float, default=0.75
-        Share of an object's detections in a window that must be kept.
+        Share of an object's detections in a window that must be kept, in
+        [0, 1].
 
     Returns
     -------
@@ -321,7 +355,7 @@ def filter_errors(keep, target, t, window=0.15, min_kept=0.75) -> int:
     >>> filter_errors(keep, [0] * 6, t)
     1
     """
-    return int(filter_error_windows(keep, target, t, window, min_kept)["error"].sum())
+    return int(_filter_error_windows(keep, target, t, window, min_kept)["error"].sum())
 
 
 # ----------------------------------------------------------------------------
@@ -329,8 +363,6 @@ def filter_errors(keep, target, t, window=0.15, min_kept=0.75) -> int:
 # ----------------------------------------------------------------------------
 def _working_columns(X, frame):
     """FrameTransform once; the float64 arrays the filter reads."""
-    if not isinstance(X, pd.DataFrame):
-        raise ValueError(f"X must be the detection DataFrame, got {type(X).__name__}")
     Xt = FrameTransform(frame=frame).fit_transform(X)
     columns = {name: Xt[name].to_numpy(dtype=np.float64) for name in ("x", "y", "v_r", "t")}
     columns["sequence"] = Xt["sequence"].to_numpy(dtype=np.float64) if "sequence" in Xt.columns else None
@@ -339,13 +371,13 @@ def _working_columns(X, frame):
 
 def _counts(c, d_xy, dt, causal, cap):
     # n_jobs=1 inside: the parallelism is over d_xy (or settings) outside.
-    return neighbor_counts(c["x"], c["y"], c["t"], c["sequence"], float(d_xy), dt, causal, cap, 1)
+    return _neighbor_counts(c["x"], c["y"], c["t"], c["sequence"], float(d_xy), dt, causal, cap, 1)
 
 
 def _scores(c, counts, vr_threshold, target, ratios, n_min, windows, min_kept):
     """(errors, background share removed, object share removed) of one setting."""
-    keep = doppler_density_keep(c["v_r"], counts, float(vr_threshold), ratios, n_min)
-    rates = filter_removal_rates(keep, target)
+    keep = _doppler_density_keep(c["v_r"], counts, float(vr_threshold), ratios, n_min)
+    rates = _filter_removal_rates(keep, target)
     errors = int(np.count_nonzero(windows.errors(windows.kept(keep), min_kept)))
     return errors, rates["background_removed"], rates["objects_removed"]
 
@@ -375,7 +407,7 @@ def _measure(tasks, target, windows, dt, causal, ratios, n_min, min_kept, n_jobs
         c, d_xy, vr_thresholds = tasks[k]
         counts = _counts(c, d_xy, dt, causal, cap)
         cells = [_scores(c, counts, vr, target, ratios, n_min, windows, min_kept) for vr in vr_thresholds]
-        errors, background, objects = (np.array(values) for values in zip(*cells))
+        errors, background, objects = (np.array(values) for values in zip(*cells, strict=True))
         return k, errors, background, objects
 
     yield from Parallel(n_jobs=n_jobs, prefer="threads", return_as="generator_unordered")(
@@ -383,21 +415,17 @@ def _measure(tasks, target, windows, dt, causal, ratios, n_min, min_kept, n_jobs
     )
 
 
-def _check_common(X, target, dt, causal, threshold_ratios, min_neighbors, window, min_kept, verbose):
-    if not isinstance(X, pd.DataFrame):
-        raise ValueError(f"X must be the raw detection DataFrame, got {type(X).__name__}")
+def _check_common(X, target, threshold_ratios, min_neighbors):
+    """What the constraints cannot say: one target per row of X, Eq. 1's rule consistent."""
     target = _as_target(target, len(X))
-    if not isinstance(dt, Real) or not np.isfinite(dt) or dt < 0:
-        raise ValueError(f"dt must be a non-negative number of seconds, got {dt!r}")
-    if not isinstance(causal, (bool, np.bool_)):
-        raise ValueError(f"causal must be a bool, got {causal!r}")
-    if not isinstance(verbose, Integral):
-        raise ValueError(f"verbose must be an int, got {verbose!r}")
-    _check_window(window, min_kept)
     ratios, n_min = check_filter_rule(threshold_ratios, min_neighbors)
     return target, ratios, n_min
 
 
+@validate_params(
+    {"vr_thresholds": ["array-like"], "d_xys": ["array-like"], **_EVALUATION_CONSTRAINTS},
+    prefer_skip_nested_validation=True,
+)
 def filter_grid(
     X,
     target,
@@ -435,29 +463,32 @@ def filter_grid(
     target : array-like of int, shape (n_detections,)
         Instance id per detection, -1 for background, unique across
         sequences.
-    vr_thresholds : sequence of float, default=(0.05, 0.10, ..., 0.35)
-        Values of ``eta_1``, m/s (the paper: 0.05 to 0.35 m/s).
-    d_xys : sequence of float, default=(0.8, 1.0, ..., 2.0)
-        Values of ``d_xy``, m (the paper: 0.8 to 2.0 m).
+    vr_thresholds : array-like of float, default=(0.05, 0.10, ..., 0.35)
+        Distinct values of ``eta_1``, m/s, each >= 0 (the paper: 0.05 to
+        0.35 m/s).
+    d_xys : array-like of float, default=(0.8, 1.0, ..., 2.0)
+        Distinct values of ``d_xy``, m, each > 0 (the paper: 0.8 to 2.0 m).
     frame : {"frame", "car"}, default="frame"
         Coordinate system: "frame" (FCS) or "car" (CCS).
     dt : float, default=0.25
-        Neighbour time window, s.
+        Neighbour time window, s, >= 0.
     causal : bool, default=False
         Count only neighbours at or before a detection's time.
-    threshold_ratios : sequence of float, default=(1, 5, 10, 50)
-        ``eta_1 / eta_i``.
-    min_neighbors : sequence of int, default=(2, 3, 4, 10)
-        ``N_i``; the neighbour counts are capped at their maximum.
+    threshold_ratios : array-like of float, default=(1, 5, 10, 50)
+        ``eta_1 / eta_i``, each > 0.
+    min_neighbors : array-like of int, default=(2, 3, 4, 10)
+        ``N_i``, each >= 1, one per ratio; the neighbour counts are capped at
+        their maximum.
     window : float, default=0.15
-        Error window, s.
+        Error window, s, > 0.
     min_kept : float, default=0.75
-        Share of an object's detections per window that must be kept.
+        Share of an object's detections per window that must be kept, in
+        [0, 1].
     n_jobs : int, default=None
         Number of ``d_xy`` values processed in parallel (joblib threads; the
         neighbour-count kernel releases the GIL).  None means 1, -1 all
         cores.
-    verbose : int, default=0
+    verbose : int or bool, default=0
         If > 0, print one line per finished ``d_xy`` to stdout.
 
     Returns
@@ -490,9 +521,7 @@ def filter_grid(
     (2, 2)
     """
     start = time.perf_counter()
-    target, ratios, n_min = _check_common(
-        X, target, dt, causal, threshold_ratios, min_neighbors, window, min_kept, verbose
-    )
+    target, ratios, n_min = _check_common(X, target, threshold_ratios, min_neighbors)
     vr_values = _check_grid(vr_thresholds, "vr_thresholds", allow_zero=True)
     d_values = _check_grid(d_xys, "d_xys", allow_zero=False)
     c = _working_columns(X, frame)
@@ -510,7 +539,7 @@ def filter_grid(
 
     index = pd.Index(vr_values, name="vr_threshold")
     columns = pd.Index(d_values, name="d_xy")
-    rates = filter_removal_rates(np.ones(len(target), bool), target)
+    rates = _filter_removal_rates(np.ones(len(target), bool), target)
     return Bunch(
         errors=pd.DataFrame(errors, index=index, columns=columns),
         background_removed=pd.DataFrame(background, index=index, columns=columns),
@@ -522,6 +551,10 @@ def filter_grid(
     )
 
 
+@validate_params(
+    {"settings": [pd.DataFrame, None], **_EVALUATION_CONSTRAINTS},
+    prefer_skip_nested_validation=True,
+)
 def filter_settings_table(
     X,
     target,
@@ -557,7 +590,7 @@ def filter_settings_table(
         As in :func:`filter_grid`.
     n_jobs : int, default=None
         Distinct (frame, ``d_xy``) pairs processed in parallel (threads).
-    verbose : int, default=0
+    verbose : int or bool, default=0
         If > 0, print one line per finished (frame, ``d_xy``) pair.
 
     Returns
@@ -580,10 +613,8 @@ def filter_settings_table(
     >>> list(table.columns)[-3:]
     ['removal_rate', 'object_removal_rate', 'errors']
     """
-    target, ratios, n_min = _check_common(
-        X, target, dt, causal, threshold_ratios, min_neighbors, window, min_kept, verbose
-    )
-    table = (PAPER_TABLE_II if settings is None else pd.DataFrame(settings)).copy().reset_index(drop=True)
+    target, ratios, n_min = _check_common(X, target, threshold_ratios, min_neighbors)
+    table = (PAPER_TABLE_II if settings is None else settings).copy().reset_index(drop=True)
     missing = [name for name in ("vr_threshold", "d_xy") if name not in table.columns]
     if missing:
         raise ValueError(f"settings is missing the column(s) {missing}")
@@ -621,6 +652,14 @@ def filter_settings_table(
 # ----------------------------------------------------------------------------
 # Plot
 # ----------------------------------------------------------------------------
+@validate_params(
+    {
+        "errors": [pd.DataFrame],
+        "ax": [HasMethods(["imshow", "text"]), None],
+        "chosen": [tuple, None],
+    },
+    prefer_skip_nested_validation=True,
+)
 def plot_filter_errors(errors, ax=None, chosen=(0.10, 1.4)):
     """Heatmap of the filter error matrix (Table I).
 
@@ -630,8 +669,9 @@ def plot_filter_errors(errors, ax=None, chosen=(0.10, 1.4)):
         Error counts with index ``vr_threshold`` (m/s) and columns ``d_xy``
         (m), e.g. ``filter_grid(...).errors``.
     ax : matplotlib Axes, default=None
-        Axes to draw into; a new figure when None.
-    chosen : tuple of (vr_threshold, d_xy), default=(0.10, 1.4)
+        Axes to draw into (anything with ``imshow`` and ``text``); a new
+        figure when None.
+    chosen : tuple of (vr_threshold, d_xy) or None, default=(0.10, 1.4)
         Setting marked with an asterisk (the paper's choice); None for no
         mark.  Matched to the grid with a tolerance of 1e-9.
 
@@ -656,8 +696,6 @@ def plot_filter_errors(errors, ax=None, chosen=(0.10, 1.4)):
             "plot_filter_errors needs matplotlib, an optional dependency of sklearn-radar; "
             "install it with `pip install matplotlib` or `pip install sklearn-radar[plot]`."
         ) from exc
-    if not isinstance(errors, pd.DataFrame):
-        raise ValueError(f"errors must be a DataFrame (vr_threshold x d_xy), got {type(errors).__name__}")
     values = errors.to_numpy(dtype=np.float64)
     vr_values = np.asarray(errors.index, dtype=np.float64)
     d_values = np.asarray(errors.columns, dtype=np.float64)
@@ -688,7 +726,15 @@ def plot_filter_errors(errors, ax=None, chosen=(0.10, 1.4)):
             raise ValueError(f"chosen={chosen!r} is not a cell of the error grid")
         i, j = rows[0], cols[0]
         dark = high > 0 and values[i, j] > 0.6 * high
-        ax.text(j + 0.3, i + 0.25, "*", ha="center", va="center", fontsize="x-large", fontweight="bold",
-                color="white" if dark else "black")
+        ax.text(
+            j + 0.3,
+            i + 0.25,
+            "*",
+            ha="center",
+            va="center",
+            fontsize="x-large",
+            fontweight="bold",
+            color="white" if dark else "black",
+        )
     ax.set_title("Filter errors per setting (* chosen)")
     return ax
