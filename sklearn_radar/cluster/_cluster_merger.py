@@ -10,6 +10,7 @@ from sklearn.base import BaseEstimator, ClusterMixin, _fit_context, clone
 from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
 from sklearn.utils.validation import check_memory
 
+from .._labels import consecutive_labels
 from .._schema import MERGER_READS, STAGE1_READS
 from .._validation import read_columns, sequence_slices
 from ._merge_kernels import (
@@ -19,7 +20,7 @@ from ._merge_kernels import (
     time_compatible_pairs,
     velocity_frames,
 )
-from ._radar_dbscan import RadarDBSCAN, _consecutive_labels
+from ._radar_dbscan import RadarDBSCAN
 from ._velocity import estimate_velocities
 
 
@@ -190,7 +191,7 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
             roots[rows] = sequence_roots
             merges += [(sequence[rows[0]], a, b) for a, b in sequence_merges]
         self.stage1_labels_ = stage1_labels
-        self.labels_ = _consecutive_labels(roots)
+        self.labels_ = consecutive_labels(roots)
         self.merges_ = np.array(merges, dtype=np.float64).reshape(-1, 3)
         return self
 

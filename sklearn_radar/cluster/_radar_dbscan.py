@@ -9,6 +9,7 @@ from joblib import Parallel, delayed
 from sklearn.base import BaseEstimator, ClusterMixin, _fit_context
 from sklearn.utils._param_validation import Interval, StrOptions
 
+from .._labels import consecutive_labels, roots_to_rows
 from .._neighbors import build_grid
 from .._schema import STAGE1_READS
 from .._validation import read_columns, sequence_slices
@@ -215,10 +216,9 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
             delayed(cluster)(rows, c, min_points, can_be_core) for rows in slices
         )
         for rows, sequence_roots, sequence_core in results:
-            found = sequence_roots >= 0
-            roots[rows[found]] = rows[sequence_roots[found]]  # roots as global row numbers
+            roots_to_rows(rows, sequence_roots, roots)  # roots as global row numbers
             core[rows] = sequence_core
-        self.labels_ = _consecutive_labels(roots)
+        self.labels_ = consecutive_labels(roots)
         self.core_sample_indices_ = np.flatnonzero(core)
         return self
 
@@ -278,14 +278,12 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
             float(self.eps_vr), float(self.vr_scale), float(self.eps_xyv),
             np.inf if self.eps_t is None else float(self.eps_t),
         )  # fmt: skip
-        # Express each emitted id as the position of the first detection that carried it.
-        roots = np.full(len(rows), -1, dtype=np.int64)
-        core = np.empty(len(rows), dtype=bool)
-        clustered = emitted >= 0
+        # Express each emitted id as the (time-sorted) position of the first detection that carried it.
+        first_carrier = np.full(len(rows), -1, dtype=np.int64)
+        clustered = np.flatnonzero(emitted >= 0)
         _, first, inverse = np.unique(emitted[clustered], return_index=True, return_inverse=True)
-        roots[order[clustered]] = order[np.flatnonzero(clustered)[first]][inverse.ravel()]
-        core[order] = core_sorted
-        return rows, roots, core
+        first_carrier[clustered] = clustered[first][inverse.ravel()]
+        return (rows, *_unsort(order, first_carrier, core_sorted))
 
     def _cluster_sequence(self, rows, c, min_points, can_be_core):
         """Roots (positions within ``rows``, or -1) and core flags of one sequence."""
@@ -305,12 +303,7 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
             self._metric_code(heading), float(self.eps_xy), float(self.eps_vr), float(self.vr_scale),
             float(self.eps_xyv), eps_t,
         )  # fmt: skip
-        roots = np.full(len(rows), -1, dtype=np.int64)
-        core = np.empty(len(rows), dtype=bool)
-        found = sorted_roots >= 0
-        roots[order[found]] = order[sorted_roots[found]]
-        core[order] = sorted_core
-        return rows, roots, core
+        return (rows, *_unsort(order, sorted_roots, sorted_core))
 
     def _metric_code(self, heading):
         """The kernel's criterion code; the box needs no rotation when every heading is 0."""
@@ -326,16 +319,28 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
         return self.eps_xy if self.metric == "xy" else self.eps_xyv
 
 
-def _consecutive_labels(roots):
-    """Cluster ids 0, 1, ... in order of each cluster's first row; -1 stays -1."""
-    labels = np.full(len(roots), -1, dtype=np.int64)
-    clustered = roots >= 0
-    if clustered.any():
-        _, first, inverse = np.unique(roots[clustered], return_index=True, return_inverse=True)
-        rank = np.empty(len(first), dtype=np.int64)
-        rank[np.argsort(first, kind="stable")] = np.arange(len(first))
-        labels[clustered] = rank[inverse.ravel()]
-    return labels
+def _unsort(order, sorted_roots, sorted_core):
+    """Roots and core flags of points processed in ``order``, back in the original order.
+
+    Parameters
+    ----------
+    order : ndarray of int, shape (n,)
+        Sorted position -> original position.
+    sorted_roots : ndarray of int, shape (n,)
+        Root of each sorted point as a sorted position, -1 for noise.
+    sorted_core : ndarray of bool, shape (n,)
+
+    Returns
+    -------
+    roots : ndarray of int64, shape (n,)
+        Root of each point as an original position, -1 for noise.
+    core : ndarray of bool, shape (n,)
+    """
+    roots = np.full(len(order), -1, dtype=np.int64)
+    roots_to_rows(order, sorted_roots, roots)
+    core = np.empty(len(order), dtype=bool)
+    core[order] = sorted_core
+    return roots, core
 
 
 class ScanStream:

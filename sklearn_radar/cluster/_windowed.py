@@ -9,9 +9,9 @@ from sklearn.base import BaseEstimator, ClusterMixin, _fit_context
 from sklearn.cluster import DBSCAN, HDBSCAN
 from sklearn.utils._param_validation import Interval
 
+from .._labels import consecutive_labels
 from .._schema import WINDOWED_READS
 from .._validation import read_columns
-from ._radar_dbscan import _consecutive_labels
 
 _SEPARATION = 1e5  # m between windows laid side by side for one DBSCAN call
 
@@ -87,7 +87,7 @@ class WindowedDBSCAN(_WindowedClusterer):
             laid_out = features[active] - features[active].min(axis=0)
             laid_out[:, 0] += _SEPARATION * window_id[active]
             labels[active] = DBSCAN(eps=self.eps, min_samples=self.min_samples).fit_predict(laid_out)
-        self.labels_ = _consecutive_labels(labels)
+        self.labels_ = consecutive_labels(labels)
         return self
 
 
@@ -148,5 +148,5 @@ class WindowedHDBSCAN(_WindowedClusterer):
             ).fit_predict(features[part])
             labels[part] = np.where(found >= 0, found + offset, -1)
             offset += max(found.max() + 1, 0)
-        self.labels_ = _consecutive_labels(labels)
+        self.labels_ = consecutive_labels(labels)
         return self
