@@ -25,12 +25,14 @@ import shutil
 import tempfile
 import uuid as uuid_module
 from dataclasses import dataclass
+from numbers import Integral
 from pathlib import Path
 
 import h5py
 import numpy as np
 import pandas as pd
 from sklearn.utils import Bunch
+from sklearn.utils._param_validation import validate_params
 
 from .._schema import (
     CONTEXT_COLUMNS,
@@ -54,9 +56,7 @@ _SEQUENCE_NAME = re.compile(r"sequence_(\d+)")
 _STRING_BYTES = 32
 
 # File dtypes: not documented by RadarScenes; these load with devkit 1.0.4.
-_RADAR_FILE_TYPES = {
-    "timestamp": "<u8", "sensor_id": "u1", "uuid": "S32", "track_id": "S32", "label_id": "u1"
-}  # fmt: skip
+_RADAR_FILE_TYPES = {"timestamp": "<u8", "sensor_id": "u1", "uuid": "S32", "track_id": "S32", "label_id": "u1"}
 RADAR_DATA_H5_DTYPE = np.dtype(
     [(name, _RADAR_FILE_TYPES.get(name, "<f4")) for name in column_names(RADAR_DATA_COLUMNS)]
 )
@@ -70,6 +70,10 @@ ODOMETRY_H5_DTYPE = np.dtype(
 # --------------------------------------------------------------------------
 
 
+@validate_params(
+    {"path": [str, os.PathLike], "sequences": [str, Integral, "array-like", None]},
+    prefer_skip_nested_validation=True,
+)
 def load_radarscenes(path, sequences=None) -> Bunch:
     """Load RadarScenes sequences into the data Bunch.
 
@@ -78,9 +82,10 @@ def load_radarscenes(path, sequences=None) -> Bunch:
     path : str or path-like
         The dataset's ``data/`` folder (holding ``sensors.json``,
         ``sequences.json`` and ``sequence_N/``), or its parent folder.
-    sequences : list of str or int, default=None
-        Sequences to load, as names (``"sequence_3"``) or numbers (``3``).
-        ``None`` loads every sequence listed in ``sequences.json``.
+    sequences : str, int or list of str or int, default=None
+        Sequences to load, as names (``"sequence_3"``) or numbers (``3``);
+        a single one need not be in a list.  ``None`` loads every sequence
+        listed in ``sequences.json``.
 
     Returns
     -------
@@ -100,7 +105,13 @@ def load_radarscenes(path, sequences=None) -> Bunch:
         If the folder, a JSON file, a sequence folder or an HDF5 file is missing.
     ValueError
         If a file is malformed or inconsistent; the message names the file
-        and the field.
+        and the field.  Also if a requested sequence is not listed in
+        ``sequences.json`` or its name is not of the form ``sequence_N``.
+
+    See Also
+    --------
+    write_radarscenes : the reverse.
+    sklearn_radar.datasets.make_scenes : simulated data in the same layout.
     """
     data_dir = _resolve_data_dir(Path(path))
     mounting = _read_sensors_json(data_dir / "sensors.json")
@@ -450,6 +461,10 @@ class _PreparedSequence:
     summary: dict
 
 
+@validate_params(
+    {"bunch": [dict], "path": [str, os.PathLike], "overwrite": ["boolean"]},
+    prefer_skip_nested_validation=True,
+)
 def write_radarscenes(bunch, path, overwrite=False) -> Path:
     """Write a data Bunch as a RadarScenes data folder.
 
@@ -462,7 +477,7 @@ def write_radarscenes(bunch, path, overwrite=False) -> Path:
 
     Parameters
     ----------
-    bunch : :class:`~sklearn.utils.Bunch`
+    bunch : :class:`~sklearn.utils.Bunch` or dict
         As returned by :func:`load_radarscenes` or
         :func:`~sklearn_radar.datasets.make_scenes`; needs ``data``,
         ``odometry``, ``sensors`` and ``sequences``.  Timestamps are in µs,
@@ -484,6 +499,10 @@ def write_radarscenes(bunch, path, overwrite=False) -> Path:
         in a sequence, or a string is not ASCII or longer than 32 bytes.
     FileExistsError
         If ``path`` exists, is not empty and ``overwrite`` is False.
+
+    See Also
+    --------
+    load_radarscenes : the reverse.
 
     Notes
     -----
@@ -522,8 +541,6 @@ def write_radarscenes(bunch, path, overwrite=False) -> Path:
 
 def _bunch_tables(bunch):
     """Validated copies of the four tables the writer needs."""
-    if not hasattr(bunch, "keys"):
-        raise ValueError(f"bunch must be a Bunch or mapping, got {type(bunch).__name__}")
     missing = [key for key in ("data", "odometry", "sensors", "sequences") if key not in bunch]
     if missing:
         raise ValueError(f"bunch is missing the key(s) {missing}")

@@ -106,7 +106,6 @@ class RoadUser:
     gait_hz: float = 0.0
     centres: np.ndarray | None = None  # (K, 4): scattering centres (along, across) and outward normals, m
 
-
     @property
     def params(self):
         return ROAD_USER_CLASSES[self.kind]
@@ -176,9 +175,7 @@ def simulate_ego(duration, rng) -> EgoMotion:
         braking = np.interp(stop_start, t, speed) / MAX_ACCEL
         target_speed[(t >= stop_start) & (t < stop_start + braking + rng.uniform(2.0, 4.0))] = 0.0
     speed = _rate_limited(target_speed, initial_speed, MAX_ACCEL * EGO_DT)
-    curvature = _piecewise(
-        t, rng, lambda: 0.0 if rng.random() < 0.4 else rng.normal(0.0, 0.025), (2.0, 6.0)
-    )
+    curvature = _piecewise(t, rng, lambda: 0.0 if rng.random() < 0.4 else rng.normal(0.0, 0.025), (2.0, 6.0))
     curvature = _rate_limited(curvature, 0.0, 0.02 * EGO_DT)  # clothoid-like transitions
     max_curvature = np.minimum(MAX_CURVATURE, MAX_LATERAL_ACCEL / np.maximum(speed, 1.0) ** 2)
     curvature = np.clip(curvature, -max_curvature, max_curvature)
@@ -238,11 +235,13 @@ def make_static_world(road: Road, s_min, s_max, rng, density=1.0) -> StaticScatt
     for side, base in ((-1, -9.0), (1, 13.0)):
         offset = base + side * rng.uniform(0.0, 3.0)
         parts.append(_line_feature(road, s_min, s_max, offset, 0.4, rng, 0.18, 0.0, gaps=0.3))
-        parts.append(_line_feature(road, s_min, s_max, offset + side * rng.uniform(8, 20), 1.5, rng, 0.10, 3.0, gaps=0.5))
+        parts.append(
+            _line_feature(road, s_min, s_max, offset + side * rng.uniform(8, 20), 1.5, rng, 0.10, 3.0, gaps=0.5)
+        )
         parts.append(_points_feature(road, s_min, s_max, offset - side * 1.0, 25.0, rng, 0.6, 12.0))
         parts.append(_clumps_feature(road, s_min, s_max, offset + side * 2.5, 12.0, rng, 0.06, -8.0))
     parts.append(_parked_cars(road, s_min, s_max, -4.5, rng))
-    x, y, s, p, rcs = (np.concatenate(v) for v in zip(*parts))
+    x, y, s, p, rcs = (np.concatenate(v) for v in zip(*parts, strict=True))
     if density != 1.0:
         keep = rng.random(len(x)) < min(density, 1.0)
         p = p * max(density, 1.0)
@@ -303,8 +302,12 @@ def _rectangle_outline(length, width, spacing):
     """Points along the outline of a centred rectangle, (along, across) in m."""
     along_edge = np.arange(-length / 2, length / 2 + 1e-9, spacing)
     across_edge = np.arange(-width / 2, width / 2 + 1e-9, spacing)
-    along = np.concatenate([along_edge, along_edge, np.full(len(across_edge), -length / 2), np.full(len(across_edge), length / 2)])
-    across = np.concatenate([np.full(len(along_edge), -width / 2), np.full(len(along_edge), width / 2), across_edge, across_edge])
+    along = np.concatenate(
+        [along_edge, along_edge, np.full(len(across_edge), -length / 2), np.full(len(across_edge), length / 2)]
+    )
+    across = np.concatenate(
+        [np.full(len(along_edge), -width / 2), np.full(len(along_edge), width / 2), across_edge, across_edge]
+    )
     return along, across
 
 
@@ -388,14 +391,18 @@ def scattering_centres(length, width, rng, spacing=1.5):
     object frame and the outward normal of its edge.
     """
     perimeter = 2 * (length + width)
-    k = max(2, int(round(perimeter / spacing)))
+    k = max(2, round(float(perimeter / spacing)))
     u = np.sort(rng.uniform(0.0, perimeter, k))
     half_l, half_w = length / 2, width / 2
     edges = np.cumsum([0.0, length, width, length])  # right side, front, left side, back
     edge = np.searchsorted(edges, u, side="right") - 1
     offset = u - edges[edge]
-    along = np.select([edge == 0, edge == 1, edge == 2], [-half_l + offset, np.full(k, half_l), half_l - offset], -half_l)
-    across = np.select([edge == 0, edge == 1, edge == 2], [np.full(k, -half_w), -half_w + offset, np.full(k, half_w)], half_w - offset)
+    along = np.select(
+        [edge == 0, edge == 1, edge == 2], [-half_l + offset, np.full(k, half_l), half_l - offset], -half_l
+    )
+    across = np.select(
+        [edge == 0, edge == 1, edge == 2], [np.full(k, -half_w), -half_w + offset, np.full(k, half_w)], half_w - offset
+    )
     normal_along = np.select([edge == 1, edge == 3], [np.ones(k), -np.ones(k)], 0.0)
     normal_across = np.select([edge == 0, edge == 2], [-np.ones(k), np.ones(k)], 0.0)
     return np.column_stack([along, across, normal_along, normal_across])

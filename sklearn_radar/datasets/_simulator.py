@@ -86,17 +86,19 @@ def make_scenes(
     Parameters
     ----------
     n_sequences : int, default=4
-        Number of recordings.
+        Number of recordings, >= 1.
     duration : float, default=30.0
-        Length of each recording, s.
+        Length of each recording, s, >= 0.5.
     random_state : int, RandomState instance or None, default=None
         Seed; equal seeds give identical data sets.
     n_objects : tuple of (int, int), default=(3, 12)
-        Inclusive range of the number of moving road users per sequence.
+        Inclusive range ``(low, high)``, ``0 <= low <= high``, of the number
+        of moving road users per sequence.
     static_density : float, default=1.0
-        Scales the number of static scatterers and clutter (1.0: urban street).
+        Scales the number of static scatterers and clutter (1.0: urban
+        street), > 0.
     first_sequence : int, default=1
-        Number N of the first sequence (folder ``sequence_N``).
+        Number N >= 1 of the first sequence (folder ``sequence_N``).
 
     Returns
     -------
@@ -172,7 +174,9 @@ def _simulate_sequence(number, duration, n_objects, density, rng):
     scans = _scan_schedule(duration, t0_us, rng)
     sensor = _sensor_states(ego, scans)
 
-    static = make_static_world(road, sensor["s"].min() - MAX_RANGE - 10, sensor["s"].max() + MAX_RANGE + 10, rng, density)
+    static = make_static_world(
+        road, sensor["s"].min() - MAX_RANGE - 10, sensor["s"].max() + MAX_RANGE + 10, rng, density
+    )
     users = make_road_users(ego, road, duration, rng.integers(n_objects[0], n_objects[1] + 1), rng)
     parts = [_static_detections(static, sensor, rng), _clutter(sensor, density, rng)]
     objects = _object_detections(users, sensor, rng)
@@ -300,7 +304,7 @@ def _static_detections(static, sensor, rng):
         p = static.p_detect[point] * _visibility(r, azimuth) / (1.0 + (r / 30.0) ** 2)
         hit = rng.random(len(p)) < p
         found.append((scan[hit], point[hit], r[hit], azimuth[hit]))
-    scan, point, r, azimuth = (np.concatenate(v) for v in zip(*found))
+    scan, point, r, azimuth = (np.concatenate(v) for v in zip(*found, strict=True))
     rcs = static.rcs_mean[point] + rng.normal(0.0, 3.0, len(point))
     vr = _static_vr(sensor, scan, azimuth)
     return _truth(scan, r, azimuth, vr, rcs, np.full(len(scan), STATIC_LABEL), np.full(len(scan), -1))
@@ -343,7 +347,9 @@ def _one_object(index, user, sensor, rng):
     pvx = vx[scan] - yaw_rate[scan] * (py - cy[scan])
     pvy = vy[scan] + yaw_rate[scan] * (px - cx[scan])
     if params["micro"] > 0:
-        swing = 1.0 + params["micro"] * np.sin(2 * np.pi * user.gait_hz * t[scan] + rng.uniform(0, 2 * np.pi, len(scan)))
+        swing = 1.0 + params["micro"] * np.sin(
+            2 * np.pi * user.gait_hz * t[scan] + rng.uniform(0, 2 * np.pi, len(scan))
+        )
         pvx, pvy = pvx * swing, pvy * swing
     r, azimuth = _polar(sensor, scan, px, py)
     angle = azimuth + sensor["boresight"][scan]
@@ -423,7 +429,9 @@ def _measure(truth, scans, odometry, rng):
     angle = azimuth.astype(float) + myaw
     x_cc = mx + r * np.cos(angle)
     y_cc = my + r * np.sin(angle)
-    ego = {name: odometry[name].to_numpy().astype(float)[row] for name in ("x_seq", "y_seq", "yaw_seq", "vx", "yaw_rate")}
+    ego = {
+        name: odometry[name].to_numpy().astype(float)[row] for name in ("x_seq", "y_seq", "yaw_seq", "vx", "yaw_rate")
+    }
     c, s = np.cos(ego["yaw_seq"]), np.sin(ego["yaw_seq"])
     sensor_vx, sensor_vy = ego["vx"] - ego["yaw_rate"] * my, ego["yaw_rate"] * mx
     vr_compensated = vr + sensor_vx * np.cos(angle) + sensor_vy * np.sin(angle)
@@ -461,4 +469,3 @@ def _uuids(n, rng):
     nibbles = (words[:, :, None] >> shifts) & np.uint64(0xF)
     chars = _HEX[nibbles.reshape(n, 32)]
     return np.ascontiguousarray(chars).view("S32").ravel()
-

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pandas as pd
+from sklearn.utils._param_validation import validate_params
 
 from .._schema import LABELS
 
@@ -11,15 +12,17 @@ from .._schema import LABELS
 RANGE_BINS = (0.0, 10.0, 25.0, 50.0, 100.0)
 
 
+@validate_params({"bunch": [dict], "range_bins": ["array-like"]}, prefer_skip_nested_validation=True)
 def scene_statistics(bunch, range_bins=RANGE_BINS):
     """Summary figures of a data Bunch (simulated or loaded).
 
     Parameters
     ----------
-    bunch : Bunch
-        As returned by :func:`make_scenes` or :func:`load_radarscenes`.
-    range_bins : sequence of float, default=(0, 10, 25, 50, 100)
-        Edges of the range bins, m.
+    bunch : Bunch or dict
+        As returned by :func:`make_scenes` or :func:`load_radarscenes`;
+        needs ``data`` and ``target``.
+    range_bins : array-like of float, default=(0, 10, 25, 50, 100)
+        Increasing edges of the range bins, m.
 
     Returns
     -------
@@ -34,34 +37,69 @@ def scene_statistics(bunch, range_bins=RANGE_BINS):
         detected, by class (rows) and range bin of the object's median range
         in that scan (columns).  A count is missing where no object of that
         class was seen in that bin.
+
+    See Also
+    --------
+    format_statistics : the figures as text.
+
+    Examples
+    --------
+    >>> from sklearn_radar.datasets import make_scenes, scene_statistics
+    >>> summary, table = scene_statistics(make_scenes(n_sequences=1, duration=2.0, random_state=0))
+    >>> summary["n_sequences"]
+    1
     """
     data, target = bunch.data, np.asarray(bunch.target)
     spans = data.groupby("sequence")["timestamp"].agg(["min", "max"])
     duration = float(((spans["max"] - spans["min"]) * 1e-6).sum())
     scans = data.groupby(["sequence", "timestamp"]).ngroups
-    objects = data.loc[target >= 0, ["sequence", "timestamp", "range_sc", "label_id"]].assign(instance=target[target >= 0])
+    is_object = target >= 0
+    objects = data.loc[is_object, ["sequence", "timestamp", "range_sc", "label_id"]].assign(instance=target[is_object])
     per_scan = objects.groupby(["instance", "timestamp"]).agg(
         count=("range_sc", "size"), range=("range_sc", "median"), label_id=("label_id", "first")
     )
     per_scan["class"] = per_scan["label_id"].map(LABELS)
     per_scan["range_bin"] = pd.cut(per_scan["range"], list(range_bins))
     table = per_scan.pivot_table(index="class", columns="range_bin", values="count", aggfunc="mean", observed=False)
+    per_sequence = objects.groupby("sequence")["instance"].nunique()
     summary = {
-        "n_detections": int(len(data)),
+        "n_detections": len(data),
         "n_sequences": int(data["sequence"].nunique()),
         "duration_s": duration,
         "detections_per_second": len(data) / duration if duration > 0 else float("nan"),
         "scans": int(scans),
         "detections_per_scan": len(data) / max(scans, 1),
         "static_share": float(np.mean(target == -1)) if len(target) else float("nan"),
-        "instances": int(len(np.unique(target[target >= 0]))),
-        "objects_per_sequence": float(objects.groupby("sequence")["instance"].nunique().mean()) if len(objects) else 0.0,
+        "instances": len(np.unique(target[is_object])),
+        "objects_per_sequence": float(per_sequence.mean()) if len(objects) else 0.0,
     }
     return summary, table
 
 
+@validate_params({"summary": [dict], "table": [pd.DataFrame]}, prefer_skip_nested_validation=True)
 def format_statistics(summary, table) -> str:
-    """Human-readable text of :func:`scene_statistics` output."""
+    """Human-readable text of :func:`scene_statistics` output.
+
+    Parameters
+    ----------
+    summary : dict
+        The first value :func:`scene_statistics` returns.
+    table : DataFrame
+        The second value :func:`scene_statistics` returns, detections per
+        object per scan by class and range bin.
+
+    Returns
+    -------
+    text : str
+        One line per summary figure, then the table with two decimals.
+
+    Examples
+    --------
+    >>> from sklearn_radar.datasets import format_statistics, make_scenes, scene_statistics
+    >>> text = format_statistics(*scene_statistics(make_scenes(n_sequences=1, duration=2.0, random_state=0)))
+    >>> text.splitlines()[1]
+    'sequences             1 (2.0 s in all)'
+    """
     lines = [
         f"detections            {summary['n_detections']}",
         f"sequences             {summary['n_sequences']} ({summary['duration_s']:.1f} s in all)",
