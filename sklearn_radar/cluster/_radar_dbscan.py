@@ -13,7 +13,15 @@ from .._labels import consecutive_labels, roots_to_rows
 from .._neighbors import build_grid
 from .._schema import STAGE1_READS
 from .._validation import read_columns, sequence_slices
-from ._radar_dbscan_kernels import BOX_UNROTATED, METRIC_CODES, causal_sequence, causal_update, dbscan_sorted
+from ._radar_dbscan_kernels import (
+    METRIC_CODES,
+    Points,
+    cluster_causal,
+    cluster_sorted,
+    criterion_of,
+    points_of,
+    update_window,
+)
 
 
 def min_points_at_range(range_m, min_samples, alpha_r, range_scaling="reciprocal"):
@@ -270,14 +278,19 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
         rows_sorted = rows[order]
         t = c["t"][rows_sorted]
         heading = np.zeros(len(rows)) if c["heading"] is None else c["heading"][rows_sorted]
-        emitted, core_sorted = causal_sequence(
-            np.ascontiguousarray(c["x"][rows_sorted]), np.ascontiguousarray(c["y"][rows_sorted]),
-            np.ascontiguousarray(c["v_r"][rows_sorted]), t - t.min() if len(t) else t,
-            np.cos(heading), np.sin(heading), np.ascontiguousarray(min_points[rows_sorted]),
-            np.ascontiguousarray(can_be_core[rows_sorted]), METRIC_CODES[self.metric], float(self.eps_xy),
-            float(self.eps_vr), float(self.vr_scale), float(self.eps_xyv),
-            np.inf if self.eps_t is None else float(self.eps_t),
-        )  # fmt: skip
+        points = points_of(
+            x=c["x"][rows_sorted],
+            y=c["y"][rows_sorted],
+            v=c["v_r"][rows_sorted],
+            t=t - t.min() if len(t) else t,
+            heading=heading,
+        )
+        emitted, core_sorted = cluster_causal(
+            points=points,
+            min_points=min_points[rows_sorted],
+            can_be_core=can_be_core[rows_sorted],
+            criterion=criterion_of(self, heading),
+        )
         # Express each emitted id as the (time-sorted) position of the first detection that carried it.
         first_carrier = np.full(len(rows), -1, dtype=np.int64)
         clustered = np.flatnonzero(emitted >= 0)
@@ -291,25 +304,17 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
             return rows, np.zeros(0, dtype=np.int64), np.zeros(0, dtype=bool)
         t = c["t"][rows]
         t = t - t.min()  # small numbers: exact time-window edges
-        eps_t = np.inf if self.eps_t is None else float(self.eps_t)
         heading = np.zeros(len(rows)) if c["heading"] is None else c["heading"][rows]
         grid = build_grid(c["x"][rows], c["y"][rows], t, self._cell_size(heading))
         order = grid.order
-        sorted_roots, sorted_core = dbscan_sorted(
-            grid.x, grid.y, np.ascontiguousarray(c["v_r"][rows][order]), grid.t,
-            np.cos(heading[order]), np.sin(heading[order]),
-            np.ascontiguousarray(min_points[rows][order]), np.ascontiguousarray(can_be_core[rows][order]),
-            grid.cell_x, grid.cell_y, grid.cell_keys, grid.cell_start, grid.cell_end,
-            self._metric_code(heading), float(self.eps_xy), float(self.eps_vr), float(self.vr_scale),
-            float(self.eps_xyv), eps_t,
-        )  # fmt: skip
+        sorted_roots, sorted_core = cluster_sorted(
+            points=points_of(x=grid.x, y=grid.y, v=c["v_r"][rows][order], t=grid.t, heading=heading[order]),
+            grid=grid,
+            min_points=min_points[rows][order],
+            can_be_core=can_be_core[rows][order],
+            criterion=criterion_of(self, heading),
+        )
         return (rows, *_unsort(order, sorted_roots, sorted_core))
-
-    def _metric_code(self, heading):
-        """The kernel's criterion code; the box needs no rotation when every heading is 0."""
-        if self.metric == "box" and not np.any(heading):
-            return BOX_UNROTATED
-        return METRIC_CODES[self.metric]
 
     def _cell_size(self, heading):
         """Grid cell side, m: the largest spatial reach of the criterion."""
@@ -373,11 +378,7 @@ class ScanStream:
         self.clusterer = clusterer
         self._windows = {}
         self._next_id = 0
-        self._eps_t = np.inf if clusterer.eps_t is None else float(clusterer.eps_t)
-        self._criterion = (
-            METRIC_CODES[clusterer.metric], float(clusterer.eps_xy), float(clusterer.eps_vr),
-            float(clusterer.vr_scale), float(clusterer.eps_xyv), self._eps_t,
-        )  # fmt: skip
+        self._criterion = criterion_of(clusterer)  # the headings of future scans are unknown: the rotated box
 
     def update(self, x, y, v_r, t, *, sequence=0, keep=None, range_sc=None, heading=None):
         """Labels of one or more new scans (-1: noise), in the order given.
@@ -414,9 +415,8 @@ class ScanStream:
                 raise ValueError(f"ScanStream.update: {name!r} must hold {n} finite values")
             return values
 
-        c = {"x": column(x, "x"), "y": column(y, "y"), "v_r": column(v_r, "v_r"), "t": column(t, "t"),
-             "sequence": column(sequence, "sequence"), "keep": column(keep, "keep"),
-             "range_sc": column(range_sc, "range_sc"), "heading": column(heading, "heading")}  # fmt: skip
+        given = dict(x=x, y=y, v_r=v_r, t=t, sequence=sequence, keep=keep, range_sc=range_sc, heading=heading)
+        c = {name: column(values, name) for name, values in given.items()}
         return self._label(c)
 
     def _label(self, c):
@@ -443,37 +443,50 @@ class ScanStream:
                     f"RadarDBSCAN stream: column 't' goes back in time ({c['t'][scan[0]]} s after "
                     f"{window.last_time} s in sequence {sequence[scan[0]]:g}); pass scans in time order"
                 )
-            window.append(c, scan, heading, min_points, can_be_core, self._eps_t)
-            self._next_id = causal_update(
-                window.x, window.y, window.v, window.t, window.cos_h, window.sin_h, window.min_points,
-                window.can_be_core, window.core, window.cluster, window.first_new, self._next_id, *self._criterion,
-            )  # fmt: skip
+            window.append(c, scan, heading, min_points, can_be_core, self._criterion.eps_t)
+            self._next_id = update_window(
+                points=window.points,
+                min_points=window.min_points,
+                can_be_core=window.can_be_core,
+                core=window.core,
+                cluster=window.cluster,
+                first_new=window.first_new,
+                next_id=self._next_id,
+                criterion=self._criterion,
+            )
             labels[scan] = window.cluster[window.first_new :]
         return labels
 
 
 class _Window:
-    """The detections of one sequence within the last eps_t, for the stream."""
+    """The detections of one sequence within the last eps_t, for the stream.
 
-    _FIELDS = ("x", "y", "v", "t", "cos_h", "sin_h", "min_points", "can_be_core", "core", "cluster")
+    The float columns live in one (7, n) block, the six rows of :class:`Points` (x, y in m, v in m/s,
+    t in s, cos and sin of the heading) then N_min, so that a scan costs one concatenation for them;
+    ``points`` and ``min_points`` are views of its rows.
+    """
 
     def __init__(self):
-        for name, dtype in zip(self._FIELDS, [float] * 7 + [bool, bool, np.int64]):
-            setattr(self, name, np.zeros(0, dtype=dtype))
+        self._set_block(np.zeros((7, 0)))
+        self.can_be_core = np.zeros(0, dtype=bool)
+        self.core = np.zeros(0, dtype=bool)
+        self.cluster = np.zeros(0, dtype=np.int64)
         self.first_new = 0
         self.last_time = -np.inf
 
+    def _set_block(self, block):
+        self._block = block
+        self.points = Points(*block[:6])
+        self.min_points = block[6]
+
     def append(self, c, scan, heading, min_points, can_be_core, eps_t):
-        """Drop what is older than ``eps_t`` before the scan, then add the scan."""
+        """Drop what is older than ``eps_t`` (s) before the scan, then add the scan."""
         now = c["t"][scan[0]]
-        first_kept = int(np.searchsorted(self.t, now - eps_t, side="left"))  # the window is time-sorted
-        new = {
-            "x": c["x"][scan], "y": c["y"][scan], "v": c["v_r"][scan], "t": c["t"][scan],
-            "cos_h": np.cos(heading[scan]), "sin_h": np.sin(heading[scan]), "min_points": min_points[scan],
-            "can_be_core": can_be_core[scan], "core": np.zeros(len(scan), dtype=bool),
-            "cluster": np.full(len(scan), -1, dtype=np.int64),
-        }  # fmt: skip
-        for name in self._FIELDS:
-            setattr(self, name, np.concatenate([getattr(self, name)[first_kept:], new[name]]))
-        self.first_new = len(self.t) - len(scan)
+        first_kept = int(np.searchsorted(self.points.t, now - eps_t, side="left"))  # the window is time-sorted
+        new = points_of(x=c["x"][scan], y=c["y"][scan], v=c["v_r"][scan], t=c["t"][scan], heading=heading[scan])
+        self._set_block(np.concatenate([self._block[:, first_kept:], np.vstack([*new, min_points[scan]])], axis=1))
+        self.can_be_core = np.concatenate([self.can_be_core[first_kept:], can_be_core[scan]])
+        self.core = np.concatenate([self.core[first_kept:], np.zeros(len(scan), dtype=bool)])
+        self.cluster = np.concatenate([self.cluster[first_kept:], np.full(len(scan), -1, dtype=np.int64)])
+        self.first_new = len(self.points.t) - len(scan)
         self.last_time = now

@@ -1,14 +1,19 @@
 """Numba kernels of RadarDBSCAN: neighbourhood criteria (Eqs. 3-5), core points, causal updates.
 
-All kernels work on the points of one sequence sorted by (grid cell, time)
-as produced by :func:`sklearn_radar._neighbors.build_grid`.  Neighbours are
-visited on the fly, cell by cell, so memory stays linear in the number of
-points however dense the clutter is.
+All kernels work on the points of one sequence: sorted by (grid cell, time)
+as produced by :func:`sklearn_radar._neighbors.build_grid` for the offline
+pass, sorted by time for the causal ones.  Neighbours are visited on the
+fly, so memory stays linear in the number of points however dense the
+clutter is.  The kernels read two typed records, :class:`Points` (the
+coordinates of each point) and :class:`Criterion` (the thresholds, built
+only by :func:`criterion_of`); the estimator calls the Python wrappers at
+the bottom of this module with keyword arguments, never a kernel.
 """
 
 from __future__ import annotations
 
 import math
+from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -20,46 +25,102 @@ BOX, XY, XYV, BOX_UNROTATED = 0, 1, 2, 3
 METRIC_CODES = {"box": BOX, "xy": XY, "xyv": XYV}
 
 
+class Criterion(NamedTuple):
+    """The neighbourhood criterion of RadarDBSCAN (Eqs. 3-5 plus the time window), as the kernels read it.
+
+    Build it with :func:`criterion_of`.  Two points i, j are neighbours when
+    ``|t_i - t_j| <= eps_t`` and the spatial-Doppler test of ``metric`` holds.
+
+    Attributes
+    ----------
+    metric : int
+        ``BOX`` (Eq. 3, in the car axes of the later point of the pair),
+        ``XY`` (Eq. 4), ``XYV`` (Eq. 5) or ``BOX_UNROTATED`` (Eq. 3 when every
+        heading is 0, so the car axes are the x-y axes).
+    eps_xy : float
+        Spatial threshold of Eqs. 3 and 4, m.
+    eps_vr : float
+        Doppler threshold of Eqs. 3 and 4, m/s.
+    vr_scale : float
+        eps'_vr of Eq. 5: the Doppler difference, m/s, that counts like 1 m.
+    eps_xyv : float
+        Threshold of the joint distance of Eq. 5, m (Doppler scaled by ``vr_scale``).
+    eps_t : float
+        Time threshold, s; ``inf`` for none.
+    """
+
+    metric: int
+    eps_xy: float
+    eps_vr: float
+    vr_scale: float
+    eps_xyv: float
+    eps_t: float
+
+
+class Points(NamedTuple):
+    """The coordinates of the points of one sequence, float64 arrays of equal length.
+
+    Attributes
+    ----------
+    x, y : ndarray of float64
+        Working coordinates, m.
+    v : ndarray of float64
+        Ego-motion-compensated radial velocity, m/s.
+    t : ndarray of float64
+        Time, s.
+    cos_h, sin_h : ndarray of float64
+        Cosine and sine of the car heading, rad, at each point (the box axes of Eq. 3).
+    """
+
+    x: np.ndarray
+    y: np.ndarray
+    v: np.ndarray
+    t: np.ndarray
+    cos_h: np.ndarray
+    sin_h: np.ndarray
+
+
 @numba.njit(cache=True, nogil=True, inline="always")
-def _spatial_neighbor(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv):
+def _spatial_neighbor(i, j, points, crit):
     """Eqs. 3-5 without the time criterion (strict inequalities, as printed in the paper)."""
-    dx = x[j] - x[i]
-    dy = y[j] - y[i]
-    dv = v[j] - v[i]
-    if metric == BOX_UNROTATED:  # every heading is 0: the box axes are the x-y axes
+    dx = points.x[j] - points.x[i]
+    dy = points.y[j] - points.y[i]
+    dv = points.v[j] - points.v[i]
+    eps_xy, eps_vr = crit.eps_xy, crit.eps_vr
+    if crit.metric == BOX_UNROTATED:  # every heading is 0: the box axes are the x-y axes
         return abs(dx) < eps_xy and abs(dy) < eps_xy and abs(dv) < eps_vr
-    if metric == BOX:
+    if crit.metric == BOX:
         # Box axes: the car frame of the later detection of the pair (the newest scan of a sliding window).
-        k = i if t[i] >= t[j] else j
-        along = cos_h[k] * dx + sin_h[k] * dy
-        across = cos_h[k] * dy - sin_h[k] * dx
+        k = i if points.t[i] >= points.t[j] else j
+        along = points.cos_h[k] * dx + points.sin_h[k] * dy
+        across = points.cos_h[k] * dy - points.sin_h[k] * dx
         return abs(along) < eps_xy and abs(across) < eps_xy and abs(dv) < eps_vr
-    if metric == XY:
+    if crit.metric == XY:
         return dx * dx + dy * dy < eps_xy * eps_xy and abs(dv) < eps_vr
-    return dx * dx + dy * dy + dv * dv / (vr_scale * vr_scale) < eps_xyv * eps_xyv
+    return dx * dx + dy * dy + dv * dv / (crit.vr_scale * crit.vr_scale) < crit.eps_xyv * crit.eps_xyv
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def _pair_distance(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv):
+def _pair_distance(i, j, points, crit):
     """The criterion as a normalised distance (< 1 for neighbours); ranks border candidates."""
-    dx = x[j] - x[i]
-    dy = y[j] - y[i]
-    dv = abs(v[j] - v[i])
-    if metric == BOX_UNROTATED:
+    dx = points.x[j] - points.x[i]
+    dy = points.y[j] - points.y[i]
+    dv = abs(points.v[j] - points.v[i])
+    eps_xy, eps_vr = crit.eps_xy, crit.eps_vr
+    if crit.metric == BOX_UNROTATED:
         return max(abs(dx) / eps_xy, abs(dy) / eps_xy, dv / eps_vr)
-    if metric == BOX:
-        k = i if t[i] >= t[j] else j
-        along = abs(cos_h[k] * dx + sin_h[k] * dy)
-        across = abs(cos_h[k] * dy - sin_h[k] * dx)
+    if crit.metric == BOX:
+        k = i if points.t[i] >= points.t[j] else j
+        along = abs(points.cos_h[k] * dx + points.sin_h[k] * dy)
+        across = abs(points.cos_h[k] * dy - points.sin_h[k] * dx)
         return max(along / eps_xy, across / eps_xy, dv / eps_vr)
-    if metric == XY:
+    if crit.metric == XY:
         return max(math.sqrt(dx * dx + dy * dy) / eps_xy, dv / eps_vr)
-    return math.sqrt(dx * dx + dy * dy + dv * dv / (vr_scale * vr_scale)) / eps_xyv
+    return math.sqrt(dx * dx + dy * dy + dv * dv / (crit.vr_scale * crit.vr_scale)) / crit.eps_xyv
 
 
 @numba.njit(cache=True, nogil=True)
-def dbscan_sorted(x, y, v, t, cos_h, sin_h, min_points, can_be_core, cell_x, cell_y, cell_keys, cell_start, cell_end,
-                  metric, eps_xy, eps_vr, vr_scale, eps_xyv, eps_t):  # fmt: skip
+def _dbscan_sorted(points, min_points, can_be_core, cell_x, cell_y, cell_keys, cell_start, cell_end, crit):
     """DBSCAN on grid-sorted points; returns (root per point or -1, core flags).
 
     A point is core when it may be (``can_be_core``) and it has at least
@@ -69,7 +130,8 @@ def dbscan_sorted(x, y, v, t, cos_h, sin_h, min_points, can_be_core, cell_x, cel
     Passes 2 and 3 visit core points only, so static clutter that cannot be
     core costs one capped count, however dense it is.
     """
-    n = len(x)
+    t, eps_t = points.t, crit.eps_t
+    n = len(t)
     n_cells = len(cell_keys)
     cells = neighbor_cells(cell_keys, cell_start, cell_x, cell_y)
     point_cell = point_cells(cell_start, cell_end, n)
@@ -89,7 +151,7 @@ def dbscan_sorted(x, y, v, t, cos_h, sin_h, min_points, can_be_core, cell_x, cel
             for j in range(lo, hi):
                 if j == i:
                     continue
-                if _spatial_neighbor(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv):
+                if _spatial_neighbor(i, j, points, crit):
                     count += 1
                     if count >= need:
                         break
@@ -119,7 +181,7 @@ def dbscan_sorted(x, y, v, t, cos_h, sin_h, min_points, can_be_core, cell_x, cel
                 j = core_position[m]
                 if c == own and j <= i:
                     continue
-                if _spatial_neighbor(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv):
+                if _spatial_neighbor(i, j, points, crit):
                     union_keep_smaller(parent, i, j)
 
     # Pass 3: roots; a non-core point takes its closest core neighbour's.
@@ -136,8 +198,8 @@ def dbscan_sorted(x, y, v, t, cos_h, sin_h, min_points, can_be_core, cell_x, cel
             lo, hi = time_range(core_t, core_start[c], core_end[c], t[i] - eps_t, t[i] + eps_t)
             for m in range(lo, hi):
                 j = core_position[m]
-                if _spatial_neighbor(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv):
-                    d = _pair_distance(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv)
+                if _spatial_neighbor(i, j, points, crit):
+                    d = _pair_distance(i, j, points, crit)
                     if d < closest_distance:
                         closest, closest_distance = j, d
         if closest >= 0:
@@ -146,15 +208,15 @@ def dbscan_sorted(x, y, v, t, cos_h, sin_h, min_points, can_be_core, cell_x, cel
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def _past_neighbor(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv, eps_t):
+def _past_neighbor(i, j, points, crit):
     """j is a neighbour of i at or before i's time (the causal neighbourhood)."""
     # Plain ifs: the same test as one chained boolean expression compiled 8x slower.
     if j == i:
         return False
-    lag = t[i] - t[j]
-    if lag < 0.0 or lag > eps_t:
+    lag = points.t[i] - points.t[j]
+    if lag < 0.0 or lag > crit.eps_t:
         return False
-    return _spatial_neighbor(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv)
+    return _spatial_neighbor(i, j, points, crit)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -167,8 +229,7 @@ def _local_id(ids, n_ids, cluster_id):
 
 
 @numba.njit(cache=True, nogil=True)
-def causal_update(x, y, v, t, cos_h, sin_h, min_points, can_be_core, core, cluster, first_new, next_id,
-                  metric, eps_xy, eps_vr, vr_scale, eps_xyv, eps_t):  # fmt: skip
+def _causal_update(points, min_points, can_be_core, core, cluster, first_new, next_id, crit):
     """Label one new scan against the sliding window before it, using only the past.
 
     The arrays hold the window: points ``[0, first_new)`` are earlier
@@ -181,7 +242,7 @@ def causal_update(x, y, v, t, cos_h, sin_h, min_points, can_be_core, core, clust
     core neighbour.  ``core`` and ``cluster`` are updated in place; returns
     the next free cluster id.
     """
-    n = len(x)
+    n = len(points.t)
     n_new = n - first_new
     if n_new <= 0:
         return next_id
@@ -193,7 +254,7 @@ def causal_update(x, y, v, t, cos_h, sin_h, min_points, can_be_core, core, clust
         for j in range(n):
             if count >= need:
                 break
-            if _past_neighbor(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv, eps_t):
+            if _past_neighbor(i, j, points, crit):
                 count += 1
         core[i] = count >= need
 
@@ -204,7 +265,7 @@ def causal_update(x, y, v, t, cos_h, sin_h, min_points, can_be_core, core, clust
             for j in range(i + 1, n):
                 if not core[j]:
                     continue
-                if _spatial_neighbor(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv):
+                if _spatial_neighbor(i, j, points, crit):
                     union_keep_smaller(parent, i - first_new, j - first_new)
     # Phase B: old clusters touched by a component merge into the oldest (smallest) id.
     ids = np.empty(first_new, dtype=np.int64)  # distinct old cluster ids met
@@ -218,7 +279,7 @@ def causal_update(x, y, v, t, cos_h, sin_h, min_points, can_be_core, core, clust
         for j in range(first_new):
             if not core[j]:
                 continue
-            if not _past_neighbor(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv, eps_t):
+            if not _past_neighbor(i, j, points, crit):
                 continue
             k = _local_id(ids, n_ids, cluster[j])
             if k < 0:
@@ -259,9 +320,9 @@ def causal_update(x, y, v, t, cos_h, sin_h, min_points, can_be_core, core, clust
         for j in range(n):
             if not core[j]:
                 continue
-            if not _past_neighbor(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv, eps_t):
+            if not _past_neighbor(i, j, points, crit):
                 continue
-            d = _pair_distance(i, j, x, y, v, t, cos_h, sin_h, metric, eps_xy, eps_vr, vr_scale, eps_xyv)
+            d = _pair_distance(i, j, points, crit)
             if d < closest_distance:
                 closest, closest_distance = j, d
         cluster[i] = cluster[closest] if closest >= 0 else -1
@@ -269,14 +330,14 @@ def causal_update(x, y, v, t, cos_h, sin_h, min_points, can_be_core, core, clust
 
 
 @numba.njit(cache=True, nogil=True)
-def causal_sequence(x, y, v, t, cos_h, sin_h, min_points, can_be_core,
-                    metric, eps_xy, eps_vr, vr_scale, eps_xyv, eps_t):  # fmt: skip
+def _causal_sequence(points, min_points, can_be_core, crit):
     """Offline-causal labels of one time-sorted sequence: each scan as the stream would see it.
 
     Returns the label each detection receives when its scan arrives (cluster
     ids never reused, oldest id kept on merges) and the core flags.
     """
-    n = len(x)
+    t = points.t
+    n = len(t)
     core = np.zeros(n, dtype=np.bool_)
     cluster = np.full(n, -1, dtype=np.int64)
     emitted = np.full(n, -1, dtype=np.int64)
@@ -287,14 +348,185 @@ def causal_sequence(x, y, v, t, cos_h, sin_h, min_points, can_be_core,
         scan_end = scan_start + 1
         while scan_end < n and t[scan_end] == t[scan_start]:
             scan_end += 1
-        while t[start] < t[scan_start] - eps_t:
+        while t[start] < t[scan_start] - crit.eps_t:
             start += 1
-        next_id = causal_update(
-            x[start:scan_end], y[start:scan_end], v[start:scan_end], t[start:scan_end],
-            cos_h[start:scan_end], sin_h[start:scan_end], min_points[start:scan_end],
-            can_be_core[start:scan_end], core[start:scan_end], cluster[start:scan_end],
-            scan_start - start, next_id, metric, eps_xy, eps_vr, vr_scale, eps_xyv, eps_t,
-        )  # fmt: skip
+        window = Points(
+            points.x[start:scan_end],
+            points.y[start:scan_end],
+            points.v[start:scan_end],
+            t[start:scan_end],
+            points.cos_h[start:scan_end],
+            points.sin_h[start:scan_end],
+        )
+        next_id = _causal_update(
+            window,
+            min_points[start:scan_end],
+            can_be_core[start:scan_end],
+            core[start:scan_end],
+            cluster[start:scan_end],
+            scan_start - start,
+            next_id,
+            crit,
+        )
         emitted[scan_start:scan_end] = cluster[scan_start:scan_end]
         scan_start = scan_end
     return emitted, core
+
+
+# Python wrappers: the estimator's only entry points, called with keyword arguments.
+
+
+def criterion_of(estimator, heading=None) -> Criterion:
+    """The neighbourhood criterion (Eqs. 3-5 and the time window) of a RadarDBSCAN's parameters.
+
+    The one place where the parameters become the kernels' :class:`Criterion`.
+
+    Parameters
+    ----------
+    estimator : RadarDBSCAN
+        Its ``metric``, ``eps_xy`` (m), ``eps_vr`` (m/s), ``vr_scale`` (m/s),
+        ``eps_xyv`` (m) and ``eps_t`` (s, None for no time limit) are read.
+    heading : array-like of float, default=None
+        Car heading, rad, of every point the criterion will be applied to.
+        When given and all 0, the box of Eq. 3 is ``BOX_UNROTATED`` (the same
+        test without the rotation).  None, as for a stream whose future
+        headings are unknown, keeps the rotated box.
+
+    Returns
+    -------
+    criterion : Criterion
+    """
+    metric = METRIC_CODES[estimator.metric]
+    if metric == BOX and heading is not None and not np.any(heading):
+        metric = BOX_UNROTATED
+    return Criterion(
+        metric=metric,
+        eps_xy=float(estimator.eps_xy),
+        eps_vr=float(estimator.eps_vr),
+        vr_scale=float(estimator.vr_scale),
+        eps_xyv=float(estimator.eps_xyv),
+        eps_t=np.inf if estimator.eps_t is None else float(estimator.eps_t),
+    )
+
+
+def points_of(*, x, y, v, t, heading) -> Points:
+    """The :class:`Points` of the kernels from per-point arrays of equal length.
+
+    Parameters
+    ----------
+    x, y : array-like of float
+        Working coordinates, m.
+    v : array-like of float
+        Ego-motion-compensated radial velocity, m/s.
+    t : array-like of float
+        Time, s.
+    heading : array-like of float
+        Car heading, rad (zeros when the box axes are the x-y axes).
+
+    Returns
+    -------
+    points : Points
+        Contiguous float64 arrays, with the cosine and sine of ``heading``.
+    """
+    heading = np.asarray(heading, dtype=np.float64)
+    return Points(
+        x=np.ascontiguousarray(x, dtype=np.float64),
+        y=np.ascontiguousarray(y, dtype=np.float64),
+        v=np.ascontiguousarray(v, dtype=np.float64),
+        t=np.ascontiguousarray(t, dtype=np.float64),
+        cos_h=np.cos(heading),
+        sin_h=np.sin(heading),
+    )
+
+
+def cluster_sorted(*, points, grid, min_points, can_be_core, criterion):
+    """Offline RadarDBSCAN of one sequence, past and future neighbours alike (Eqs. 2-5).
+
+    Parameters
+    ----------
+    points : Points
+        The points in the order of ``grid`` (sorted by grid cell, then time).
+    grid : GridIndex
+        The cell table of :func:`sklearn_radar._neighbors.build_grid`; its
+        cell side must be the criterion's largest spatial reach, m.
+    min_points : ndarray of float, shape (n,)
+        N_min per point (Eq. 2), the point itself included.
+    can_be_core : ndarray of bool, shape (n,)
+        False for points that may not be core (``|v_r| <= vr_min``).
+    criterion : Criterion
+
+    Returns
+    -------
+    roots : ndarray of int64, shape (n,)
+        Root of each point's cluster as a (sorted) position, -1 for noise.
+    core : ndarray of bool, shape (n,)
+    """
+    return _dbscan_sorted(
+        points,
+        np.ascontiguousarray(min_points, dtype=np.float64),
+        np.ascontiguousarray(can_be_core, dtype=np.bool_),
+        grid.cell_x,
+        grid.cell_y,
+        grid.cell_keys,
+        grid.cell_start,
+        grid.cell_end,
+        criterion,
+    )
+
+
+def cluster_causal(*, points, min_points, can_be_core, criterion):
+    """Offline-causal RadarDBSCAN of one sequence: each scan labelled as the stream labels it.
+
+    Parameters
+    ----------
+    points : Points
+        The points sorted by time, s; a scan is a run of equal times.
+    min_points : ndarray of float, shape (n,)
+        N_min per point (Eq. 2), the point itself included.
+    can_be_core : ndarray of bool, shape (n,)
+    criterion : Criterion
+
+    Returns
+    -------
+    emitted : ndarray of int64, shape (n,)
+        The cluster id each point received when its scan arrived, -1 for noise.
+    core : ndarray of bool, shape (n,)
+    """
+    return _causal_sequence(
+        points,
+        np.ascontiguousarray(min_points, dtype=np.float64),
+        np.ascontiguousarray(can_be_core, dtype=np.bool_),
+        criterion,
+    )
+
+
+def update_window(*, points, min_points, can_be_core, core, cluster, first_new, next_id, criterion) -> int:
+    """Label the newest scan of a sliding window from the past only (see :func:`_causal_update`).
+
+    The arrays must be contiguous, of the dtypes below: ``core`` and
+    ``cluster`` are updated in place.
+
+    Parameters
+    ----------
+    points : Points
+        The window sorted by time, s: earlier points within ``criterion.eps_t``, then the new scan.
+    min_points : ndarray of float64, shape (n,)
+        N_min per point (Eq. 2), the point itself included.
+    can_be_core : ndarray of bool, shape (n,)
+    core : ndarray of bool, shape (n,)
+        Core flags; those of the new scan are written in place.
+    cluster : ndarray of int64, shape (n,)
+        Cluster ids; the new scan's are written and merged clusters relabelled in place.
+    first_new : int
+        Position of the first point of the new scan.
+    next_id : int
+        The next free cluster id.
+    criterion : Criterion
+
+    Returns
+    -------
+    next_id : int
+        The next free cluster id after the scan.
+    """
+    # No conversions: the stream calls this once per scan, with the window's own contiguous arrays.
+    return _causal_update(points, min_points, can_be_core, core, cluster, first_new, next_id, criterion)
