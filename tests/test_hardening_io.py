@@ -1,8 +1,12 @@
 """Hardening of the command line and the output folders (issue 15, items 4-8)."""
 
+import hashlib
 import json
 import os
+import signal
 import stat
+import subprocess
+import sys
 
 import pytest
 
@@ -124,3 +128,117 @@ def test_cluster_predictions_and_reproduce_files_honour_the_umask(small_folder, 
     atomic_write_text(folder / "results.json", "{}")
     assert stat.S_IMODE(folder.stat().st_mode) == 0o777 & ~umask
     assert stat.S_IMODE((folder / "results.json").stat().st_mode) == 0o666 & ~umask
+
+
+# ----------------------------------------------------------------------------- item 7: the output folder of a run
+
+# Runs the command line in a child process that SIGKILLs itself when a chosen file is about to be renamed into
+# place (the atomic writes end with os.replace), or when the writer of a data folder writes its second HDF5 file.
+_KILLER = """
+import os, signal, sys
+kill_at, argv = sys.argv[1], sys.argv[2:]
+real_replace = os.replace
+def replace(src, dst, *args, **kwargs):
+    if kill_at != "h5" and str(dst).endswith(kill_at):
+        os.kill(os.getpid(), signal.SIGKILL)
+    return real_replace(src, dst, *args, **kwargs)
+os.replace = replace
+if kill_at == "h5":
+    from sklearn_radar.datasets import _radarscenes
+    real_write, calls = _radarscenes._write_radar_data_h5, []
+    def write(*args):
+        calls.append(args)
+        if len(calls) == 2:
+            os.kill(os.getpid(), signal.SIGKILL)
+        real_write(*args)
+    _radarscenes._write_radar_data_h5 = write
+from sklearn_radar._cli import main
+sys.exit(main(argv))
+"""
+
+
+def _killed(kill_at, argv):
+    result = subprocess.run(
+        [sys.executable, "-c", _KILLER, kill_at, *argv], capture_output=True, text=True, timeout=600, check=False
+    )
+    assert result.returncode == -signal.SIGKILL, result.stderr
+    return result
+
+
+@pytest.fixture(scope="module")
+def two_folder(tmp_path_factory):
+    path = tmp_path_factory.mktemp("data") / "two"
+    write_radarscenes(make_scenes(n_sequences=2, duration=2.0, random_state=1), path)
+    return path
+
+
+def _reproduce_argv(data, out):
+    return ["reproduce", "--data", str(data), "--out", str(out), "--experiments", "1"]
+
+
+def _run_marker(out):
+    return json.loads((out / "run.json").read_text())
+
+
+def _assert_complete_and_unmixed(out):
+    marker = _run_marker(out)
+    assert marker["complete"] is True and marker["status"] == "complete"
+    names = sorted(p.name for p in out.iterdir())
+    assert names == sorted([*marker["files"], "run.json"]), "files of another run, or temporary files, remain"
+    for name, digest in marker["files"].items():
+        assert hashlib.sha256((out / name).read_bytes()).hexdigest() == digest, name
+    assert "wall_time_s" in json.loads((out / "results.json").read_text())["meta"]
+
+
+def test_a_run_killed_while_drawing_figures_is_marked_incomplete_and_cleaned_next_time(two_folder, tmp_path, capsys):
+    out = tmp_path / "out"
+    _killed(".png", _reproduce_argv(two_folder, out))
+    assert not (out / "report.md").exists()
+    assert _run_marker(out)["complete"] is False
+    results = json.loads((out / "results.json").read_text())
+    assert "wall_time_s" not in results["meta"], "results.json must not look finished while report.md is missing"
+    assert [p for p in out.iterdir() if p.name.startswith(".")], "the killed run should have left its temporary files"
+    assert main(_reproduce_argv(two_folder, out)) == 0
+    _assert_complete_and_unmixed(out)
+
+
+def test_a_new_run_never_sits_beside_the_old_runs_report(two_folder, tmp_path, capsys):
+    out = tmp_path / "out"
+    assert main(_reproduce_argv(two_folder, out)) == 0
+    _assert_complete_and_unmixed(out)
+    old = _run_marker(out)
+    _killed("results.json", _reproduce_argv(two_folder, out))
+    names = {p.name for p in out.iterdir() if not p.name.startswith(".")}
+    assert names == {"run.json"}, f"the old run's files remain beside the new run's: {names}"
+    marker = _run_marker(out)
+    assert marker["complete"] is False and marker["run_id"] != old["run_id"]
+
+
+def test_stale_temporary_files_are_removed_and_live_ones_kept(two_folder, tmp_path, capsys):
+    out = tmp_path / "out"
+    out.mkdir()
+    finished = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    dead = int(finished.stdout)
+    stale = out / f".sklearn-radar-tmp-{dead}-cache-abc"
+    (stale / "joblib").mkdir(parents=True)
+    (stale / "joblib" / "big.npy").write_bytes(b"0" * 1000)
+    (out / f".sklearn-radar-tmp-{dead}-results.json.x.tmp").write_text("{")
+    legacy = out / ".report.md.k3j2.tmp"  # the name of a temporary file before the prefix
+    legacy.write_text("old")
+    live = out / f".sklearn-radar-tmp-{os.getppid()}-results.json.y.tmp"
+    live.write_text("{")
+    mine = out / "notes.txt"  # not a run's file: left alone
+    mine.write_text("mine")
+    assert main(_reproduce_argv(two_folder, out)) == 0
+    hidden = sorted(p.name for p in out.iterdir() if p.name.startswith("."))
+    assert hidden == [live.name]
+    assert mine.read_text() == "mine"
+
+
+def test_a_killed_simulate_leaves_no_hidden_folder_after_the_next_write(tmp_path, capsys):
+    out = tmp_path / "sim"
+    argv = ["simulate", "--out", str(out), "--n-sequences", "2", "--duration", "1"]
+    _killed("h5", argv)
+    assert not out.exists()
+    assert main(argv) == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["sim"]

@@ -522,7 +522,9 @@ def write_radarscenes(bunch, path, overwrite=False) -> Path:
     }
     sequences_json = {"sequences": {p.name: p.summary for p in prepared}}
     path.parent.mkdir(parents=True, exist_ok=True)
-    staging = Path(tempfile.mkdtemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent))
+    _remove_stale_temporaries(path)
+    prefix = f"{_TEMPORARY_PREFIX}{os.getpid()}-{path.name}."
+    staging = Path(tempfile.mkdtemp(prefix=prefix, suffix=".tmp", dir=path.parent))
     try:
         os.chmod(staging, 0o777 & ~_current_umask())  # mkdtemp creates 0700 whatever the umask
         _write_json(staging / "sensors.json", sensors_json)
@@ -747,6 +749,51 @@ def _refuse_occupied(path: Path, overwrite: bool) -> None:
         raise FileExistsError(f"{path} exists and is not empty; pass overwrite=True to replace it")
 
 
+#: Temporary folders beside the written one: this prefix, the writer's process id, "-", the folder's name.
+_TEMPORARY_PREFIX = ".sklearn-radar-tmp-"
+
+
+def _remove_stale_temporaries(path: Path) -> None:
+    """Delete what a killed writer of ``path`` left beside it.
+
+    Its staging folders (``.sklearn-radar-tmp-<pid>-<name>.*.tmp``, and
+    ``.<name>.*.tmp`` of older versions) go when process ``<pid>`` no longer
+    runs; a set-aside old copy (``*.old``) only when ``path`` exists, as it
+    may otherwise be the only copy of the data.
+    """
+    name = re.escape(path.name)
+    pattern = re.compile(rf"(?:{re.escape(_TEMPORARY_PREFIX)}(?P<pid>\d+)-{name}|\.{name})\.[^/]+\.(?P<kind>tmp|old)")
+    try:
+        entries = list(path.parent.iterdir())
+    except OSError:
+        return
+    for entry in entries:
+        match = pattern.fullmatch(entry.name)
+        if match is None or (match["kind"] == "old" and not path.exists()):
+            continue
+        if match["pid"] is not None and _process_alive(int(match["pid"])):
+            continue
+        try:
+            if entry.is_dir() and not entry.is_symlink():
+                shutil.rmtree(entry)
+            else:
+                entry.unlink()
+        except OSError:
+            pass  # removed meanwhile, or not ours to remove: the write goes on
+
+
+def _process_alive(pid: int) -> bool:
+    if pid == os.getpid() or os.name == "nt":  # on Windows, os.kill would end the process
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:
+        return True
+    return True
+
+
 def _move_into_place(staging: Path, path: Path, overwrite: bool) -> None:
     """Rename ``staging`` to ``path``; an existing ``path`` is swapped out, then deleted."""
     if not _is_occupied(path):
@@ -755,7 +802,7 @@ def _move_into_place(staging: Path, path: Path, overwrite: bool) -> None:
         os.rename(staging, path)
         return
     _refuse_occupied(path, overwrite)
-    aside = path.with_name(f".{path.name}.{uuid_module.uuid4().hex}.old")
+    aside = path.with_name(f"{_TEMPORARY_PREFIX}{os.getpid()}-{path.name}.{uuid_module.uuid4().hex}.old")
     os.rename(path, aside)
     try:
         os.rename(staging, path)

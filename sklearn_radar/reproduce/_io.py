@@ -1,21 +1,106 @@
-"""Atomic output: a file appears whole or not at all."""
+"""Atomic output: a file appears whole or not at all; what a killed process leaves is removed next time."""
 
 from __future__ import annotations
 
 import os
+import re
+import shutil
 import tempfile
 from pathlib import Path
 
+#: Every temporary file or folder written beside an output starts with this, then the writer's process id and "-".
+TEMPORARY_PREFIX = ".sklearn-radar-tmp-"
+_TEMPORARY = re.compile(re.escape(TEMPORARY_PREFIX) + r"(\d+)-")
+
+
+def temporary_prefix(name=""):
+    """``.sklearn-radar-tmp-<pid>-<name>``: the prefix of this process's temporary files and folders."""
+    return f"{TEMPORARY_PREFIX}{os.getpid()}-{name}"
+
 
 def check_writable(folder):
-    """Create ``folder`` if needed and prove that a file can be written there (OSError names it)."""
+    """Create ``folder`` if needed and prove that a file can be written there (OSError names it).
+
+    Returns
+    -------
+    created : list of Path
+        The folders created, deepest first (:func:`remove_empty_folders` undoes it).
+    """
     folder = Path(folder)
+    created = []
     try:
+        parent = folder
+        while not parent.exists() and parent != parent.parent:
+            created.append(parent)
+            parent = parent.parent
         folder.mkdir(parents=True, exist_ok=True)
-        with tempfile.NamedTemporaryFile(dir=folder, prefix=".write-test-"):
+        with tempfile.NamedTemporaryFile(dir=folder, prefix=temporary_prefix("write-test-")):
             pass
     except OSError as error:
+        remove_empty_folders(created)
         raise OSError(f"cannot write to the output folder {folder}: {error.strerror or error}") from None
+    return created
+
+
+def remove_empty_folders(folders):
+    """Remove each of ``folders`` (deepest first) that exists and is empty."""
+    for folder in folders:
+        try:
+            folder.rmdir()
+        except OSError:
+            return
+
+
+def _alive(pid):
+    if pid == os.getpid():
+        return True
+    if os.name == "nt":  # os.kill would terminate it: never take another process's files for stale
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # e.g. another user's process
+        return True
+    return True
+
+
+def remove_stale_temporaries(folder, legacy=()):
+    """Delete the temporary files and folders that killed processes left in ``folder``.
+
+    A stale entry is named ``.sklearn-radar-tmp-<pid>-...`` with no process
+    ``<pid>`` running, or ``.<name>.<random>.tmp`` for a ``name`` in
+    ``legacy`` (the temporary files of older versions).  A running
+    process's entries are kept.
+
+    Returns
+    -------
+    removed : list of str
+        The names removed.
+    """
+    folder = Path(folder)
+    legacy = tuple(f".{name}." for name in legacy)
+    removed = []
+    try:
+        entries = list(folder.iterdir())
+    except OSError:
+        return removed
+    for entry in entries:
+        match = _TEMPORARY.match(entry.name)
+        stale = (match is not None and not _alive(int(match.group(1)))) or (
+            entry.name.startswith(legacy) and entry.name.endswith(".tmp")
+        )
+        if not stale:
+            continue
+        try:
+            if entry.is_dir() and not entry.is_symlink():
+                shutil.rmtree(entry)
+            else:
+                entry.unlink()
+            removed.append(entry.name)
+        except OSError:
+            pass  # another process removed it, or it cannot be: not worth failing the run for
+    return removed
 
 
 def current_umask():
@@ -45,7 +130,7 @@ def atomic_write_text(path, text):
 def atomic_write(path, write):
     """Call ``write(binary stream)`` on a temporary sibling of ``path``, then rename it into place."""
     path = Path(path)
-    handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=".tmp")
+    handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=temporary_prefix(f"{path.name}."), suffix=".tmp")
     try:
         os.chmod(temporary, file_mode())  # mkstemp creates 0600 whatever the umask
         with os.fdopen(handle, "wb") as stream:

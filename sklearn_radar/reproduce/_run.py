@@ -7,6 +7,15 @@ and scored on the held-out half with the radar V-measure against the
 pre-clustered target.  Results are written after every experiment, atomically,
 so an interrupted run keeps what it finished.
 
+The output folder holds one run at a time, and ``run.json`` says which and
+whether it is complete: it is written first (``"complete": false``), then
+the previous run's files are removed, and it is rewritten with
+``"complete": true`` and the SHA-256 of every file of the run only after
+``report.md`` and the figures.  ``results.json`` gets ``meta.wall_time_s``
+only then, too.  Temporary files and the pipeline cache are named
+``.sklearn-radar-tmp-<pid>-...``; a run removes those of processes that no
+longer run.
+
 The results are typed (:mod:`._results`), the in-memory state is a
 :class:`~._context.RunContext`, and the report is built from the sections of
 :mod:`._sections`.
@@ -14,10 +23,13 @@ The results are typed (:mod:`._results`), the in-memory state is a
 
 from __future__ import annotations
 
+import datetime
+import hashlib
 import json
 import sys
 import tempfile
 import time
+import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -48,7 +60,13 @@ from ._constants import (
     SOURCE_SEARCH,
 )
 from ._context import RunContext
-from ._io import atomic_write_text, check_writable
+from ._io import (
+    atomic_write_text,
+    check_writable,
+    remove_empty_folders,
+    remove_stale_temporaries,
+    temporary_prefix,
+)
 from ._report import write_report
 from ._results import (
     BaselineResult,
@@ -67,6 +85,13 @@ from ._results import (
     RunResults,
     SearchRecord,
 )
+from ._sections._figures import CONVERGENCE, SCENE
+from ._sections._filter import HEATMAP
+
+#: The run marker: which run the folder holds and whether it is complete.
+RUN_MARKER = "run.json"
+#: Every file a run may write besides the marker (a previous run's are removed when a new one starts).
+RUN_FILES = ("report.md", "results.json", "params.json", HEATMAP, SCENE, CONVERGENCE)
 
 
 @dataclass
@@ -95,6 +120,8 @@ class Run:
     stream: object
     results: RunResults
     started: float = field(default_factory=time.perf_counter)
+    run_id: str = field(default_factory=lambda: uuid.uuid4().hex)
+    started_utc: str = field(default_factory=lambda: _utc_now())
 
 
 def parse_experiments(text):
@@ -141,7 +168,10 @@ def reproduce(
     data : str or path-like, default=None
         A RadarScenes data folder; None simulates one (:func:`make_scenes`).
     out : str or path-like, default="sklearn-radar-report"
-        Output folder (created).
+        Output folder (created).  It holds one run: a previous run's files
+        there are removed when this one starts (other files are left
+        alone), and ``run.json`` says ``"complete": true`` only once every
+        file of the run is written.
     n_iter : int, default=None
         Bayesian-optimisation iterations per tuned experiment; None: 10, or
         100 with ``full`` (30 % of them random, as the paper's 30 + 70).
@@ -165,10 +195,14 @@ def reproduce(
     started = time.perf_counter()
     keys = parse_experiments(experiments)
     out = Path(out)
-    check_writable(out)
+    created = check_writable(out)
     budget = Budget.full(n_iter) if full else Budget.default(n_iter)
     stream = stream or sys.stdout
-    scenes, source = _data(data, budget, seed)
+    try:
+        scenes, source = _data(data, budget, seed)
+    except BaseException:
+        remove_empty_folders(created)  # a run that never started leaves no folder behind
+        raise
     train, test = sequence_train_test_split(scenes.groups, random_state=seed)
     meta = RunMeta(
         version=__version__,
@@ -186,6 +220,7 @@ def reproduce(
     )
     results = RunResults(meta=meta)
     run = Run(out=out, budget=budget, seed=seed, n_jobs=n_jobs, stream=stream, results=results, started=started)
+    _start_folder(run)
     _say(
         run,
         f"data: {source}, {len(scenes.data):,} detections in {meta.data.n_sequences} sequences; "
@@ -195,29 +230,94 @@ def reproduce(
     # The estimators' input: the measured columns only (no labels, no strings: cheap to hash for caching).
     X = scenes.data[[c for c in scenes.data.columns if c not in ("uuid", "track_id", "label_id")]]
     context = RunContext(scenes=scenes, X=X, train=train, test=test, target=target)
-    with tempfile.TemporaryDirectory(prefix="sklearn-radar-cache-") as cache:
-        context.cache = cache
-        try:
-            for position, key in enumerate(keys, start=1):
-                _say(run, f"[{position}/{len(keys)}] {_title(key)}")
-                start = time.perf_counter()
-                _RUNNERS[_runner_of(key)](run, context, key)
-                meta.completed.append(key)
-                _say(run, f"[{position}/{len(keys)}] {_title(key)} done in {time.perf_counter() - start:.1f} s")
-                _save(run)
-        except KeyboardInterrupt:
-            meta.interrupted = True
-            _say(run, "interrupted: writing the finished results")
-            _finish(run, context)
-            raise
-    _finish(run, context)
+    try:
+        # The pipeline cache (tens of MB) lives beside the output, named so that the next run removes it if
+        # this process is killed.
+        with tempfile.TemporaryDirectory(prefix=temporary_prefix("cache-"), dir=out) as cache:
+            context.cache = cache
+            try:
+                for position, key in enumerate(keys, start=1):
+                    _say(run, f"[{position}/{len(keys)}] {_title(key)}")
+                    start = time.perf_counter()
+                    _RUNNERS[_runner_of(key)](run, context, key)
+                    meta.completed.append(key)
+                    _say(run, f"[{position}/{len(keys)}] {_title(key)} done in {time.perf_counter() - start:.1f} s")
+                    _save(run)
+            except KeyboardInterrupt:
+                meta.interrupted = True
+                _say(run, "interrupted: writing the finished results")
+                _finish(run, context, "interrupted")
+                raise
+        _finish(run, context, "complete")
+    except BaseException as error:
+        marker = _read_marker(run.out)
+        if marker.get("run_id") == run.run_id and marker.get("status") == "running":
+            _write_marker(run, "failed", error=f"{type(error).__name__}: {error}")
+        raise
     return run.results.to_json_dict(figures=True)
 
 
-def _finish(run, context):
+def _finish(run, context, status):
+    """Figures and report.md first, then results.json with the wall time, then the marker: readers see the end last."""
     run.results.meta.wall_time_s = time.perf_counter() - run.started
-    _save(run)
     write_report(run.out, run.results, context)
+    _save(run)
+    _write_marker(run, status)
+
+
+def _utc_now():
+    return datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+
+
+def _read_marker(out):
+    try:
+        marker = json.loads((Path(out) / RUN_MARKER).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+    return marker if isinstance(marker, dict) else {}
+
+
+def _start_folder(run):
+    """Claim the output folder for this run: the marker first ("running"), then the previous run's files go."""
+    out = run.out
+    remove_stale_temporaries(out, legacy=(*RUN_FILES, RUN_MARKER))
+    previous = _read_marker(out).get("files")
+    previous = [name for name in previous if isinstance(name, str)] if isinstance(previous, dict) else []
+    _write_marker(run, "running")
+    for name in {*RUN_FILES, *previous}:
+        file = out / name
+        if Path(name).name == name and name != RUN_MARKER and (file.is_file() or file.is_symlink()):
+            file.unlink()
+
+
+def _write_marker(run, status, error=None):
+    """Write ``run.json``: the run's id, its status and, once it ended, the SHA-256 of each of its files."""
+    files = {}
+    if status in ("complete", "interrupted"):
+        names = ["report.md", "results.json", "params.json", *sorted(set(run.results.figures.drawn.values()))]
+        files = {name: _sha256(run.out / name) for name in names if (run.out / name).is_file()}
+    marker = {
+        "tool": "sklearn-radar reproduce",
+        "version": __version__,
+        "run_id": run.run_id,
+        "started": run.started_utc,
+        "status": status,
+        "complete": status == "complete",
+        "files": files,
+    }
+    if status != "running":
+        marker["ended"] = _utc_now()
+    if error is not None:
+        marker["error"] = error
+    atomic_write_text(run.out / RUN_MARKER, json.dumps(marker, indent=1))
+
+
+def _sha256(path):
+    digest = hashlib.sha256()
+    with open(path, "rb") as stream:
+        for block in iter(lambda: stream.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
 
 
 def _data(data, budget, seed):
