@@ -7,7 +7,7 @@ from numbers import Integral, Real
 import numpy as np
 from joblib import Parallel, delayed
 from sklearn.base import BaseEstimator, ClusterMixin, _fit_context
-from sklearn.utils._param_validation import Interval, StrOptions
+from sklearn.utils._param_validation import Interval, StrOptions, validate_params
 
 from .._labels import consecutive_labels, roots_to_rows
 from .._neighbors import build_grid
@@ -24,6 +24,15 @@ from ._radar_dbscan_kernels import (
 )
 
 
+@validate_params(
+    {
+        "range_m": ["array-like"],
+        "min_samples": [Interval(Real, 1, None, closed="left")],
+        "alpha_r": [Interval(Real, 0, 1, closed="both")],
+        "range_scaling": [StrOptions({"reciprocal", "linear"})],
+    },
+    prefer_skip_nested_validation=True,
+)
 def min_points_at_range(range_m, min_samples, alpha_r, range_scaling="reciprocal"):
     """Eq. 2: the range-adaptive minimum number of points N_min(r).
 
@@ -37,16 +46,22 @@ def min_points_at_range(range_m, min_samples, alpha_r, range_scaling="reciprocal
     ----------
     range_m : array-like
         Range of each detection to its sensor, m.
-    min_samples : float
+    min_samples : float >= 1
         N_min,50, the minimum at 50 m (real-valued).
-    alpha_r : float
+    alpha_r : float in [0, 1]
         Slope; 0 gives the fixed ``min_samples``.
     range_scaling : {"reciprocal", "linear"}, default="reciprocal"
+        Any other value raises ``InvalidParameterError`` (a ``ValueError``) naming the parameter.
 
     Returns
     -------
     ndarray of float
     """
+    return _min_points_at_range(range_m, min_samples, alpha_r, range_scaling)
+
+
+def _min_points_at_range(range_m, min_samples, alpha_r, range_scaling):
+    """Eq. 2 without parameter validation, for callers that validated them (the stream calls it per scan)."""
     r = np.clip(np.asarray(range_m, dtype=np.float64), 25.0, 125.0)
     relative = r / 50.0 - 1.0 if range_scaling == "linear" else 50.0 / r - 1.0
     return min_samples * (1.0 + alpha_r * relative)
@@ -269,7 +284,7 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
         if self.alpha_r == 0:
             min_points = np.full(n, float(self.min_samples))
         else:
-            min_points = min_points_at_range(c["range_sc"], self.min_samples, self.alpha_r, self.range_scaling)
+            min_points = _min_points_at_range(c["range_sc"], self.min_samples, self.alpha_r, self.range_scaling)
         return active, min_points, active & (np.abs(c["v_r"]) > self.vr_min)
 
     def _cluster_sequence_causal(self, rows, c, min_points, can_be_core):
