@@ -99,12 +99,105 @@ def test_spatial_and_doppler_comparisons_are_strict_and_time_is_inclusive():
 
 
 def test_box_is_aligned_with_the_car_heading():
-    # Two detections 1.2 m apart along a car heading of 45 degrees: outside a 1 m world-aligned box
-    # diagonal? No: dx = dy = 0.85 fits the world box, but along the car axis the gap is 1.2 m.
+    # dx = dy = 0.85: inside the 1 m box of the world axes (heading 0), but with the car heading 45 degrees
+    # the gap along the car's x axis is (0.85 + 0.85) / sqrt(2) = 1.20 m, outside it.
     X = _frame([(0.0, 0.0, 2.0, 0.0), (0.85, 0.85, 2.0, 0.0)])
     params = dict(metric="box", eps_xy=1.0, min_samples=2, vr_min=-np.inf)
     assert RadarDBSCAN(**params).fit(X).labels_.tolist() == [0, 0]
     assert RadarDBSCAN(**params).fit(X.assign(heading=np.pi / 4)).labels_.tolist() == [-1, -1]
+
+
+@pytest.mark.parametrize(
+    "heading, linked",
+    [
+        # cos 0.3 = 0.95534, sin 0.3 = 0.29552; dx, dy = 0.9, 0.6.
+        # along = cos * dx + sin * dy = 0.85980 + 0.17731 = 1.03711 >= 1: not neighbours.
+        (0.3, False),
+        # heading -0.3: along = 0.85980 - 0.17731 = 0.68249, across = cos * dy - sin * dx = 0.57320 + 0.26597
+        # = 0.83917, both < 1: neighbours.  (At +-pi/4 a square box cannot tell the sign apart.)
+        (-0.3, True),
+    ],
+)
+def test_box_turns_with_the_heading_not_against_it(heading, linked):
+    X = _frame([(0.0, 0.0, 2.0, 0.0), (0.9, 0.6, 2.0, 0.0)]).assign(heading=heading)
+    labels = RadarDBSCAN(metric="box", eps_xy=1.0, min_samples=2, vr_min=-np.inf).fit(X).labels_
+    assert labels.tolist() == ([0, 0] if linked else [-1, -1])
+
+
+def test_rotated_box_is_strict():
+    # Heading pi/2: the car's x axis is the world's y axis, so dy = 1.0 is a gap of exactly eps_xy along it
+    # (cos(pi/2) * 0 + sin(pi/2) * 1.0 = 1.0): not < eps_xy.
+    params = dict(metric="box", eps_xy=1.0, min_samples=2, vr_min=-np.inf)
+    at_eps = _frame([(0.0, 0.0, 2.0, 0.0), (0.0, 1.0, 2.0, 0.0)]).assign(heading=np.pi / 2)
+    inside = _frame([(0.0, 0.0, 2.0, 0.0), (0.0, 0.999, 2.0, 0.0)]).assign(heading=np.pi / 2)
+    assert RadarDBSCAN(**params).fit(at_eps).labels_.tolist() == [-1, -1]
+    assert RadarDBSCAN(**params).fit(inside).labels_.tolist() == [0, 0]
+
+
+@pytest.mark.parametrize("later_heading, linked", [(np.pi / 4, False), (0.0, True)])
+def test_box_takes_the_axes_of_the_later_detection(later_heading, linked):
+    # (0, 0) at t = 0 and (0.85, 0.85) at t = 0.1 s.  Axes of heading 0: |dx| = |dy| = 0.85 < 1, neighbours;
+    # of heading pi/4: along = 1.70 / sqrt(2) = 1.20 >= 1, not.  The later detection's heading decides.
+    earlier_heading = np.pi / 4 - later_heading
+    X = _frame([(0.0, 0.0, 2.0, 0.0), (0.85, 0.85, 2.0, 0.1)]).assign(heading=[earlier_heading, later_heading])
+    labels = RadarDBSCAN(metric="box", eps_xy=1.0, min_samples=2, vr_min=-np.inf).fit(X).labels_
+    assert labels.tolist() == ([0, 0] if linked else [-1, -1])
+
+
+@pytest.mark.parametrize("seed, heading", [(0, 0.3), (1, -0.3), (2, 1.1), (3, -2.5), (4, 2.0)])
+def test_rotated_box_equals_sklearn_chebyshev_dbscan_in_the_car_frame(seed, heading):
+    # Points drawn in the car frame and carried into the world by rotating by +heading (x_world = R(h) x_car):
+    # the box criterion with that heading must cluster them as the plain Chebyshev DBSCAN clusters the
+    # car-frame coordinates (with Doppler scaled so that eps_vr counts like eps_xy).
+    rng = np.random.default_rng(300 + seed)
+    car = np.c_[rng.uniform(0, 8, (250, 2)), rng.normal(0, 3, 250)]
+    eps, eps_vr, min_samples = 0.8, 2.0, 4
+    c, s = np.cos(heading), np.sin(heading)
+    world = _frame(np.c_[5.0 + c * car[:, 0] - s * car[:, 1], -3.0 + s * car[:, 0] + c * car[:, 1], car[:, 2],
+                         np.zeros(250)]).assign(heading=heading)  # fmt: skip
+    scaled = car * [1.0, 1.0, eps / eps_vr]
+    reference = DBSCAN(eps=eps, min_samples=min_samples, metric="chebyshev").fit(scaled)
+    assert len(set(reference.labels_.tolist()) - {-1}) >= 3  # a case with several clusters and noise
+    ours = RadarDBSCAN(metric="box", eps_xy=eps, eps_vr=eps_vr, min_samples=min_samples, **UNRESTRICTED).fit(world)
+    _assert_like_sklearn(ours, reference, scaled, lambda p, Q: np.abs(Q - p).max(axis=1) <= eps)
+
+
+@pytest.mark.parametrize("dv, linked", [(4.9, True), (5.0, False), (6.0, False)])
+def test_eq_4_needs_the_doppler_condition_too(dv, linked):
+    # 0.5 m apart (< eps_xy = 1), Doppler apart by dv: neighbours only when |dv| < eps_vr = 5.
+    X = _frame([(0.0, 0.0, 2.0, 0.0), (0.5, 0.0, 2.0 + dv, 0.0)])
+    labels = RadarDBSCAN(metric="xy", eps_xy=1.0, eps_vr=5.0, min_samples=2, vr_min=-np.inf).fit(X).labels_
+    assert labels.tolist() == ([0, 0] if linked else [-1, -1])
+
+
+@pytest.mark.parametrize("v_r, core", [(0.4, False), (-0.4, False), (0.41, True), (-0.41, True)])
+def test_vr_min_is_a_strict_bound_on_the_absolute_doppler(v_r, core):
+    # Three detections within 0.3 m; each has 2 neighbours + itself >= min_samples = 3, so core exactly
+    # when |v_r| > vr_min = 0.4: |0.4| is not > 0.4.
+    X = _frame([(0.0, 0.0, v_r, 0.0), (0.3, 0.0, v_r, 0.0), (0.0, 0.3, v_r, 0.0)])
+    model = RadarDBSCAN(metric="xy", eps_xy=0.5, min_samples=3, vr_min=0.4).fit(X)
+    assert model.core_sample_indices_.tolist() == ([0, 1, 2] if core else [])
+
+
+@pytest.mark.parametrize("border_x, expected", [(0.0, [0, 0, 1, 1, 1]), (-0.1, [0, 0, 0, 1, 1])])
+def test_a_border_point_joins_its_closest_core_point(border_x, expected):
+    # Cores at x = -0.4 (cluster A, with -0.9) and 0.3 (cluster B, with 0.8), 0.7 m apart: not linked
+    # (eps_xy = 0.6).  The slow middle detection (|v_r| = 0.1 < vr_min) cannot be core; it reaches both cores.
+    # At x = 0: 0.4 m to A's core, 0.3 m to B's -> B.  At x = -0.1: 0.3 m to A's, 0.4 m to B's -> A.
+    # (Doppler differs by 2.9 m/s, 2.9 / eps_vr = 0.058 of the normalised distance: it does not decide.)
+    X = _frame([(-0.9, 0.0, 3.0, 0.0), (-0.4, 0.0, 3.0, 0.0), (border_x, 0.0, 0.1, 0.0), (0.3, 0.0, 3.0, 0.0),
+                (0.8, 0.0, 3.0, 0.0)])  # fmt: skip
+    model = RadarDBSCAN(metric="xy", eps_xy=0.6, eps_vr=50.0, min_samples=3, vr_min=0.4).fit(X)
+    assert model.core_sample_indices_.tolist() == [1, 3]
+    assert model.labels_.tolist() == expected
+
+
+def test_causal_time_window_is_inclusive_too():
+    # Causal: the later detection sees the earlier one when the lag is <= eps_t = 0.25 s and becomes core
+    # (1 neighbour + itself = 2); the earlier one had no past and stays noise.
+    params = dict(metric="xy", causal=True, min_samples=2, vr_min=-np.inf)
+    assert RadarDBSCAN(**params).fit(_frame([(0.0, 0.0, 2.0, 0.0), (0.0, 0.0, 2.0, 0.25)])).labels_.tolist() == [-1, 0]
+    assert RadarDBSCAN(**params).fit(_frame([(0.0, 0.0, 2.0, 0.0), (0.0, 0.0, 2.0, 0.2501)])).labels_.tolist() == [-1, -1]
 
 
 def test_only_fast_enough_detections_become_core_points():
@@ -146,6 +239,32 @@ def test_an_object_tracked_for_20_s_forms_one_cluster():
 def test_eq_2_by_hand_with_alpha_1(r, linear, reciprocal):
     assert min_points_at_range([r], 4.0, 1.0, "linear")[0] == pytest.approx(4.0 * linear)
     assert min_points_at_range([r], 4.0, 1.0, "reciprocal")[0] == pytest.approx(4.0 * reciprocal)
+
+
+@pytest.mark.parametrize(
+    "r, linear, reciprocal",
+    [
+        # N_min(r) = 4 * (1 + 0.5 * rel), rel = clip(r) / 50 - 1 (linear) or 50 / clip(r) - 1 (reciprocal).
+        (25.0, 4 * (1 + 0.5 * -0.5), 4 * (1 + 0.5 * 1.0)),  # 3.0, 6.0
+        (40.0, 4 * (1 + 0.5 * -0.2), 4 * (1 + 0.5 * 0.25)),  # 3.6, 4.5
+        (100.0, 4 * (1 + 0.5 * 1.0), 4 * (1 + 0.5 * -0.5)),  # 6.0, 3.0
+        (125.0, 4 * (1 + 0.5 * 1.5), 4 * (1 + 0.5 * -0.6)),  # 7.0, 2.8
+    ],
+)
+def test_eq_2_by_hand_with_alpha_one_half(r, linear, reciprocal):
+    # At alpha_r = 0.5 the slope shows: alpha_r**2 (0.25) or no alpha_r (1) would give other values.
+    assert min_points_at_range([r], 4.0, 0.5, "linear")[0] == pytest.approx(linear)
+    assert min_points_at_range([r], 4.0, 0.5, "reciprocal")[0] == pytest.approx(reciprocal)
+
+
+def test_range_adaptive_min_points_with_alpha_one_half_decide_core_points():
+    # Three detections within 0.3 m at 100 m, N_min,50 = 4, alpha_r = 0.5 (reciprocal):
+    # N_min = 4 * (1 + 0.5 * (50 / 100 - 1)) = 3.0 -> 2 neighbours + itself = 3 suffice.  At 40 m:
+    # 4 * (1 + 0.5 * 0.25) = 4.5 -> 5 needed, not core.
+    X = _frame([(0.0, 0.0, 3.0, 0.0), (0.3, 0.0, 3.0, 0.0), (0.0, 0.3, 3.0, 0.0)])
+    params = dict(metric="xy", eps_xy=0.5, min_samples=4.0, alpha_r=0.5, vr_min=0.0)
+    assert RadarDBSCAN(**params).fit(X.assign(range_sc=100.0)).core_sample_indices_.tolist() == [0, 1, 2]
+    assert RadarDBSCAN(**params).fit(X.assign(range_sc=40.0)).core_sample_indices_.tolist() == []
 
 
 def test_range_adaptive_min_points_decide_core_points():
