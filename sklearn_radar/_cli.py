@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 import time
 
@@ -16,13 +17,34 @@ def main(argv=None) -> int:
         parser.print_help()
         return 0
     try:
-        return args.run(args)
+        code = args.run(args)
+        sys.stdout.flush()  # a closed pipe shows here, inside the try, rather than at exit
+        return code
     except KeyboardInterrupt:
         print("sklearn-radar: interrupted", file=sys.stderr)
         return 130
+    except BrokenPipeError:
+        # The reader left (``sklearn-radar stats | head -2``): not an error. Nothing more can be written.
+        _silence_stdout()
+        return 0
     except (ValueError, OSError) as error:
         print(f"sklearn-radar: error: {error}", file=sys.stderr)
         return 1
+
+
+def _silence_stdout():
+    """Point standard output at the null device, so that Python's flush at exit does not fail again."""
+    try:
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        os.close(devnull)
+    except (OSError, ValueError, AttributeError):
+        pass
+
+
+def _shown(path):
+    """A path as text that can be printed and written as UTF-8: undecodable bytes appear as ``\\xff``."""
+    return os.fsencode(path).decode("utf-8", "backslashreplace")
 
 
 def _parser():
@@ -38,7 +60,9 @@ def _parser():
         help="write a simulated data set in the RadarScenes layout",
         description="Simulate urban radar recordings and write them as a RadarScenes data folder.",
     )
-    simulate.add_argument("--out", required=True, help="data folder to create (sensors.json, sequences.json, sequence_N/)")
+    simulate.add_argument(
+        "--out", required=True, help="data folder to create (sensors.json, sequences.json, sequence_N/)"
+    )
     simulate.add_argument("--n-sequences", type=int, default=4, help="number of recordings (default: 4)")
     simulate.add_argument("--duration", type=float, default=30.0, help="length of each recording in s (default: 30)")
     simulate.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
@@ -60,11 +84,21 @@ def _parser():
         "scikit-learn baselines; write report.md, results.json, params.json and figures.",
     )
     reproduce.add_argument("--data", help="RadarScenes data folder (default: simulate one)")
-    reproduce.add_argument("--out", default="sklearn-radar-report", help="output folder (default: sklearn-radar-report)")
-    reproduce.add_argument("--n-iter", type=int, help="Bayesian-optimisation iterations per experiment (default 10; 100 with --full)")
-    reproduce.add_argument("--n-jobs", type=int, help="candidates evaluated in parallel")
-    reproduce.add_argument("--experiments", help="comma-separated: filter, 1-13 (ranges like 2-9), filter-effect, baselines")
-    reproduce.add_argument("--full", action="store_true", help="the paper's budget (100 iterations, 30 random) on ~1M detections")
+    reproduce.add_argument(
+        "--out", default="sklearn-radar-report", help="output folder (default: sklearn-radar-report)"
+    )
+    reproduce.add_argument(
+        "--n-iter", type=int, help="Bayesian-optimisation iterations per experiment (default 10; 100 with --full)"
+    )
+    reproduce.add_argument(
+        "--n-jobs", type=int, help="candidates evaluated in parallel (default: one at a time; -1: all cores)"
+    )
+    reproduce.add_argument(
+        "--experiments", help="comma-separated: filter, 1-13 (ranges like 2-9), filter-effect, baselines"
+    )
+    reproduce.add_argument(
+        "--full", action="store_true", help="the paper's budget (100 iterations, 30 random) on ~1M detections"
+    )
     reproduce.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
     reproduce.set_defaults(run=_reproduce)
 
@@ -88,8 +122,12 @@ def _simulate(args) -> int:
     start = time.perf_counter()
     scenes = make_scenes(n_sequences=args.n_sequences, duration=args.duration, random_state=args.seed)
     simulated = time.perf_counter() - start
-    path = write_radarscenes(scenes, args.out, overwrite=args.overwrite)
-    print(f"simulated {len(scenes.data)} detections in {simulated:.2f} s; wrote {path}")
+    try:
+        path = write_radarscenes(scenes, args.out, overwrite=args.overwrite)
+    except FileExistsError:
+        what = "is a file, not a data folder" if os.path.isfile(args.out) else "exists and is not empty"
+        raise FileExistsError(f"{_shown(args.out)} {what}; pass --overwrite to replace it") from None
+    print(f"simulated {len(scenes.data)} detections in {simulated:.2f} s; wrote {_shown(path)}")
     print(format_statistics(*scene_statistics(scenes)))
     return 0
 
@@ -109,7 +147,10 @@ def _reproduce(args) -> int:
     start = time.perf_counter()
     reproduce(args.data, args.out, n_iter=args.n_iter, n_jobs=args.n_jobs, experiments=args.experiments,
               full=args.full, seed=args.seed)  # fmt: skip
-    print(f"wrote {args.out}/report.md, results.json, params.json and figures in {time.perf_counter() - start:.0f} s")
+    print(
+        f"wrote {_shown(args.out)}/report.md, results.json, params.json and figures "
+        f"in {time.perf_counter() - start:.0f} s"
+    )
     return 0
 
 
@@ -117,6 +158,8 @@ def _cluster(args) -> int:
     from .reproduce import cluster_radarscenes
 
     summary = cluster_radarscenes(args.data, args.params, args.out, experiment=args.experiment)
-    print(f"experiment #{summary['experiment']}: {summary['n_detections']} detections in "
-          f"{summary['n_clusters']} clusters; wrote {summary['out']}")
+    print(
+        f"experiment #{summary['experiment']}: {summary['n_detections']} detections in "
+        f"{summary['n_clusters']} clusters; wrote {_shown(summary['out'])}"
+    )
     return 0

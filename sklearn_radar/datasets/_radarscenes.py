@@ -746,7 +746,8 @@ def _is_occupied(path: Path) -> bool:
 
 def _refuse_occupied(path: Path, overwrite: bool) -> None:
     if _is_occupied(path) and not overwrite:
-        raise FileExistsError(f"{path} exists and is not empty; pass overwrite=True to replace it")
+        what = "exists and is not empty" if path.is_dir() else "is a file, not a folder"
+        raise FileExistsError(f"{path} {what}; pass overwrite=True to replace it")
 
 
 #: Temporary folders beside the written one: this prefix, the writer's process id, "-", the folder's name.

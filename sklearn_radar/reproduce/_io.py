@@ -130,12 +130,30 @@ def atomic_write_text(path, text):
 def atomic_write(path, write):
     """Call ``write(binary stream)`` on a temporary sibling of ``path``, then rename it into place."""
     path = Path(path)
-    handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=temporary_prefix(f"{path.name}."), suffix=".tmp")
+    if path.is_dir():
+        raise IsADirectoryError(f"cannot write {path}: it is a folder; give a file name")
+    try:
+        handle, temporary = tempfile.mkstemp(dir=path.parent, prefix=temporary_prefix(f"{path.name}."), suffix=".tmp")
+    except OSError as error:
+        raise _write_error(error, path) from None
     try:
         os.chmod(temporary, file_mode())  # mkstemp creates 0600 whatever the umask
         with os.fdopen(handle, "wb") as stream:
             write(stream)
         os.replace(temporary, path)
-    except BaseException:
+    except BaseException as error:
         Path(temporary).unlink(missing_ok=True)
+        if isinstance(error, OSError):
+            raise _write_error(error, path) from None
         raise
+
+
+def _write_error(error, path):
+    """The OSError of a failed write, naming ``path`` (not the temporary file) and without the errno."""
+    if isinstance(error, FileNotFoundError):
+        reason = f"the folder {path.parent} does not exist"
+    elif isinstance(error, NotADirectoryError):
+        reason = f"{path.parent} is not a folder"
+    else:
+        reason = error.strerror or str(error)
+    return type(error)(f"cannot write {path}: {reason}")

@@ -26,6 +26,7 @@ from __future__ import annotations
 import datetime
 import hashlib
 import json
+import os
 import sys
 import tempfile
 import time
@@ -324,7 +325,8 @@ def _data(data, budget, seed):
     if data is None:
         scenes = make_scenes(n_sequences=budget.n_sequences, duration=budget.duration, random_state=seed)
         return scenes, f"simulated ({budget.n_sequences} sequences x {budget.duration:g} s, seed {seed})"
-    return load_radarscenes(data), f"RadarScenes folder {data}"
+    # The source goes into report.md (UTF-8): an undecodable byte of the path is shown as \xff.
+    return load_radarscenes(data), f"RadarScenes folder {os.fsencode(data).decode('utf-8', 'backslashreplace')}"
 
 
 def _say(run, text):

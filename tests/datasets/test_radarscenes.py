@@ -747,3 +747,11 @@ def test_load_accepts_a_scenes_json_without_sequence_name(written):
     root, bunch = written
     edit_json(root / "sequence_5" / "scenes.json", lambda content: content.pop("sequence_name"))
     assert_bunch_equal(load_radarscenes(root), bunch)
+
+
+def test_writing_onto_a_file_says_it_is_a_file(tmp_path):
+    afile = tmp_path / "afile"
+    afile.write_text("mine")
+    with pytest.raises(FileExistsError, match="is a file"):
+        write_radarscenes(make_test_bunch(), afile)
+    assert afile.read_text() == "mine"
