@@ -1,4 +1,4 @@
-"""FrameTransform against hand-computed geometry, the RadarScenes columns and the official devkit."""
+"""FrameTransform against hand-computed geometry, rigid-body kinematics and the official devkit."""
 
 import numpy as np
 import pandas as pd
@@ -29,6 +29,8 @@ def test_hand_computed_car_and_frame_coordinates():
     # Car heading along world +y: car x -> world +y, car y -> world -x.
     frame = FrameTransform(frame="frame").fit_transform(X)
     np.testing.assert_allclose(frame[["x", "y"]].to_numpy(), [[8.0, 6.0]], atol=1e-12)
+    # The box of RadarDBSCAN follows the car's x axis: pi/2 in the frame system, 0 in the car's own.
+    assert frame["heading"].tolist() == [np.pi / 2] and car["heading"].tolist() == [0.0]
 
 
 def test_doppler_of_a_static_target_is_compensated_to_zero():
@@ -46,6 +48,21 @@ def test_yaw_rate_moves_a_sensor_mounted_off_the_rear_axle():
     assert FrameTransform().fit_transform(X)["v_r"].iloc[0] == pytest.approx(0.0, abs=1e-12)
 
 
+def test_yaw_rate_with_a_laterally_mounted_sensor_by_hand():
+    # Sensor on the right (sensor_x, sensor_y) = (3.0, -0.8); car at 10 m/s turning left at 0.5 rad/s.
+    # v_s = (ego_vx - yaw_rate * sensor_y, yaw_rate * sensor_x) = (10 + 0.4, 1.5) = (10.4, 1.5) m/s.
+    # Line of sight u = (0.6, -0.8) (sensor_yaw -0.5 plus azimuth): v_s . u = 6.24 - 1.2 = 5.04 m/s.
+    # A target receding over ground at 2.0 m/s is measured at vr = 2.0 - 5.04 = -3.04 m/s.
+    # Range 10 m: x = 3.0 + 10 * 0.6 = 9.0, y = -0.8 - 10 * 0.8 = -8.8.
+    sensor_yaw = -0.5
+    azimuth = np.arctan2(-0.8, 0.6) - sensor_yaw
+    X = pd.DataFrame([_detection(range_sc=10.0, azimuth_sc=azimuth, vr=-3.04, sensor_x=3.0, sensor_y=-0.8,
+                                 sensor_yaw=sensor_yaw, ego_vx=10.0, ego_yaw_rate=0.5)])  # fmt: skip
+    Xt = FrameTransform(frame="car").fit_transform(X)
+    assert Xt["v_r"].iloc[0] == pytest.approx(2.0, abs=1e-12)
+    np.testing.assert_allclose(Xt[["x", "y"]].to_numpy(), [[9.0, -8.8]], atol=1e-12)
+
+
 def test_a_static_point_stays_in_place_in_the_frame_system_but_moves_in_the_car_system():
     # The ego drives along world x at 10 m/s; a static point at world (30, 4) is seen from three scans 0.1 s apart.
     rows = []
@@ -60,16 +77,61 @@ def test_a_static_point_stays_in_place_in_the_frame_system_but_moves_in_the_car_
     np.testing.assert_allclose(np.diff(car["x"]), [-1.0, -1.0], atol=1e-9)
 
 
-def test_results_agree_with_the_radarscenes_columns(scenes):
-    X = scenes.data
+def _rigid_body_detections(n, seed):
+    """Detections made from world geometry alone, with what each must give.
+
+    A car drives at ego_vx along its heading and turns at ego_yaw_rate (its rear axle on a circle); a
+    sensor is mounted on it at (sensor_x, sensor_y, sensor_yaw); a target moves in a straight line.  The
+    measured vr is the rate of change of the sensor-target distance, taken by a central difference of
+    positions -- none of FrameTransform's formulas is used.  Expected: the target's world (sequence)
+    position, its position in the car frame, and its velocity over ground along the line of sight.
+    """
+    rng = np.random.default_rng(seed)
+    psi0 = rng.uniform(-np.pi, np.pi, n)
+    omega = rng.choice([-1.0, 1.0], n) * rng.uniform(0.05, 1.0, n)
+    speed = rng.uniform(0.0, 20.0, n)
+    ego0 = rng.uniform(-50.0, 50.0, (n, 2))
+    mount = np.c_[rng.uniform(-1.0, 4.0, n), rng.uniform(-1.0, 1.0, n)]
+    sensor_yaw = rng.uniform(-np.pi, np.pi, n)
+    target0 = ego0 + rng.uniform(3.0, 60.0, n)[:, None] * np.c_[np.cos(angle := rng.uniform(-np.pi, np.pi, n)), np.sin(angle)]
+    target_velocity = rng.uniform(-15.0, 15.0, (n, 2))
+
+    def sensor(t):
+        psi = psi0 + omega * t
+        ego = ego0 + (speed / omega)[:, None] * np.c_[np.sin(psi) - np.sin(psi0), np.cos(psi0) - np.cos(psi)]
+        c, s = np.cos(psi), np.sin(psi)
+        return ego + np.c_[c * mount[:, 0] - s * mount[:, 1], s * mount[:, 0] + c * mount[:, 1]]
+
+    def distance(t):
+        return np.linalg.norm(target0 + target_velocity * t - sensor(t), axis=1)
+
+    h = 1e-5
+    sight = target0 - sensor(0.0)
+    azimuth = np.mod(np.arctan2(sight[:, 1], sight[:, 0]) - psi0 - sensor_yaw + np.pi, 2 * np.pi) - np.pi
+    timestamp = rng.integers(0, 10**9, n)
+    X = pd.DataFrame({
+        "range_sc": distance(0.0), "azimuth_sc": azimuth, "vr": (distance(h) - distance(-h)) / (2 * h),
+        "timestamp": timestamp, "sensor_x": mount[:, 0], "sensor_y": mount[:, 1], "sensor_yaw": sensor_yaw,
+        "ego_x_seq": ego0[:, 0], "ego_y_seq": ego0[:, 1], "ego_yaw_seq": psi0, "ego_vx": speed,
+        "ego_yaw_rate": omega, "sequence": 1,
+    })  # fmt: skip
+    relative = target0 - ego0
+    c, s = np.cos(psi0), np.sin(psi0)
+    car = np.c_[c * relative[:, 0] + s * relative[:, 1], -s * relative[:, 0] + c * relative[:, 1]]
+    over_ground = np.sum(target_velocity * sight, axis=1) / np.linalg.norm(sight, axis=1)
+    return X, target0, car, over_ground, timestamp * 1e-6
+
+
+@pytest.mark.parametrize("seed", range(3))
+def test_results_agree_with_rigid_body_geometry(seed):
+    X, world, car_position, over_ground, t = _rigid_body_detections(300, seed)
     car = FrameTransform(frame="car").fit_transform(X)
     frame = FrameTransform(frame="frame").fit_transform(X)
-    np.testing.assert_allclose(car["x"], X["x_cc"], atol=1e-4)
-    np.testing.assert_allclose(car["y"], X["y_cc"], atol=1e-4)
-    np.testing.assert_allclose(frame["x"], X["x_seq"], atol=1e-3)
-    np.testing.assert_allclose(frame["y"], X["y_seq"], atol=1e-3)
-    np.testing.assert_allclose(frame["v_r"], X["vr_compensated"], atol=1e-4)
-    np.testing.assert_allclose(frame["t"], X["timestamp"] * 1e-6)
+    np.testing.assert_allclose(car[["x", "y"]].to_numpy(), car_position, atol=1e-9)
+    np.testing.assert_allclose(frame[["x", "y"]].to_numpy(), world, atol=1e-9)
+    np.testing.assert_allclose(frame["v_r"], over_ground, atol=1e-5)  # the central difference's error is ~1e-9
+    np.testing.assert_allclose(car["v_r"], over_ground, atol=1e-5)  # v_r does not depend on the frame
+    np.testing.assert_allclose(frame["t"], t)
 
 
 def test_frame_coordinates_map_back_to_car_coordinates_with_the_devkit(scenes):
