@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from numbers import Integral, Real
+from typing import ClassVar
 
 import numpy as np
 from joblib import Parallel, delayed
@@ -167,7 +168,7 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
     array([ 0,  0,  0, -1])
     """
 
-    _parameter_constraints: dict = {
+    _parameter_constraints: ClassVar[dict] = {
         "metric": [StrOptions(set(METRIC_CODES))],
         "eps_xy": [Interval(Real, 0, None, closed="neither")],
         "eps_vr": [Interval(Real, 0, None, closed="neither")],
