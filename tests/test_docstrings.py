@@ -76,10 +76,6 @@ KNOWN_GAPS = {
     "sklearn_radar.cluster.WindowedDBSCAN.fit": {"PR01", "RT01"},
     "sklearn_radar.cluster.WindowedHDBSCAN": {"PR07"},
     "sklearn_radar.cluster.WindowedHDBSCAN.fit": {"PR01", "RT01"},
-    "sklearn_radar.preprocessing.DopplerDensityFilter.fit": {"PR07"},
-    "sklearn_radar.preprocessing.DopplerDensityFilter.transform": {"PR07"},
-    "sklearn_radar.preprocessing.FrameTransform.fit": {"PR07"},
-    "sklearn_radar.preprocessing.FrameTransform.transform": {"PR07"},
     "sklearn_radar.reproduce.parse_experiments": {"PR01", "RT01"},
 }
 

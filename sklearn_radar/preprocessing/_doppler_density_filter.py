@@ -280,6 +280,8 @@ class DopplerDensityFilter(TransformerMixin, BaseEstimator):
         Parameters
         ----------
         X : DataFrame or array-like of shape (n_detections, n_columns)
+            Working detections (the output of :class:`FrameTransform`), or an array in the order
+            of :data:`~sklearn_radar._schema.WORK_LAYOUT`.
         y : None
             Ignored.
 
@@ -297,6 +299,8 @@ class DopplerDensityFilter(TransformerMixin, BaseEstimator):
         Parameters
         ----------
         X : DataFrame or array-like of shape (n_detections, n_columns)
+            Working detections (the output of :class:`FrameTransform`), or an array in the order
+            of :data:`~sklearn_radar._schema.WORK_LAYOUT`.
 
         Returns
         -------
@@ -306,10 +310,10 @@ class DopplerDensityFilter(TransformerMixin, BaseEstimator):
         check_is_fitted(self)
         ratios, min_neighbors = self._rule()
         X, c = read_columns(self, X, FILTER_READS, reset=False)
-        counts = neighbor_counts(
+        counts = _neighbor_counts(
             c["x"], c["y"], c["t"], c["sequence"], self.d_xy, self.dt, self.causal, int(min_neighbors.max()), self.n_jobs
         )
-        keep = doppler_density_keep(c["v_r"], counts, self.vr_threshold, ratios, min_neighbors)
+        keep = _doppler_density_keep(c["v_r"], counts, self.vr_threshold, ratios, min_neighbors)
         return write_columns(X, {"keep": keep if hasattr(X, "columns") else keep.astype(np.float64)})
 
     def _rule(self):

@@ -87,6 +87,8 @@ class FrameTransform(TransformerMixin, BaseEstimator):
         Parameters
         ----------
         X : DataFrame or array-like of shape (n_detections, n_columns)
+            Raw detections: the detection table of :mod:`sklearn_radar._schema`, or an array in the
+            order of :data:`~sklearn_radar._schema.RAW_LAYOUT`.
         y : None
             Ignored.
 
@@ -103,6 +105,8 @@ class FrameTransform(TransformerMixin, BaseEstimator):
         Parameters
         ----------
         X : DataFrame or array-like of shape (n_detections, n_columns)
+            Raw detections: the detection table of :mod:`sklearn_radar._schema`, or an array in the
+            order of :data:`~sklearn_radar._schema.RAW_LAYOUT`.
 
         Returns
         -------
