@@ -60,6 +60,28 @@ def test_property_4_without_background_it_is_sklearns_v_measure(case):
     )
 
 
+@settings(max_examples=60, deadline=None)
+@given(labelings, st.sampled_from([0.25, 0.5, 2.0, 4.0]))
+def test_beta_weights_homogeneity_as_in_sklearn(case, beta):
+    truth, pred = (np.array(v) for v in case)
+    truth = truth + 1  # no background: scikit-learn's V-measure with the same beta is the reference
+    assert radar_homogeneity_completeness_v_measure(truth, pred, beta=beta) == pytest.approx(
+        homogeneity_completeness_v_measure(truth, pred, beta=beta), abs=1e-12
+    )
+
+
+def test_beta_by_hand_with_background():
+    # Every cluster is pure (h = 1).  Completeness over the objects [0, 0, 1, 1] -> [0, 0, 1, 2]:
+    # H(K) = 1.5 ln 2, H(K|C) = 0.5 ln 2, so c = 1 - 1/3 = 2/3.
+    # V_beta = (1 + beta) h c / (beta h + c); beta = 2: 3 * 2/3 / (2 + 2/3) = 0.75
+    # (weighting completeness instead would give 3 * 2/3 / (1 + 4/3) = 6/7).
+    truth = np.array([0, 0, 1, 1, -1, -1])
+    pred = np.array([0, 0, 1, 2, -1, 3])
+    h, c, v = radar_homogeneity_completeness_v_measure(truth, pred, beta=2.0)
+    assert (h, c, v) == pytest.approx((1.0, 2 / 3, 0.75), abs=1e-12)
+    assert radar_v_measure(truth, pred, beta=2.0) == pytest.approx(0.75, abs=1e-12)
+
+
 def test_cluster_ids_of_different_sequences_are_different_clusters():
     truth = np.array([0, 0, 1, 1])
     pred = np.array([0, 0, 0, 0])  # the same id in two sequences
