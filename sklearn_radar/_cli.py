@@ -6,6 +6,7 @@ import argparse
 import os
 import sys
 import time
+from pathlib import Path
 
 from . import __version__
 
@@ -125,7 +126,14 @@ def _simulate(args) -> int:
     try:
         path = write_radarscenes(scenes, args.out, overwrite=args.overwrite)
     except FileExistsError:
-        what = "is a file, not a data folder" if os.path.isfile(args.out) else "exists and is not empty"
+        from .reproduce._io import blocking_file
+
+        blocking = blocking_file(args.out)
+        if blocking is not None and blocking != Path(args.out):
+            raise FileExistsError(
+                f"cannot create {_shown(args.out)}: {_shown(blocking)} is a file, not a folder"
+            ) from None
+        what = "is a file, not a data folder" if blocking is not None else "exists and is not empty"
         raise FileExistsError(f"{_shown(args.out)} {what}; pass --overwrite to replace it") from None
     print(f"simulated {len(scenes.data)} detections in {simulated:.2f} s; wrote {_shown(path)}")
     print(format_statistics(*scene_statistics(scenes)))

@@ -49,6 +49,8 @@ _DROP = object()
         ({"best": "8", "experiments": {"8": _setting(experiment=_DROP)}}, "'experiment'"),
         ({"best": "8", "experiments": {"8": _setting(params=["a"])}}, "'params'"),
         ({"best": "8", "experiments": {"8": _setting(params={"cluster__nosuch": 1})}}, "cluster__nosuch"),
+        ({"best": "8", "experiments": {"8": _setting(params={"cluster__eps_xyv": "big"})}}, "eps_xyv"),
+        ({"best": "8", "experiments": {"8": _setting(params={"cluster__eps_xyv": -1})}}, "eps_xyv"),
         ({"best": "8", "experiments": {"8": _setting(experiment="eight")}}, "'experiment'"),
         ({"best": "8", "experiments": {"8": _setting(experiment=99)}}, "'experiment'"),
         ({"best": "8", "experiments": {"8": _setting(experiment=True)}}, "'experiment'"),
@@ -260,6 +262,18 @@ def test_simulate_onto_a_file_says_it_is_a_file_and_names_the_option(tmp_path, c
     assert main(["simulate", "--out", str(full), "--n-sequences", "1", "--duration", "1"]) == 1
     err = _one_line_error(capsys)
     assert "not empty" in err and "--overwrite" in err and "overwrite=True" not in err
+    assert main(["simulate", "--out", str(afile / "sim"), "--n-sequences", "1", "--duration", "1"]) == 1
+    err = _one_line_error(capsys)
+    assert f"{afile} is a file" in err and "Errno" not in err
+
+
+@pytest.mark.parametrize("below", [False, True], ids=["the file", "below it"])
+def test_reproduce_out_on_a_file_says_it_is_a_file(two_folder, tmp_path, capsys, below):
+    afile = tmp_path / "afile"
+    afile.write_text("mine")
+    assert main(_reproduce_argv(two_folder, afile / "r" if below else afile)) == 1
+    err = _one_line_error(capsys)
+    assert "is a file" in err and "Errno" not in err and afile.read_text() == "mine"
 
 
 @pytest.mark.parametrize("where", ["missing folder", "a folder", "a file as folder"])

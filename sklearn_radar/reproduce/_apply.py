@@ -6,6 +6,7 @@ import json
 from pathlib import Path
 
 import numpy as np
+from sklearn.base import BaseEstimator
 
 from .._schema import LABELS, STATIC_LABEL
 from ..datasets import load_radarscenes
@@ -141,10 +142,15 @@ def _pipeline(setting, path):
     if unknown:
         raise ValueError(f"{where}: key 'params' holds parameters that experiment #{number} does not have: {unknown}")
     try:
-        return experiment_pipeline(number, params=params, stage1_params=stage1_params)
+        pipeline = experiment_pipeline(number, params=params, stage1_params=stage1_params)
+        # Check every value now, before the data are loaded, rather than when the pipeline is fitted.
+        for estimator in [pipeline, *pipeline.get_params(deep=True).values()]:
+            if isinstance(estimator, BaseEstimator) and hasattr(estimator, "_validate_params"):
+                estimator._validate_params()
     except (ValueError, TypeError) as error:
         first_line = str(error).splitlines()[0] if str(error) else type(error).__name__
         raise ValueError(f"{where}: cannot build experiment #{number}'s pipeline: {first_line}") from None
+    return pipeline
 
 
 def write_predictions(uuids, labels, out):

@@ -38,8 +38,21 @@ def check_writable(folder):
             pass
     except OSError as error:
         remove_empty_folders(created)
-        raise OSError(f"cannot write to the output folder {folder}: {error.strerror or error}") from None
+        blocking = blocking_file(folder)
+        if blocking is not None:
+            reason = "it is a file" if blocking == folder else f"{blocking} is a file, not a folder"
+        else:
+            reason = error.strerror or str(error)
+        raise OSError(f"cannot write to the output folder {folder}: {reason}") from None
     return created
+
+
+def blocking_file(folder):
+    """``folder`` or its first ancestor that exists and is not a folder (so ``folder`` cannot be made); else None."""
+    for candidate in (Path(folder), *Path(folder).parents):
+        if candidate.exists() or candidate.is_symlink():
+            return None if candidate.is_dir() else candidate
+    return None
 
 
 def remove_empty_folders(folders):
