@@ -344,3 +344,19 @@ def test_sigint_during_the_start_up_imports_prints_no_traceback(tmp_path):
     _, err = process.communicate(timeout=60)
     assert "Traceback" not in err.decode(), err.decode()
     assert process.returncode == 130
+
+
+@pytest.mark.parametrize("error, status, code", [(KeyboardInterrupt, "interrupted", 130), (ValueError, "failed", 1)])
+def test_an_interrupted_or_failed_run_is_marked_so(two_folder, tmp_path, monkeypatch, capsys, error, status, code):
+    import sklearn_radar.reproduce._run as run_module
+
+    def fail(*args, **kwargs):
+        raise error("stopped here")
+
+    monkeypatch.setitem(run_module._RUNNERS, "filter-effect", fail)
+    out = tmp_path / "out"
+    argv = ["reproduce", "--data", str(two_folder), "--out", str(out), "--experiments", "1,filter-effect"]
+    assert main(argv) == code
+    marker = _run_marker(out)
+    assert marker["status"] == status and marker["complete"] is False
+    assert not [p for p in out.iterdir() if p.name.startswith(".")]
