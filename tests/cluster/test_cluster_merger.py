@@ -55,6 +55,30 @@ def test_an_object_split_by_a_gap_of_300_ms_is_merged(mode):
     assert set(model.labels_.tolist()) == {0}
 
 
+@pytest.mark.parametrize("eps_phi, merged", [(0.4, True), (0.25, False)])
+def test_eq_6_compares_direction_and_speed_not_the_velocity_vector(eps_phi, merged):
+    # After the gap the car drives on at the same speed, 10 m/s, turned by 0.3 rad: (10, 0) -> (9.553, 2.955).
+    # Eq. 6: dphi = 0.3 and dv = | |v_A| - |v_B| | = 0 < eps_v = 1.0, so it merges when dphi < eps_phi.
+    # (The norm of the velocity difference, 2 * 10 * sin(0.15) = 2.99 m/s, would refuse it.)
+    turned = 10.0 * np.array([np.cos(0.3), np.sin(0.3)])
+    start = np.array([20.0 + 10.0 * 1.3, 5.0]) - turned * 1.3  # where the first part would be at t = 1.3 s
+    X = pd.concat([_car(SCANS, (20.0, 5.0), (10.0, 0.0)), _car(AFTER_GAP, tuple(start), tuple(turned))], ignore_index=True)
+    model = ClusterMerger(mode="velocity", eps_d=1.0, eps_phi=eps_phi, eps_v=1.0, eps_t2=0.35, stage1=STAGE1).fit(X)
+    assert len(set(model.stage1_labels_.tolist())) == 2
+    assert len(set(model.labels_.tolist())) == (1 if merged else 2)
+
+
+@pytest.mark.parametrize("min_samples, merged", [(1, True), (2, True), (3, False)])
+def test_min_samples_of_the_second_dbscan_counts_the_cluster_itself(min_samples, merged):
+    # Two stage-1 clusters and one merge edge: each has 1 partner + itself = 2 clusters, so both are core
+    # (and merge) for min_samples <= 2; for 3 neither is core and the edge merges nothing.
+    X = _split_by_a_gap()
+    model = ClusterMerger(mode="continuation", eps_d=1.0, eps_v=1.0, eps_t2=0.35, min_samples=min_samples,
+                          stage1=STAGE1).fit(X)  # fmt: skip
+    assert len(model.merges_) == 1
+    assert len(set(model.labels_.tolist())) == (1 if merged else 2)
+
+
 def test_a_long_truck_split_along_its_length_is_merged_by_velocity():
     # 3.5 m between the halves: more than the 1 m + 8 m/s x 0.25 s stage 1 can bridge over time.
     front = _car(SCANS, (27.5, 5.0), (8.0, 0.0), length=4.0)
