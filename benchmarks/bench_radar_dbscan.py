@@ -63,8 +63,12 @@ def load(path, n):
 def window_features(d):
     """sklearn features whose Chebyshev DBSCAN equals the box-and-time criterion."""
     p = WINDOW_PARAMS
-    return np.c_[d["x"] + SEPARATION * d["sequence"], d["y"], d["v_r"] * p["eps_xy"] / p["eps_vr"],
-                 (d["t"] - d["t"].min()) * p["eps_xy"] / p["eps_t"]]  # fmt: skip
+    return np.c_[
+        d["x"] + SEPARATION * d["sequence"],
+        d["y"],
+        d["v_r"] * p["eps_xy"] / p["eps_vr"],
+        (d["t"] - d["t"].min()) * p["eps_xy"] / p["eps_t"],
+    ]
 
 
 def euclid_windows(d):
@@ -112,7 +116,6 @@ class PeakMemory:
         self._thread.join()
         self._peak = max(self._peak, self._rss())
         self.mb = (self._peak - self._start) / 2**20
-
 
 
 def child(method, path, n, out):
@@ -212,7 +215,7 @@ def child(method, path, n, out):
         from sklearn_radar.cluster import ScanStream
 
         params = dict(metric="xyv", eps_xyv=1.04, vr_scale=1.03, min_samples=3.87, vr_min=1.0)
-        first = (d["sequence"] == d["sequence"][0])
+        first = d["sequence"] == d["sequence"][0]
         scans = list(pd.Series(np.arange(first.sum())).groupby(d["timestamp"][first], sort=True).indices.values())
         arrays = [(d["x"][r], d["y"][r], d["v_r"][r], d["t"][r[0]]) for r in scans]
         frames = [frame.iloc[r] for r in scans]
@@ -220,7 +223,7 @@ def child(method, path, n, out):
             for warm_up in (True, False):
                 stream, model = ScanStream(RadarDBSCAN(**params)), RadarDBSCAN(**params)
                 latencies = []
-                for scan, scan_frame in zip(arrays, frames):
+                for scan, scan_frame in zip(arrays, frames, strict=True):
                     start = time.perf_counter()
                     stream.update(*scan) if kind == "arrays" else model.partial_fit(scan_frame)
                     latencies.append(time.perf_counter() - start)
@@ -240,8 +243,12 @@ def run_child(method, path, n):
     with tempfile.NamedTemporaryFile(suffix=".npz", delete=False) as out:
         name = out.name
     try:
-        done = subprocess.run([sys.executable, __file__, "--child", method, path, str(n), name],
-                              capture_output=True, text=True, timeout=3600)  # fmt: skip
+        done = subprocess.run(
+            [sys.executable, __file__, "--child", method, path, str(n), name],
+            capture_output=True,
+            text=True,
+            timeout=3600,
+        )
         if done.returncode != 0:
             return {"error": done.stderr.strip().splitlines()[-1] if done.stderr else "failed"}, None
         result = json.loads(done.stdout.strip().splitlines()[-1])
@@ -256,7 +263,7 @@ def same_clusters(a, b):
     (la, ca), (lb, cb) = a, b
     if not np.array_equal(np.sort(ca), np.sort(cb)) or not np.array_equal(la == -1, lb == -1):
         return False
-    pairs = set(zip(la[ca].tolist(), lb[ca].tolist()))
+    pairs = set(zip(la[ca].tolist(), lb[ca].tolist(), strict=True))
     return len(pairs) == len(set(la[ca].tolist())) == len(set(lb[ca].tolist()))
 
 
@@ -278,21 +285,28 @@ def main():
         above = lambda r: r.get("peak_mb", float("nan"))  # noqa: E731
         print("memory: peak growth of resident memory during the clustering call itself, MB\n")
         print("1. identical problems (detections/s; ratio = our speed / theirs; 'same' = identical clusters)")
-        print(f"{'problem':<10} {'n':>9} {'ours 1 thr':>12} {'ours 2 thr':>12} {'sklearn':>12} {'dbscan pkg':>12}"
-              f" {'x sklearn':>10} {'x dbscan':>9} {'same':>5} {'MB ours':>8} {'MB sklearn':>10}")  # fmt: skip
+        print(
+            f"{'problem':<10} {'n':>9} {'ours 1 thr':>12} {'ours 2 thr':>12} {'sklearn':>12} {'dbscan pkg':>12}"
+            f" {'x sklearn':>10} {'x dbscan':>9} {'same':>5} {'MB ours':>8} {'MB sklearn':>10}"
+        )
         for problem in ("window", "euclid"):
             for n in args.sizes:
                 ours, ours_labels = run_child(f"ours:{problem}:1", path, n)
                 ours2, _ = run_child(f"ours:{problem}:2", path, n)
                 ref, ref_labels = run_child(f"sklearn:{problem}", path, n)
-                pkg, pkg_labels = (run_child("dbscan:euclid", path, n) if problem == "euclid" else ({}, None))
+                pkg, pkg_labels = run_child("dbscan:euclid", path, n) if problem == "euclid" else ({}, None)
                 same = ref_labels is not None and same_clusters(ours_labels, ref_labels)
                 if pkg_labels is not None:
                     same = same and same_clusters(ours_labels, pkg_labels)
-                rate = lambda r: n / r["seconds"] if "seconds" in r else float("nan")  # noqa: E731
-                print(f"{problem:<10} {n:>9,} {rate(ours):>12,.0f} {rate(ours2):>12,.0f} {rate(ref):>12,.0f}"
-                      f" {rate(pkg):>12,.0f} {rate(ours) / rate(ref):>9.1f}x {rate(ours) / rate(pkg):>8.2f}x"
-                      f" {str(same):>5} {above(ours):>8.0f} {above(ref):>10.0f}")  # fmt: skip
+
+                def rate(r, n=n):
+                    return n / r["seconds"] if "seconds" in r else float("nan")
+
+                print(
+                    f"{problem:<10} {n:>9,} {rate(ours):>12,.0f} {rate(ours2):>12,.0f} {rate(ref):>12,.0f}"
+                    f" {rate(pkg):>12,.0f} {rate(ours) / rate(ref):>9.1f}x {rate(ours) / rate(pkg):>8.2f}x"
+                    f" {same!s:>5} {above(ours):>8.0f} {above(ref):>10.0f}"
+                )
                 for r in (ours, ref, pkg):
                     if "error" in r:
                         print("   error:", r["error"])
@@ -300,8 +314,12 @@ def main():
         n = max(args.sizes)
         for n_jobs in (1, 2):
             result, _ = run_child(f"pipeline:{n_jobs}", path, n)
-            print(f"\n2. DopplerDensityFilter + RadarDBSCAN (paper's best setting #8), {n:,} detections, n_jobs={n_jobs}: "
-                  f"{result['seconds']:.2f} s = {n / result['seconds']:,.0f} detections/s, +{above(result):.0f} MB", end="")  # fmt: skip
+            print(
+                f"\n2. DopplerDensityFilter + RadarDBSCAN (paper's best setting #8), {n:,} detections, "
+                f"n_jobs={n_jobs}: "
+                f"{result['seconds']:.2f} s = {n / result['seconds']:,.0f} detections/s, +{above(result):.0f} MB",
+                end="",
+            )
         print()
 
         print("\n3. dense static clutter: extra detections in 2 m x 2 m within 0.25 s, on top of 100,000")
@@ -309,17 +327,23 @@ def main():
         for n_dense in (0, 5_000, 20_000):
             ours, _ = run_child(f"dense:ours:{n_dense}", path, 100_000)
             ref, _ = run_child(f"dense:sklearn:{n_dense}", path, 100_000)
-            print(f"{n_dense:>8,} {ours.get('seconds', float('nan')):>8.2f} {above(ours):>8.0f}"
-                  f" {ref.get('seconds', float('nan')):>10.2f} {above(ref):>11.0f}")  # fmt: skip
+            print(
+                f"{n_dense:>8,} {ours.get('seconds', float('nan')):>8.2f} {above(ours):>8.0f}"
+                f" {ref.get('seconds', float('nan')):>10.2f} {above(ref):>11.0f}"
+            )
 
         result, _ = run_child("stream", path, n)
         budget = 0.060 / 4
-        print(f"\n4. streaming, one scan per call ({result['scans']} scans of {result['detections_per_scan']:.1f} "
-              f"detections); budget {1e3 * budget:.0f} ms per scan (60 ms cycle, 4 sensors)")  # fmt: skip
+        print(
+            f"\n4. streaming, one scan per call ({result['scans']} scans of {result['detections_per_scan']:.1f} "
+            f"detections); budget {1e3 * budget:.0f} ms per scan (60 ms cycle, 4 sensors)"
+        )
         for kind, name in (("arrays", "ScanStream.update (arrays)"), ("frames", "partial_fit (DataFrame)")):
             median, p99 = result[f"{kind}_median"], result[f"{kind}_p99"]
-            print(f"   {name:<28} median {1e6 * median:6.0f} µs ({budget / median:5.0f}x real time), "
-                  f"p99 {1e6 * p99:6.0f} µs ({budget / p99:5.0f}x)")
+            print(
+                f"   {name:<28} median {1e6 * median:6.0f} µs ({budget / median:5.0f}x real time), "
+                f"p99 {1e6 * p99:6.0f} µs ({budget / p99:5.0f}x)"
+            )
 
 
 if __name__ == "__main__":

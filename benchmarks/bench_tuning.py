@@ -64,15 +64,26 @@ def main():
     parser.add_argument("--experiment", type=int, default=8, help="stage-1 experiment to tune (2-9)")
     parser.add_argument("--n-iter", type=int, default=100)
     parser.add_argument("--n-initial-points", type=int, default=30)
-    parser.add_argument("--acq-optimizer", default="auto", choices=["auto", "lbfgs", "sampling"],
-                        help="skopt's acquisition optimiser (auto = skopt's default, L-BFGS for a GP)")
+    parser.add_argument(
+        "--acq-optimizer",
+        default="auto",
+        choices=["auto", "lbfgs", "sampling"],
+        help="skopt's acquisition optimiser (auto = skopt's default, L-BFGS for a GP)",
+    )
     parser.add_argument("--cv", type=int, default=3, help="GroupKFold folds inside the training half")
     parser.add_argument("--n-candidates", type=int, default=10, help="candidates per stage-1 caching measurement")
-    parser.add_argument("--n-stage2-candidates", type=int, default=10,
-                        help="candidates per stage-2 caching measurement (0: skip stage 2)")
-    parser.add_argument("--stage2-base", default="paper", choices=["paper", "tuned"],
-                        help="stage-1 setting under stage 2: #8 of Table III (the paper's base for #12/#13) "
-                             "or the tuned one")
+    parser.add_argument(
+        "--n-stage2-candidates",
+        type=int,
+        default=10,
+        help="candidates per stage-2 caching measurement (0: skip stage 2)",
+    )
+    parser.add_argument(
+        "--stage2-base",
+        default="paper",
+        choices=["paper", "tuned"],
+        help="stage-1 setting under stage 2: #8 of Table III (the paper's base for #12/#13) or the tuned one",
+    )
     parser.add_argument("--n-jobs", type=int, default=None, help="parallel fits of the tuning run")
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--quiet", action="store_true", help="no per-iteration progress lines")
@@ -106,17 +117,29 @@ def main():
 
     number = args.experiment
     add("#1 expert setting (CCS, box)", None, test_score(experiment_pipeline(1)), None, "paper: 67.57 %")
-    add("#1 expert setting in FCS", None, test_score(experiment_pipeline(1, params={"frame__frame": "frame"})), None, "")
-    add(f"#{number} paper's optimum", None, test_score(experiment_pipeline(number)), None,
-        f"paper: {get_experiment(number).v1_percent} %")
+    add(
+        "#1 expert setting in FCS", None, test_score(experiment_pipeline(1, params={"frame__frame": "frame"})), None, ""
+    )
+    add(
+        f"#{number} paper's optimum",
+        None,
+        test_score(experiment_pipeline(number)),
+        None,
+        f"paper: {get_experiment(number).v1_percent} %",
+    )
 
     cache = tempfile.mkdtemp(prefix="bench_tuning_")
     try:
         # --- the paper's tuning run ------------------------------------------------------------
         search = make_bayes_search(
-            experiment_pipeline(number, memory=os.path.join(cache, "run")), search_space(number),
-            n_iter=args.n_iter, n_initial_points=args.n_initial_points, cv=args.cv, n_jobs=args.n_jobs,
-            random_state=args.seed, verbose=0 if args.quiet else 1,
+            experiment_pipeline(number, memory=os.path.join(cache, "run")),
+            search_space(number),
+            n_iter=args.n_iter,
+            n_initial_points=args.n_initial_points,
+            cv=args.cv,
+            n_jobs=args.n_jobs,
+            random_state=args.seed,
+            verbose=0 if args.quiet else 1,
             optimizer_kwargs={"acq_optimizer": args.acq_optimizer},
         )
         search.set_params(progress=False if args.quiet else f"#{number}")
@@ -124,25 +147,44 @@ def main():
         search.fit(X_train, y_train, groups=g_train)
         wall = time.perf_counter() - start
         tuned = dict(search.best_params_)
-        evaluation = float(np.sum(search.cv_results_["mean_fit_time"] + search.cv_results_["mean_score_time"]) * args.cv)
+        evaluation = float(
+            np.sum(search.cv_results_["mean_fit_time"] + search.cv_results_["mean_score_time"]) * args.cv
+        )
         add(
             f"#{number} tuned: {args.n_iter} it. ({args.n_initial_points} random), {args.cv}-fold GroupKFold",
-            search.best_score_, test_score(experiment_pipeline(number, params=tuned)), wall,
+            search.best_score_,
+            test_score(experiment_pipeline(number, params=tuned)),
+            wall,
             f"{wall / args.n_iter:.1f} s/it.; fits+scoring {evaluation:.0f} s, rest skopt; "
             f"acq_optimizer={args.acq_optimizer}, n_jobs={args.n_jobs}",
         )
-        print("   tuned setting: " + ", ".join(f"{k.split('__')[1]}={v:.3g}" for k, v in sorted(tuned.items())), flush=True)
+        print(
+            "   tuned setting: " + ", ".join(f"{k.split('__')[1]}={v:.3g}" for k, v in sorted(tuned.items())),
+            flush=True,
+        )
         shutil.rmtree(os.path.join(cache, "run"), ignore_errors=True)
 
         # --- stage 1: Pipeline(memory=...) -----------------------------------------------------
         timings = {}
         for label, memory in (("no cache", None), ("Pipeline(memory)", os.path.join(cache, "s1"))):
-            seconds, timed = _timed_search(experiment_pipeline(number, memory=memory), search_space(number),
-                                           args.n_candidates, X_train, y_train, g_train, args.seed, args.cv)
+            seconds, timed = _timed_search(
+                experiment_pipeline(number, memory=memory),
+                search_space(number),
+                args.n_candidates,
+                X_train,
+                y_train,
+                g_train,
+                args.seed,
+                args.cv,
+            )
             timings[label] = seconds
-            add(f"stage 1 #{number}, {args.n_candidates} random candidates, {label}",
-                max(timed.cv_results_["mean_test_score"]), None, seconds,
-                "" if memory is None else f"speed-up {timings['no cache'] / seconds:.2f}x (cold cache)")
+            add(
+                f"stage 1 #{number}, {args.n_candidates} random candidates, {label}",
+                max(timed.cv_results_["mean_test_score"]),
+                None,
+                seconds,
+                "" if memory is None else f"speed-up {timings['no cache'] / seconds:.2f}x (cold cache)",
+            )
 
         # --- stage 2 (#13): ClusterMerger(memory=...) -----------------------------------------
         if args.n_stage2_candidates > 0:
@@ -151,20 +193,30 @@ def main():
                 stage1.pop("n_jobs")
             else:
                 stage1 = dict(get_experiment(8).params)
-            add(f"#13 paper's stage-2 setting on the {args.stage2_base} stage 1", None,
-                test_score(experiment_pipeline(13, stage1_params=stage1)), None, "paper: 71.79 % (on #8)")
+            add(
+                f"#13 paper's stage-2 setting on the {args.stage2_base} stage 1",
+                None,
+                test_score(experiment_pipeline(13, stage1_params=stage1)),
+                None,
+                "paper: 71.79 % (on #8)",
+            )
             timings = {}
             for label in ("no cache", "Pipeline(memory) only", "Pipeline + ClusterMerger(memory)"):
                 memory = None if label == "no cache" else os.path.join(cache, "s2" + str(len(timings)))
                 pipeline = experiment_pipeline(13, memory=memory, stage1_params=stage1)
                 if label == "Pipeline(memory) only":
                     pipeline.set_params(merge__memory=None)
-                seconds, timed = _timed_search(pipeline, search_space(13), args.n_stage2_candidates,
-                                               X_train, y_train, g_train, args.seed, args.cv)
+                seconds, timed = _timed_search(
+                    pipeline, search_space(13), args.n_stage2_candidates, X_train, y_train, g_train, args.seed, args.cv
+                )
                 timings[label] = seconds
-                add(f"stage 2 #13, {args.n_stage2_candidates} random candidates, {label}",
-                    max(timed.cv_results_["mean_test_score"]), None, seconds,
-                    "" if memory is None else f"speed-up {timings['no cache'] / seconds:.2f}x (cold cache)")
+                add(
+                    f"stage 2 #13, {args.n_stage2_candidates} random candidates, {label}",
+                    max(timed.cv_results_["mean_test_score"]),
+                    None,
+                    seconds,
+                    "" if memory is None else f"speed-up {timings['no cache'] / seconds:.2f}x (cold cache)",
+                )
     finally:
         shutil.rmtree(cache, ignore_errors=True)
 

@@ -27,7 +27,12 @@ PAPER = {
     "continuation": dict(eps_d=0.94, eps_v=2.72, eps_t2=0.35),  # #13
 }
 SPACE = {
-    "velocity": {"eps_d": uniform(0.2, 2.8), "eps_phi": uniform(0.05, 1.0), "eps_v": uniform(0.2, 4.0), "eps_t2": uniform(0.1, 0.9)},
+    "velocity": {
+        "eps_d": uniform(0.2, 2.8),
+        "eps_phi": uniform(0.05, 1.0),
+        "eps_v": uniform(0.2, 4.0),
+        "eps_t2": uniform(0.1, 0.9),
+    },
     "continuation": {"eps_d": uniform(0.2, 2.8), "eps_v": uniform(0.2, 5.8), "eps_t2": uniform(0.1, 0.9)},
 }
 
@@ -61,7 +66,8 @@ def main():
     print(f"{'mode':<13} {'parameters':<7} {'test V1':>8} {'change':>8} {'merges':>7}  values")
     with tempfile.TemporaryDirectory() as cache:
         for mode in ("velocity", "continuation"):
-            def merged(params, rows=slice(None)):
+
+            def merged(params, rows=slice(None), mode=mode):
                 model = ClusterMerger(mode=mode, stage1=stage1, memory=cache, **params).fit(X)
                 return model.labels_, len(model.merges_)
 
@@ -76,8 +82,10 @@ def main():
             ClusterMerger(mode=mode, stage1=stage1, **PAPER[mode]).fit(X)
             stage2_s = time.perf_counter() - start - stage1_s
             total = frame_s + filter_s + stage1_s + stage2_s
-            print(f"{'':<13} time: stage 2 {stage2_s:.2f} s = {len(X) / stage2_s:,.0f} detections/s, "
-                  f"{100 * stage2_s / total:.0f} % of frame + filter + stage 1 + stage 2 ({total:.2f} s)")
+            print(
+                f"{'':<13} time: stage 2 {stage2_s:.2f} s = {len(X) / stage2_s:,.0f} detections/s, "
+                f"{100 * stage2_s / total:.0f} % of frame + filter + stage 1 + stage 2 ({total:.2f} s)"
+            )
 
 
 if __name__ == "__main__":

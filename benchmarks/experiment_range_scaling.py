@@ -15,8 +15,8 @@ import argparse
 import time
 
 import numpy as np
-from sklearn.model_selection import ParameterSampler
 from scipy.stats import uniform
+from sklearn.model_selection import ParameterSampler
 
 from sklearn_radar import DopplerDensityFilter, FrameTransform, RadarDBSCAN
 from sklearn_radar.datasets import make_scenes
@@ -58,7 +58,8 @@ def main():
         train_scores = [score(p, train) for p in tried]
         best = tried[int(np.argmax(train_scores))]
         shown = ", ".join(f"{k}={v:.2f}" for k, v in best.items() if not isinstance(v, str))
-        print(f"{form:<12} {max(train_scores):9.4f} {score(best, ~train):8.4f}  {shown}  ({time.perf_counter() - start:.0f} s)")
+        elapsed = time.perf_counter() - start
+        print(f"{form:<12} {max(train_scores):9.4f} {score(best, ~train):8.4f}  {shown}  ({elapsed:.0f} s)")
         best_fixed = best
 
     alphas = (0.0, 0.25, 0.5, 0.75, 0.99)

@@ -37,17 +37,30 @@ for sensor, mount in RADARSCENES_MOUNTING.items():
     boresight = np.rad2deg(mount["yaw"])
     # Field of view +-60 deg, drawn to 6 m.  The plot's horizontal axis is y,
     # so a direction a in the car frame is drawn at 90 deg - a.
-    ax.add_patch(Wedge((mount["y"], mount["x"]), 6.0, 90 - boresight - 60, 90 - boresight + 60,
-                       fc=colours(sensor), alpha=0.25))
+    ax.add_patch(
+        Wedge((mount["y"], mount["x"]), 6.0, 90 - boresight - 60, 90 - boresight + 60, fc=colours(sensor), alpha=0.25)
+    )
     ax.plot(mount["y"], mount["x"], "o", c=colours(sensor))
-    ax.text(mount["y"] + 7.3 * np.sin(mount["yaw"]), mount["x"] + 7.3 * np.cos(mount["yaw"]),
-            f"sensor {sensor}\nyaw {mount['yaw']:+.2f} rad", ha="center", va="center", fontsize=9)
+    ax.text(
+        mount["y"] + 7.3 * np.sin(mount["yaw"]),
+        mount["x"] + 7.3 * np.cos(mount["yaw"]),
+        f"sensor {sensor}\nyaw {mount['yaw']:+.2f} rad",
+        ha="center",
+        va="center",
+        fontsize=9,
+    )
 ax.annotate("", (0, 1.6), (0, 0), arrowprops=dict(arrowstyle="->", lw=2))
 ax.annotate("", (1.6, 0), (0, 0), arrowprops=dict(arrowstyle="->", lw=2))
 ax.text(0.15, 1.7, "x", fontsize=12)
 ax.text(1.7, 0.2, "y", fontsize=12)
-ax.set(xlim=(10.5, -10.5), ylim=(-2, 12.5), aspect="equal", xlabel="y_cc (m, left)", ylabel="x_cc (m, forward)",
-       title="RadarScenes sensor mounting, fields of view +-60 deg")
+ax.set(
+    xlim=(10.5, -10.5),
+    ylim=(-2, 12.5),
+    aspect="equal",
+    xlabel="y_cc (m, left)",
+    ylabel="x_cc (m, forward)",
+    title="RadarScenes sensor mounting, fields of view +-60 deg",
+)
 fig.tight_layout()
 plt.show()
 
@@ -80,8 +93,11 @@ ax.scatter(los[w], Xt["v_r"][w], s=6, label="compensated v_r (static)")
 w = window & ~static
 ax.scatter(los[w], Xt["v_r"][w], s=14, marker="x", c="C3", label="compensated v_r (road users)")
 ax.axhline(0, c="k", lw=0.6)
-ax.set(xlabel="line of sight azimuth_sc + sensor_yaw (deg, car frame)", ylabel="radial velocity (m/s)",
-       title=f"0.25 s at ego speed {data['ego_vx'][turn]:.1f} m/s (negative = approaching)")
+ax.set(
+    xlabel="line of sight azimuth_sc + sensor_yaw (deg, car frame)",
+    ylabel="radial velocity (m/s)",
+    title=f"0.25 s at ego speed {data['ego_vx'][turn]:.1f} m/s (negative = approaching)",
+)
 ax.legend(loc="lower right")
 fig.tight_layout()
 plt.show()
@@ -106,19 +122,27 @@ dx, dy = Xt["x"].to_numpy() - ego_x, Xt["y"].to_numpy() - ego_y
 fcs_in_car = (c * dx + s * dy, -s * dx + c * dy)  # world -> car frame of the last scan
 travel = data["ego_vx"][turn] * 0.25
 rotation = abs(data["ego_yaw_rate"][turn]) * 0.25
-print(f"within 0.25 s: {travel:.1f} m of travel and {rotation:.3f} rad of rotation, "
-      f"i.e. {rotation * 50:.1f} m of lateral smear at 50 m range")
+print(
+    f"within 0.25 s: {travel:.1f} m of travel and {rotation:.3f} rad of rotation, "
+    f"i.e. {rotation * 50:.1f} m of lateral smear at 50 m range"
+)
 
 fig, axes = plt.subplots(1, 2, figsize=(12, 6.4), sharex=True, sharey=True, layout="constrained")
-for ax, (x, y), title in zip(axes, [(ccs["x"].to_numpy(), ccs["y"].to_numpy()), fcs_in_car],
-                             ["CCS: each scan in its own car frame", "FCS: fixed frame (shown in the last car frame)"]):
+for ax, (x, y), title in zip(
+    axes,
+    [(ccs["x"].to_numpy(), ccs["y"].to_numpy()), fcs_in_car],
+    ["CCS: each scan in its own car frame", "FCS: fixed frame (shown in the last car frame)"],
+    strict=True,
+):
     points = ax.scatter(y[span], x[span], c=t[span] - t[span].min(), s=5, cmap="viridis", vmin=0, vmax=1.0)
     ax.plot(0, 0, "k^", ms=9)
     ax.set(title=title, xlabel="y (m, left)", aspect="equal", xlim=(35, -35), ylim=(-5, 65))
 axes[0].set_ylabel("x (m, forward)")
 fig.colorbar(points, ax=axes, label="time (s)", shrink=0.9)
-fig.suptitle(f"1 s of static and moving detections, yaw rate {data['ego_yaw_rate'][turn]:+.2f} rad/s "
-             f"at {data['ego_vx'][turn]:.1f} m/s")
+fig.suptitle(
+    f"1 s of static and moving detections, yaw rate {data['ego_yaw_rate'][turn]:+.2f} rad/s "
+    f"at {data['ego_vx'][turn]:.1f} m/s"
+)
 plt.show()
 
 # %%
@@ -134,8 +158,15 @@ plt.show()
 scenes = make_scenes(n_sequences=2, duration=20.0, random_state=0)
 rows = []
 for frame, name in (("car", "CCS"), ("frame", "FCS")):
-    X = DopplerDensityFilter(vr_threshold=0.10, d_xy=1.4).fit_transform(FrameTransform(frame=frame).fit_transform(scenes.data))
+    X = DopplerDensityFilter(vr_threshold=0.10, d_xy=1.4).fit_transform(
+        FrameTransform(frame=frame).fit_transform(scenes.data)
+    )
     rates = filter_removal_rates(X["keep"], scenes.target)
-    rows.append({"frame": name, "background removed (%)": 100 * rates["background_removed"],
-                 "road-user detections removed (%)": 100 * rates["objects_removed"]})
+    rows.append(
+        {
+            "frame": name,
+            "background removed (%)": 100 * rates["background_removed"],
+            "road-user detections removed (%)": 100 * rates["objects_removed"],
+        }
+    )
 pd.DataFrame(rows).round(2)

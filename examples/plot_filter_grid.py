@@ -28,26 +28,38 @@ from sklearn_radar.preprocessing import neighbor_counts
 
 scenes = make_scenes(n_sequences=2, duration=20.0, random_state=0)
 Xt = FrameTransform(frame="frame").fit_transform(scenes.data)
-counts = neighbor_counts(Xt["x"].to_numpy(), Xt["y"].to_numpy(), Xt["t"].to_numpy(), Xt["sequence"].to_numpy(),
-                         d_xy=1.4, dt=0.25, cap=12)
+counts = neighbor_counts(
+    Xt["x"].to_numpy(), Xt["y"].to_numpy(), Xt["t"].to_numpy(), Xt["sequence"].to_numpy(), d_xy=1.4, dt=0.25, cap=12
+)
 speed = np.abs(Xt["v_r"].to_numpy())
 
 eta_1 = 0.10
 fig, ax = plt.subplots(figsize=(8, 5))
 floor = 1e-4
-for eta, n_min in zip(eta_1 / np.array([1, 5, 10, 50]), (2, 3, 4, 10)):
+for eta, n_min in zip(eta_1 / np.array([1, 5, 10, 50]), (2, 3, 4, 10), strict=True):
     ax.fill_between([-0.5, n_min - 0.5], floor, eta, color="C0", alpha=0.18, lw=0)
 ax.axvspan(-0.5, 0.5, color="C0", alpha=0.18, lw=0)
 rng = np.random.default_rng(0)
 jitter = rng.uniform(-0.3, 0.3, len(counts))
 background = scenes.target == -1
 shown = rng.random(len(counts)) < 0.15  # a sample, for legibility
-ax.scatter((counts + jitter)[background & shown], np.maximum(speed, floor)[background & shown], s=2, c="0.5",
-           label="background (15 % sample)")
+ax.scatter(
+    (counts + jitter)[background & shown],
+    np.maximum(speed, floor)[background & shown],
+    s=2,
+    c="0.5",
+    label="background (15 % sample)",
+)
 ax.scatter((counts + jitter)[~background], np.maximum(speed, floor)[~background], s=2, c="C3", label="road users")
-ax.set(yscale="log", ylim=(floor, 30), xlim=(-0.5, 12.5), xticks=range(13),
-       xlabel="neighbours N within d_xy = 1.4 m and 0.25 s (capped at 12)", ylabel="|v_r| (m/s)",
-       title="Eq. (1) at eta_1 = 0.10 m/s: shaded = removed")
+ax.set(
+    yscale="log",
+    ylim=(floor, 30),
+    xlim=(-0.5, 12.5),
+    xticks=range(13),
+    xlabel="neighbours N within d_xy = 1.4 m and 0.25 s (capped at 12)",
+    ylabel="|v_r| (m/s)",
+    title="Eq. (1) at eta_1 = 0.10 m/s: shaded = removed",
+)
 ax.legend(loc="upper right", markerscale=5)
 fig.tight_layout()
 plt.show()
@@ -58,8 +70,10 @@ plt.show()
 # Static detections have ``|v_r|`` close to 0 m/s and are removed unless they
 # are dense (walls, parked cars); road users move and have many neighbours.
 keep = DopplerDensityFilter().fit_transform(Xt)["keep"].to_numpy()
-print(f"background removed: {100 * np.mean(~keep[background]):.1f} %, "
-      f"road-user detections removed: {100 * np.mean(~keep[~background]):.2f} %")
+print(
+    f"background removed: {100 * np.mean(~keep[background]):.1f} %, "
+    f"road-user detections removed: {100 * np.mean(~keep[~background]):.2f} %"
+)
 
 # %%
 # Table I: errors over the grid

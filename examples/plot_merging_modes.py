@@ -56,8 +56,14 @@ ax.annotate("", (s_b, 0.65), (s_b + eps_t2, 0.65), arrowprops=dict(arrowstyle="<
 ax.text(s_b + eps_t2 / 2, 0.75, "eps_t2", ha="center")
 ax.annotate("", (a_end, 2.3), (s_b, 2.3), arrowprops=dict(arrowstyle="<->"))
 ax.text(a_end - 0.02, 2.3, "gap < eps_t2", ha="right", va="center", fontsize=9)
-ax.set(yticks=[1.5, 3.0], yticklabels=["cluster B", "cluster A"], xlabel="time (s)", ylim=(0, 5.2),
-       xlim=(-0.05, 2.0), title="Causal decision (continuation uses all of A up to tau)")
+ax.set(
+    yticks=[1.5, 3.0],
+    yticklabels=["cluster B", "cluster A"],
+    xlabel="time (s)",
+    ylim=(0, 5.2),
+    xlim=(-0.05, 2.0),
+    title="Causal decision (continuation uses all of A up to tau)",
+)
 fig.tight_layout()
 plt.show()
 
@@ -101,14 +107,19 @@ rows_of = (stage1_labels == largest) & (t_all >= middle) & (t_all < middle + eps
 theta = (X["azimuth_sc"] + X["sensor_yaw"] + X["heading"]).to_numpy()[rows_of]
 v_r = X["v_r"].to_numpy()[rows_of]
 vx, vy, n_inliers = estimate_velocity(v_r, theta)
-print(f"cluster {largest}, 0.35 s: {rows_of.sum()} detections, velocity ({vx:.2f}, {vy:.2f}) m/s, "
-      f"speed {np.hypot(vx, vy):.2f} m/s, {n_inliers} inliers")
+print(
+    f"cluster {largest}, 0.35 s: {rows_of.sum()} detections, velocity ({vx:.2f}, {vy:.2f}) m/s, "
+    f"speed {np.hypot(vx, vy):.2f} m/s, {n_inliers} inliers"
+)
 grid = np.linspace(theta.min() - 0.05, theta.max() + 0.05, 100)
 fig, ax = plt.subplots(figsize=(8, 4))
 ax.scatter(np.rad2deg(theta), v_r, s=12, label="detections")
 ax.plot(np.rad2deg(grid), vx * np.cos(grid) + vy * np.sin(grid), c="C3", label="v_x cos(theta) + v_y sin(theta)")
-ax.set(xlabel="line of sight theta (deg, FCS)", ylabel="compensated v_r (m/s)",
-       title=f"Velocity estimate of one cluster: |v| = {np.hypot(vx, vy):.2f} m/s")
+ax.set(
+    xlabel="line of sight theta (deg, FCS)",
+    ylabel="compensated v_r (m/s)",
+    title=f"Velocity estimate of one cluster: |v| = {np.hypot(vx, vy):.2f} m/s",
+)
 ax.legend()
 fig.tight_layout()
 plt.show()
@@ -129,7 +140,10 @@ direction = np.linalg.svd(xy - xy.mean(axis=0), full_matrices=False)[2][0]
 along = (xy - xy.mean(axis=0)) @ direction
 t = X["t"].to_numpy()[pair] - X["t"].to_numpy()[pair].min()
 fig, axes = plt.subplots(1, 2, figsize=(11, 4), sharey=True)
-for ax, labels, title in ((axes[0], stage1_labels, "stage 1"), (axes[1], models["continuation"].labels_, "after merging")):
+for ax, labels, title in (
+    (axes[0], stage1_labels, "stage 1"),
+    (axes[1], models["continuation"].labels_, "after merging"),
+):
     ids = labels[pair]
     for k, cluster in enumerate(np.unique(ids)):
         ax.scatter(t[ids == cluster], along[ids == cluster], s=10, c=f"C{k}", label=f"cluster {cluster}")

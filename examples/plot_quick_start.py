@@ -24,8 +24,10 @@ from sklearn_radar.datasets import make_scenes
 from sklearn_radar.metrics import precluster_target, radar_homogeneity_completeness_v_measure
 
 scenes = make_scenes(n_sequences=2, duration=20.0, random_state=0)
-print(f"{len(scenes.data)} detections, {np.unique(scenes.target[scenes.target >= 0]).size} road users, "
-      f"{100 * np.mean(scenes.target == -1):.0f} % background")
+print(
+    f"{len(scenes.data)} detections, {np.unique(scenes.target[scenes.target >= 0]).size} road users, "
+    f"{100 * np.mean(scenes.target == -1):.0f} % background"
+)
 
 # %%
 # Pipeline
@@ -100,7 +102,7 @@ stages = [
 ]
 fig, axes = plt.subplots(1, 4, figsize=(16, 4.6), sharex=True, sharey=True)
 x, y = Xt["x"].to_numpy()[now], Xt["y"].to_numpy()[now]
-for ax, (title, ids, keep) in zip(axes, stages):
+for ax, (title, ids, keep) in zip(axes, stages, strict=True):
     ids = ids[now]
     if keep is not None:
         keep = keep[now]

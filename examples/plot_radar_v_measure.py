@@ -42,11 +42,18 @@ cases = {
 for name, predicted in cases.items():
     radar = radar_homogeneity_completeness_v_measure(truth, predicted)
     sklearn = homogeneity_completeness_v_measure(truth, predicted)
-    print(f"{name:<44} radar h/c/V {radar[0]:.2f} {radar[1]:.2f} {radar[2]:.2f}   "
-          f"sklearn h/c/V {sklearn[0]:.2f} {sklearn[1]:.2f} {sklearn[2]:.2f}")
+    print(
+        f"{name:<44} radar h/c/V {radar[0]:.2f} {radar[1]:.2f} {radar[2]:.2f}   "
+        f"sklearn h/c/V {sklearn[0]:.2f} {sklearn[1]:.2f} {sklearn[2]:.2f}"
+    )
 objects = truth != -1
-print("property 4:", np.allclose(radar_homogeneity_completeness_v_measure(truth[objects], cases["3. a road user split in two"][objects]),
-                                 homogeneity_completeness_v_measure(truth[objects], cases["3. a road user split in two"][objects])))
+print(
+    "property 4:",
+    np.allclose(
+        radar_homogeneity_completeness_v_measure(truth[objects], cases["3. a road user split in two"][objects]),
+        homogeneity_completeness_v_measure(truth[objects], cases["3. a road user split in two"][objects]),
+    ),
+)
 
 # %%
 # Picture
@@ -55,15 +62,16 @@ print("property 4:", np.allclose(radar_homogeneity_completeness_v_measure(truth[
 # background).  Colour: the predicted cluster (grey: noise).
 markers = {0: "s", 1: "o", -1: "x"}
 fig, axes = plt.subplots(1, 4, figsize=(16, 4.4), sharex=True, sharey=True)
-for ax, (name, predicted) in zip(axes, cases.items()):
+for ax, (name, predicted) in zip(axes, cases.items(), strict=True):
     for instance, marker in markers.items():
         rows = truth == instance
         colour = [("0.6" if p < 0 else f"C{p}") for p in predicted[rows]]
         ax.scatter(xy[rows, 0], xy[rows, 1], marker=marker, c=colour, s=60)
     h, c, v = radar_homogeneity_completeness_v_measure(truth, predicted)
     sh, sc, sv = homogeneity_completeness_v_measure(truth, predicted)
-    ax.set_title(f"{name}\nradar: h {h:.2f}  c {c:.2f}  V {v:.2f}\nsklearn: h {sh:.2f}  c {sc:.2f}  V {sv:.2f}",
-                 fontsize=10)
+    ax.set_title(
+        f"{name}\nradar: h {h:.2f}  c {c:.2f}  V {v:.2f}\nsklearn: h {sh:.2f}  c {sc:.2f}  V {sv:.2f}", fontsize=10
+    )
     ax.set(xlabel="x (m)", aspect="equal")
 axes[0].set_ylabel("y (m)")
 fig.tight_layout()

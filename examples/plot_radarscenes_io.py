@@ -33,7 +33,7 @@ workdir = tempfile.TemporaryDirectory()
 folder = write_radarscenes(scenes, Path(workdir.name) / "data")
 for path in sorted(folder.rglob("*")):
     size = f"{path.stat().st_size / 1024:8.1f} KiB" if path.is_file() else ""
-    print(f"{str(path.relative_to(folder)):<32}{size}")
+    print(f"{path.relative_to(folder)!s:<32}{size}")
 
 # %%
 # The files
@@ -67,8 +67,10 @@ loaded = load_radarscenes(folder)
 print(loaded.DESCR)
 print("same columns:", list(loaded.data.columns) == list(scenes.data.columns))
 print("same targets:", np.array_equal(loaded.target, scenes.target))
-largest = max(np.abs(loaded.data[c].to_numpy(np.float64) - scenes.data[c].to_numpy(np.float64)).max()
-              for c in ("range_sc", "azimuth_sc", "vr", "x_seq", "y_seq", "ego_x_seq"))
+largest = max(
+    np.abs(loaded.data[c].to_numpy(np.float64) - scenes.data[c].to_numpy(np.float64)).max()
+    for c in ("range_sc", "azimuth_sc", "vr", "x_seq", "y_seq", "ego_x_seq")
+)
 print(f"largest difference in range, angle, Doppler or position: {largest:.2g}")
 print(describe_columns())
 print("road-user classes:", sorted({LABELS[k] for k in loaded.data["label_id"][loaded.target >= 0]}))
@@ -86,11 +88,22 @@ for sensor in (1, 2, 3, 4):
     scan = data["timestamp"][(data["sensor_id"] == sensor) & (t >= 2.0)].min()
     rows = (data["timestamp"] == scan).to_numpy()
     moving = rows & (loaded.target >= 0)
-    ax.scatter(data["y_cc"][rows & ~moving], data["x_cc"][rows & ~moving], s=8, c=f"C{sensor}",
-               label=f"sensor {sensor} ({rows.sum()} detections)")
+    ax.scatter(
+        data["y_cc"][rows & ~moving],
+        data["x_cc"][rows & ~moving],
+        s=8,
+        c=f"C{sensor}",
+        label=f"sensor {sensor} ({rows.sum()} detections)",
+    )
     ax.scatter(data["y_cc"][moving], data["x_cc"][moving], s=40, marker="x", c=f"C{sensor}")
-ax.set(xlim=(60, -60), ylim=(-10, 100), aspect="equal", xlabel="y_cc (m, left)", ylabel="x_cc (m, forward)",
-       title="One scan per sensor (crosses: moving road users)")
+ax.set(
+    xlim=(60, -60),
+    ylim=(-10, 100),
+    aspect="equal",
+    xlabel="y_cc (m, left)",
+    ylabel="x_cc (m, forward)",
+    title="One scan per sensor (crosses: moving road users)",
+)
 ax.legend(loc="lower left")
 fig.tight_layout()
 plt.show()

@@ -40,8 +40,13 @@ for alpha, style in ((0.0, ":"), (0.5, "--"), (0.99, "-")):
         ax.plot(r, min_points_at_range(r, 3.87, alpha, form), style, c="k" if alpha == 0 else colour, label=label)
 ax.axvspan(0, 25, color="0.92")
 ax.axvspan(125, 140, color="0.92")
-ax.set(xlabel="range r to the sensor (m)", ylabel="N_min(r) (points)", xlim=(0, 140), ylim=(0, 10),
-       title="Eq. (2) with N_min,50 = 3.87 (grey: r is clipped)")
+ax.set(
+    xlabel="range r to the sensor (m)",
+    ylabel="N_min(r) (points)",
+    xlim=(0, 140),
+    ylim=(0, 10),
+    title="Eq. (2) with N_min,50 = 3.87 (grey: r is clipped)",
+)
 ax.legend()
 fig.tight_layout()
 plt.show()
@@ -62,8 +67,11 @@ which = np.digitize(per_scan["median"], bins) - 1
 mean = [per_scan["size"][which == k].mean() for k in range(len(bins) - 1)]
 fig, ax = plt.subplots(figsize=(8, 4))
 ax.bar(bins[:-1] + 5, mean, width=8)
-ax.set(xlabel="range of the road user (m)", ylabel="detections per scan",
-       title="Detections of one road user in one scan (mean)")
+ax.set(
+    xlabel="range of the road user (m)",
+    ylabel="detections per scan",
+    title="Detections of one road user in one scan (mean)",
+)
 fig.tight_layout()
 plt.show()
 
@@ -95,8 +103,12 @@ def score(params, rows):
     return radar_v_measure(y[rows], labels, groups=scenes.groups[rows])
 
 
-space = {"eps_xyv": uniform(0.4, 1.6), "vr_scale": uniform(0.3, 4.0), "min_samples": uniform(2.0, 4.0),
-         "vr_min": uniform(0.0, 1.5)}
+space = {
+    "eps_xyv": uniform(0.4, 1.6),
+    "vr_scale": uniform(0.3, 4.0),
+    "min_samples": uniform(2.0, 4.0),
+    "vr_min": uniform(0.0, 1.5),
+}
 candidates = list(ParameterSampler(space, n_iter=20, random_state=0))
 best = max(candidates, key=lambda params: score(dict(params, alpha_r=0.0), train))
 print("best fixed-N_min candidate:", {k: round(float(v), 2) for k, v in best.items()})

@@ -36,7 +36,22 @@ t = data.timestamp.to_numpy()
 now = (t >= t.min() + 8_000_000) & (t < t.min() + 8_250_000)
 colour = np.where(target[now] >= 0, target[now] % 10, np.nan)
 window.scatter(data.y_cc[now][background[now]], data.x_cc[now][background[now]], s=6, c="0.6")
-window.scatter(data.y_cc[now][~background[now]], data.x_cc[now][~background[now]], s=12, c=colour[~background[now]], cmap="tab10", vmin=0, vmax=9)
-window.set(xlim=(50, -50), ylim=(-30, 100), xlabel="y_cc (m, left)", ylabel="x_cc (m, forward)", title="0.25 s in the car frame", aspect="equal")
+window.scatter(
+    data.y_cc[now][~background[now]],
+    data.x_cc[now][~background[now]],
+    s=12,
+    c=colour[~background[now]],
+    cmap="tab10",
+    vmin=0,
+    vmax=9,
+)
+window.set(
+    xlim=(50, -50),
+    ylim=(-30, 100),
+    xlabel="y_cc (m, left)",
+    ylabel="x_cc (m, forward)",
+    title="0.25 s in the car frame",
+    aspect="equal",
+)
 fig.tight_layout()
 plt.show()

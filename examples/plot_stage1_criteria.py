@@ -39,12 +39,21 @@ for number, params in settings.items():
 fig, axes = plt.subplots(2, 3, figsize=(12, 7.5))
 box, xy, xyv = settings[3], settings[5], settings[6]
 shapes = [
-    ("Eq. (3) box, #3", Rectangle((-box["eps_xy"], -box["eps_xy"]), 2 * box["eps_xy"], 2 * box["eps_xy"]),
-     Rectangle((-box["eps_xy"], -box["eps_vr"]), 2 * box["eps_xy"], 2 * box["eps_vr"])),
-    ("Eq. (4) xy, #5", Ellipse((0, 0), 2 * xy["eps_xy"], 2 * xy["eps_xy"]),
-     Rectangle((-xy["eps_xy"], -xy["eps_vr"]), 2 * xy["eps_xy"], 2 * xy["eps_vr"])),
-    ("Eq. (5) xyv, #6", Ellipse((0, 0), 2 * xyv["eps_xyv"], 2 * xyv["eps_xyv"]),
-     Ellipse((0, 0), 2 * xyv["eps_xyv"], 2 * xyv["eps_xyv"] * xyv["vr_scale"])),
+    (
+        "Eq. (3) box, #3",
+        Rectangle((-box["eps_xy"], -box["eps_xy"]), 2 * box["eps_xy"], 2 * box["eps_xy"]),
+        Rectangle((-box["eps_xy"], -box["eps_vr"]), 2 * box["eps_xy"], 2 * box["eps_vr"]),
+    ),
+    (
+        "Eq. (4) xy, #5",
+        Ellipse((0, 0), 2 * xy["eps_xy"], 2 * xy["eps_xy"]),
+        Rectangle((-xy["eps_xy"], -xy["eps_vr"]), 2 * xy["eps_xy"], 2 * xy["eps_vr"]),
+    ),
+    (
+        "Eq. (5) xyv, #6",
+        Ellipse((0, 0), 2 * xyv["eps_xyv"], 2 * xyv["eps_xyv"]),
+        Ellipse((0, 0), 2 * xyv["eps_xyv"], 2 * xyv["eps_xyv"] * xyv["vr_scale"]),
+    ),
 ]
 for column, (title, spatial, doppler) in enumerate(shapes):
     top, bottom = axes[0, column], axes[1, column]
@@ -76,8 +85,10 @@ labels = {}
 for number, params in settings.items():
     labels[number] = RadarDBSCAN(**params).fit_predict(X)
     h, c, v = radar_homogeneity_completeness_v_measure(target, labels[number], groups=scenes.groups)
-    print(f"#{number} {params['metric']:<4} homogeneity {h:.3f} completeness {c:.3f} V {v:.3f}, "
-          f"{labels[number].max() + 1} clusters")
+    print(
+        f"#{number} {params['metric']:<4} homogeneity {h:.3f} completeness {c:.3f} V {v:.3f}, "
+        f"{labels[number].max() + 1} clusters"
+    )
 
 # %%
 # One window, three clusterings
@@ -96,13 +107,18 @@ palette = plt.get_cmap("tab20")
 fig, axes = plt.subplots(1, 4, figsize=(16, 4.4), sharex=True, sharey=True)
 panels = [("target (pre-clustered)", target)] + [(f"#{n} {settings[n]['metric']}", labels[n]) for n in settings]
 x, y = X["x"].to_numpy()[now], X["y"].to_numpy()[now]
-for ax, (title, ids) in zip(axes, panels):
+for ax, (title, ids) in zip(axes, panels, strict=True):
     ids = ids[now]
     noise = ids < 0
     ax.scatter(x[noise], y[noise], s=3, c="0.8")
     ax.scatter(x[~noise], y[~noise], s=9, c=palette(ids[~noise] % 20))
-    ax.set(title=title, xlabel="x (m)", aspect="equal", xlim=(centre[0] - 30, centre[0] + 30),
-           ylim=(centre[1] - 30, centre[1] + 30))
+    ax.set(
+        title=title,
+        xlabel="x (m)",
+        aspect="equal",
+        xlim=(centre[0] - 30, centre[0] + 30),
+        ylim=(centre[1] - 30, centre[1] + 30),
+    )
 axes[0].set_ylabel("y (m)")
 fig.tight_layout()
 plt.show()

@@ -45,15 +45,24 @@ scan_ends = np.r_[scan_starts[1:], len(X)]
 stream = ScanStream(clusterer)
 labels = np.full(len(X), -1, dtype=np.int64)
 latency = []
-for begin, end in zip(scan_starts, scan_ends):
+for begin, end in zip(scan_starts, scan_ends, strict=True):
     rows = slice(begin, end)
     start = time.perf_counter()
-    labels[rows] = stream.update(columns["x"][rows], columns["y"][rows], columns["v_r"][rows], columns["t"][begin],
-                                 keep=keep[rows], range_sc=columns["range_sc"][rows], heading=columns["heading"][rows])
+    labels[rows] = stream.update(
+        columns["x"][rows],
+        columns["y"][rows],
+        columns["v_r"][rows],
+        columns["t"][begin],
+        keep=keep[rows],
+        range_sc=columns["range_sc"][rows],
+        heading=columns["heading"][rows],
+    )
     latency.append(time.perf_counter() - start)
 latency = np.array(latency[1:]) * 1e3  # ms; the first call, which warms up the kernels, is left out
-print(f"{len(scan_starts)} scans, {len(X) / len(scan_starts):.1f} detections per scan, "
-      f"latency median {np.median(latency):.3f} ms, 99th percentile {np.percentile(latency, 99):.3f} ms")
+print(
+    f"{len(scan_starts)} scans, {len(X) / len(scan_starts):.1f} detections per scan, "
+    f"latency median {np.median(latency):.3f} ms, 99th percentile {np.percentile(latency, 99):.3f} ms"
+)
 
 # %%
 # Same result as the offline causal mode
@@ -62,8 +71,7 @@ print(f"{len(scan_starts)} scans, {len(X) / len(scan_starts):.1f} detections per
 offline = clusterer.set_params(causal=True).fit_predict(X)
 same_noise = np.array_equal(labels < 0, offline < 0)
 clustered = labels >= 0
-print(f"same noise: {same_noise}, same clusters: "
-      f"{adjusted_rand_score(labels[clustered], offline[clustered]) == 1.0}")
+print(f"same noise: {same_noise}, same clusters: {adjusted_rand_score(labels[clustered], offline[clustered]) == 1.0}")
 
 # %%
 # Latency against the budget
@@ -90,7 +98,13 @@ high = np.percentile(np.c_[x, y][clustered], 99, axis=0) + 10
 fig, ax = plt.subplots(figsize=(8, 6))
 ax.scatter(x[~clustered], y[~clustered], s=1, c="0.85")
 ax.scatter(x[clustered], y[clustered], s=3, c=plt.get_cmap("tab20")(labels[clustered] % 20))
-ax.set(xlabel="x (m, FCS)", ylabel="y (m, FCS)", aspect="equal", xlim=(low[0], high[0]), ylim=(low[1], high[1]),
-       title=f"{labels.max() + 1} stream ids over {columns['t'].max() - columns['t'].min():.0f} s")
+ax.set(
+    xlabel="x (m, FCS)",
+    ylabel="y (m, FCS)",
+    aspect="equal",
+    xlim=(low[0], high[0]),
+    ylim=(low[1], high[1]),
+    title=f"{labels.max() + 1} stream ids over {columns['t'].max() - columns['t'].min():.0f} s",
+)
 fig.tight_layout()
 plt.show()

@@ -43,8 +43,10 @@ scenes = make_scenes(n_sequences=6, duration=10.0, random_state=0)
 X, groups = scenes.data[list(PIPELINE_COLUMNS)], scenes.groups
 y = precluster_target(X, scenes.target)
 train, test = sequence_train_test_split(groups, test_size=0.5, random_state=0)
-print(f"training sequences {np.unique(groups[train])} ({len(train)} detections), "
-      f"test sequences {np.unique(groups[test])} ({len(test)} detections)")
+print(
+    f"training sequences {np.unique(groups[train])} ({len(train)} detections), "
+    f"test sequences {np.unique(groups[test])} ({len(test)} detections)"
+)
 
 # %%
 # The search
@@ -87,8 +89,12 @@ fig, ax = plt.subplots(figsize=(8, 4))
 ax.plot(iterations, 100 * scores, "o", label="candidate")
 ax.plot(iterations, 100 * np.maximum.accumulate(scores), "-", c="C3", label="best so far")
 ax.axvspan(0.5, 5.5, color="0.92", label="random start")
-ax.set(xlabel="iteration", ylabel="mean CV radar V-measure (%)", title=f"Bayesian search, experiment #{number}",
-       xticks=iterations)
+ax.set(
+    xlabel="iteration",
+    ylabel="mean CV radar V-measure (%)",
+    title=f"Bayesian search, experiment #{number}",
+    xticks=iterations,
+)
 ax.legend(loc="lower right")
 fig.tight_layout()
 plt.show()

@@ -13,11 +13,11 @@ from .preprocessing import DopplerDensityFilter, FrameTransform
 __version__ = "0.1.0.dev0"
 
 __all__ = [
+    "LABELS",
+    "RADARSCENES_MOUNTING",
     "ClusterMerger",
     "DopplerDensityFilter",
     "FrameTransform",
-    "LABELS",
-    "RADARSCENES_MOUNTING",
     "RadarDBSCAN",
     "__version__",
     "describe_columns",

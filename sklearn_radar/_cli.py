@@ -153,8 +153,15 @@ def _reproduce(args) -> int:
     if args.n_iter is not None and args.n_iter < 1:
         raise ValueError(f"--n-iter must be at least 1, got {args.n_iter}")
     start = time.perf_counter()
-    reproduce(args.data, args.out, n_iter=args.n_iter, n_jobs=args.n_jobs, experiments=args.experiments,
-              full=args.full, seed=args.seed)  # fmt: skip
+    reproduce(
+        args.data,
+        args.out,
+        n_iter=args.n_iter,
+        n_jobs=args.n_jobs,
+        experiments=args.experiments,
+        full=args.full,
+        seed=args.seed,
+    )
     print(
         f"wrote {_shown(args.out)}/report.md, results.json, params.json and figures "
         f"in {time.perf_counter() - start:.0f} s"

@@ -67,9 +67,19 @@ def count_neighbors(grid: GridIndex, radius, before, after, cap) -> np.ndarray:
     counts : ndarray of int64 in input row order
     """
     sorted_counts = _count_capped(
-        grid.x, grid.y, grid.t, grid.cell_x, grid.cell_y, grid.cell_keys, grid.cell_start, grid.cell_end,
-        float(radius) ** 2, float(before), float(after), int(cap),
-    )  # fmt: skip
+        grid.x,
+        grid.y,
+        grid.t,
+        grid.cell_x,
+        grid.cell_y,
+        grid.cell_keys,
+        grid.cell_start,
+        grid.cell_end,
+        float(radius) ** 2,
+        float(before),
+        float(after),
+        int(cap),
+    )
     counts = np.empty_like(sorted_counts)
     counts[grid.order] = sorted_counts
     return counts

@@ -289,13 +289,11 @@ FRAME_TRANSFORM_READS = ColumnsRead(
 #: DopplerDensityFilter (Eq. 1).
 FILTER_READS = ColumnsRead(required=_WORK, optional=("sequence",), layout=WORK_LAYOUT)
 #: RadarDBSCAN (Eqs. 2-5); ``range_sc`` is needed when ``alpha_r > 0``.
-STAGE1_READS = ColumnsRead(
-    required=_WORK, optional=("sequence", "keep", "range_sc", "heading"), layout=WORK_LAYOUT
-)
+STAGE1_READS = ColumnsRead(required=_WORK, optional=("sequence", "keep", "range_sc", "heading"), layout=WORK_LAYOUT)
 #: ClusterMerger (stage 2); ``azimuth_sc`` and ``sensor_yaw`` are needed by ``mode="velocity"``.
 MERGER_READS = ColumnsRead(
     required=_WORK,
-    optional=STAGE1_READS.optional + ("azimuth_sc", "sensor_yaw"),
+    optional=(*STAGE1_READS.optional, "azimuth_sc", "sensor_yaw"),
     layout=WORK_LAYOUT,
 )
 #: The scikit-learn baselines per time window.
@@ -313,21 +311,14 @@ def _cast_column(values, column: Column, table: str):
         if values.dtype.kind == "S":
             values = np.char.decode(values, "ascii")
         if values.dtype.kind not in "OUT":
-            raise ValueError(
-                f"{table}: column {column.name!r} must hold strings, got dtype {values.dtype}"
-            )
+            raise ValueError(f"{table}: column {column.name!r} must hold strings, got dtype {values.dtype}")
         return pd.array(values.astype(str), dtype="str")
     kind = np.dtype(column.dtype).kind
     if values.dtype.kind not in "biuf":
-        raise ValueError(
-            f"{table}: column {column.name!r} must be numeric ({column.dtype}), "
-            f"got dtype {values.dtype}"
-        )
+        raise ValueError(f"{table}: column {column.name!r} must be numeric ({column.dtype}), got dtype {values.dtype}")
     if kind in "iu" and values.dtype.kind == "f":
         if not np.all(np.isfinite(values)) or np.any(values != np.round(values)):
-            raise ValueError(
-                f"{table}: column {column.name!r} must hold integers, found non-integer values"
-            )
+            raise ValueError(f"{table}: column {column.name!r} must hold integers, found non-integer values")
     return values.astype(column.dtype, copy=False)
 
 
@@ -362,8 +353,7 @@ def check_columns(X, required, where: str = "X") -> None:
     """
     if not isinstance(X, pd.DataFrame):
         raise ValueError(
-            f"{where} must be a pandas DataFrame with the columns {list(required)}, "
-            f"got {type(X).__name__}"
+            f"{where} must be a pandas DataFrame with the columns {list(required)}, got {type(X).__name__}"
         )
     missing = [name for name in required if name not in X.columns]
     if missing:

@@ -11,8 +11,7 @@ try:
     from skopt.space import Categorical, Integer, Real
 except ImportError as error:  # pragma: no cover - exercised only on a broken install
     raise ImportError(
-        "sklearn-radar needs scikit-optimize==0.10.2 for Bayesian optimisation: "
-        "pip install 'scikit-optimize==0.10.2'"
+        "sklearn-radar needs scikit-optimize==0.10.2 for Bayesian optimisation: pip install 'scikit-optimize==0.10.2'"
     ) from error
 
 __all__ = ["BayesSearchCV", "Categorical", "Integer", "Real"]

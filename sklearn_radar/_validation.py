@@ -132,9 +132,7 @@ def _numeric_column(series, name, estimator):
     if values.dtype.kind == "b":
         values = values.astype(np.float64)
     if values.dtype.kind not in "iuf":
-        raise ValueError(
-            f"{type(estimator).__name__}: column {name!r} must be numeric, got dtype {series.dtype}"
-        )
+        raise ValueError(f"{type(estimator).__name__}: column {name!r} must be numeric, got dtype {series.dtype}")
     values = values.astype(np.float64)
     if not np.all(np.isfinite(values)):
         raise ValueError(f"{type(estimator).__name__}: column {name!r} contains NaN or infinity")

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from numbers import Integral, Real
+from typing import ClassVar
 
 import numpy as np
 import pandas as pd
@@ -22,7 +23,6 @@ from ._merge_kernels import (
 )
 from ._radar_dbscan import RadarDBSCAN
 from ._velocity import estimate_velocities
-
 
 
 def _stage1_labels(stage1, columns):
@@ -124,7 +124,7 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
     True
     """
 
-    _parameter_constraints: dict = {
+    _parameter_constraints: ClassVar[dict] = {
         "mode": [StrOptions({"continuation", "velocity"})],
         "eps_d": [Interval(Real, 0, None, closed="neither")],
         "eps_phi": [Interval(Real, 0, None, closed="neither")],
@@ -176,7 +176,9 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
         if self.mode == "velocity" and (c["azimuth_sc"] is None or c["sensor_yaw"] is None):
             raise ValueError("ClusterMerger: mode='velocity' needs the columns 'azimuth_sc' and 'sensor_yaw' (rad)")
         stage1 = clone(self.stage1) if self.stage1 is not None else RadarDBSCAN()
-        stage1_labels = check_memory(self.memory).cache(_stage1_labels)(stage1, {name: c[name] for name in STAGE1_READS.names})
+        stage1_labels = check_memory(self.memory).cache(_stage1_labels)(
+            stage1, {name: c[name] for name in STAGE1_READS.names}
+        )
         stage1_labels = np.asarray(stage1_labels)
         sequence = np.zeros(len(stage1_labels)) if c["sequence"] is None else c["sequence"]
         los = None
@@ -205,9 +207,10 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
         if self.mode == "velocity":
             merge = self._velocity_merges(runs, pair_a, pair_b, c["v_r"][rows], los[rows])
         else:
-            merge = continuation_edges(runs, pair_a, pair_b, self.eps_d, self.eps_v, self.eps_t2,
-                                       self.unknown_velocity == "accept")  # fmt: skip
-        edges = list(zip(pair_a[merge].tolist(), pair_b[merge].tolist()))
+            merge = continuation_edges(
+                runs, pair_a, pair_b, self.eps_d, self.eps_v, self.eps_t2, self.unknown_velocity == "accept"
+            )
+        edges = list(zip(pair_a[merge].tolist(), pair_b[merge].tolist(), strict=True))
         component = merge_components(len(runs.ids), edges, self.min_samples)
         cluster_of_position = np.repeat(np.arange(len(runs.ids)), runs.run_end - runs.run_start)
         representative = runs.order[runs.run_start]  # earliest detection of each cluster
@@ -232,7 +235,9 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
         va, vb = velocity[0::2], velocity[1::2]
         known = np.isfinite(va).all(axis=1) & np.isfinite(vb).all(axis=1)
         with np.errstate(invalid="ignore"):
-            dphi = np.abs((np.arctan2(va[:, 1], va[:, 0]) - np.arctan2(vb[:, 1], vb[:, 0]) + np.pi) % (2 * np.pi) - np.pi)
+            dphi = np.abs(
+                (np.arctan2(va[:, 1], va[:, 0]) - np.arctan2(vb[:, 1], vb[:, 0]) + np.pi) % (2 * np.pi) - np.pi
+            )
             agree = (dphi < self.eps_phi) & (np.abs(np.hypot(*va.T) - np.hypot(*vb.T)) < self.eps_v)
         merge[frames[:, 0]] = np.where(known, agree, self.unknown_velocity == "accept")
         return merge

@@ -63,13 +63,19 @@ def cluster_runs(labels, x, y, t):
     scan_start = np.searchsorted(scan_cluster, np.arange(len(ids)), side="left")
     scan_end = np.searchsorted(scan_cluster, np.arange(len(ids)), side="right")
     return ClusterRuns(
-        ids=ids, order=order, run_start=run_start.astype(np.int64), run_end=run_end,
+        ids=ids,
+        order=order,
+        run_start=run_start.astype(np.int64),
+        run_end=run_end,
         t=np.ascontiguousarray(sorted_t, dtype=np.float64),
-        x=np.ascontiguousarray(x[order], dtype=np.float64), y=np.ascontiguousarray(y[order], dtype=np.float64),
+        x=np.ascontiguousarray(x[order], dtype=np.float64),
+        y=np.ascontiguousarray(y[order], dtype=np.float64),
         scan_t=np.ascontiguousarray(sorted_t[scan_first], dtype=np.float64),
-        scan_x=np.bincount(scan_of_row, x[order]) / count, scan_y=np.bincount(scan_of_row, y[order]) / count,
-        scan_start=scan_start.astype(np.int64), scan_end=scan_end.astype(np.int64),
-    )  # fmt: skip
+        scan_x=np.bincount(scan_of_row, x[order]) / count,
+        scan_y=np.bincount(scan_of_row, y[order]) / count,
+        scan_start=scan_start.astype(np.int64),
+        scan_end=scan_end.astype(np.int64),
+    )
 
 
 @numba.njit(cache=True, nogil=True)
@@ -103,11 +109,11 @@ def _pair_frame(a, b, t, run_start, run_end, eps_t2):
     """
     start_b = t[run_start[b]]
     tau = min(t[run_end[b] - 1], start_b + eps_t2)
-    lo, past_a_end = time_range(t, run_start[a], run_end[a], -np.inf, tau)
-    lo, before_b_end = time_range(t, run_start[a], past_a_end, -np.inf, start_b)
+    _, past_a_end = time_range(t, run_start[a], run_end[a], -np.inf, tau)
+    _, before_b_end = time_range(t, run_start[a], past_a_end, -np.inf, start_b)
     alive = past_a_end > before_b_end
     gap = 0.0 if alive else start_b - t[before_b_end - 1]
-    lo, b_end = time_range(t, run_start[b], run_end[b], -np.inf, tau)
+    _, b_end = time_range(t, run_start[b], run_end[b], -np.inf, tau)
     return gap < eps_t2, tau, past_a_end, b_end
 
 
@@ -122,7 +128,7 @@ def _velocity_frames(pair_a, pair_b, t, x, y, run_start, run_end, eps_d, eps_t2)
     eps_d2 = eps_d * eps_d
     for k in range(len(pair_a)):
         a, b = pair_a[k], pair_b[k]
-        ok, tau, past_a_end, b_end = _pair_frame(a, b, t, run_start, run_end, eps_t2)
+        ok, _tau, past_a_end, b_end = _pair_frame(a, b, t, run_start, run_end, eps_t2)
         if not ok:
             continue
         a_first, a_end = time_range(t, run_start[a], past_a_end, t[run_start[b]] - eps_t2, np.inf)
@@ -144,7 +150,9 @@ def _velocity_frames(pair_a, pair_b, t, x, y, run_start, run_end, eps_d, eps_t2)
 
 def velocity_frames(runs, pair_a, pair_b, eps_d, eps_t2):
     """Candidate pairs of Eq. 6 with their detection frames (see :func:`_velocity_frames`)."""
-    return _velocity_frames(pair_a, pair_b, runs.t, runs.x, runs.y, runs.run_start, runs.run_end, float(eps_d), float(eps_t2))
+    return _velocity_frames(
+        pair_a, pair_b, runs.t, runs.x, runs.y, runs.run_start, runs.run_end, float(eps_d), float(eps_t2)
+    )
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -180,8 +188,8 @@ def _continuation(scan_t, scan_x, scan_y, first, n):
     for i in range(k):
         scan = n - k + i
         lag[i] = scan_t[first + scan] - scan_t[last]
-        sx[i] = _smoothed(scan_x[first:last + 1], scan, n)
-        sy[i] = _smoothed(scan_y[first:last + 1], scan, n)
+        sx[i] = _smoothed(scan_x[first : last + 1], scan, n)
+        sy[i] = _smoothed(scan_y[first : last + 1], scan, n)
     vx = 0.0
     vy = 0.0
     if k == 4:
@@ -212,18 +220,32 @@ def _continuation(scan_t, scan_x, scan_y, first, n):
 
 @numba.njit(cache=True, nogil=True)
 def _scans_up_to(scan_t, first, end, tau):
-    lo, hi = time_range(scan_t, first, end, -np.inf, tau)
+    _lo, hi = time_range(scan_t, first, end, -np.inf, tau)
     return hi - first
 
 
 @numba.njit(cache=True, nogil=True)
-def _continuation_edges(pair_a, pair_b, t, run_start, run_end, scan_t, scan_x, scan_y, scan_start, scan_end,
-                        eps_d, eps_v, eps_t2, accept_unknown):  # fmt: skip
+def _continuation_edges(
+    pair_a,
+    pair_b,
+    t,
+    run_start,
+    run_end,
+    scan_t,
+    scan_x,
+    scan_y,
+    scan_start,
+    scan_end,
+    eps_d,
+    eps_v,
+    eps_t2,
+    accept_unknown,
+):
     """The continuation criterion for every pair: continued centres within eps_d (m), velocities within eps_v (m/s)."""
     merge = np.zeros(len(pair_a), dtype=np.bool_)
     for k in range(len(pair_a)):
         a, b = pair_a[k], pair_b[k]
-        ok, tau, past_a_end, b_end = _pair_frame(a, b, t, run_start, run_end, eps_t2)
+        ok, tau, _past_a_end, _b_end = _pair_frame(a, b, t, run_start, run_end, eps_t2)
         if not ok:
             continue
         n_a = _scans_up_to(scan_t, scan_start[a], scan_end[a], tau)
@@ -253,9 +275,21 @@ def _continuation_edges(pair_a, pair_b, t, run_start, run_end, scan_t, scan_x, s
 def continuation_edges(runs, pair_a, pair_b, eps_d, eps_v, eps_t2, accept_unknown):
     """Boolean per pair: does the continuation criterion merge it? (see :func:`_continuation_edges`)."""
     return _continuation_edges(
-        pair_a, pair_b, runs.t, runs.run_start, runs.run_end, runs.scan_t, runs.scan_x, runs.scan_y,
-        runs.scan_start, runs.scan_end, float(eps_d), float(eps_v), float(eps_t2), bool(accept_unknown),
-    )  # fmt: skip
+        pair_a,
+        pair_b,
+        runs.t,
+        runs.run_start,
+        runs.run_end,
+        runs.scan_t,
+        runs.scan_x,
+        runs.scan_y,
+        runs.scan_start,
+        runs.scan_end,
+        float(eps_d),
+        float(eps_v),
+        float(eps_t2),
+        bool(accept_unknown),
+    )
 
 
 def track_continuation(runs, cluster, tau):

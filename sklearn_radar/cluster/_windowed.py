@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from numbers import Integral, Real
+from typing import ClassVar
 
 import numpy as np
 from sklearn.base import BaseEstimator, ClusterMixin, _fit_context
@@ -65,7 +66,7 @@ class WindowedDBSCAN(_WindowedClusterer):
         When X is a DataFrame.
     """
 
-    _parameter_constraints: dict = {
+    _parameter_constraints: ClassVar[dict] = {
         "eps": [Interval(Real, 0, None, closed="neither")],
         "min_samples": [Interval(Integral, 1, None, closed="left")],
         "vr_scale": [Interval(Real, 0, None, closed="neither")],
@@ -114,7 +115,7 @@ class WindowedHDBSCAN(_WindowedClusterer):
         When X is a DataFrame.
     """
 
-    _parameter_constraints: dict = {
+    _parameter_constraints: ClassVar[dict] = {
         "min_cluster_size": [Interval(Integral, 2, None, closed="left")],
         "min_samples": [Interval(Integral, 1, None, closed="left"), None],
         "cluster_selection_epsilon": [Interval(Real, 0, None, closed="left")],

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from numbers import Integral, Real
+from typing import ClassVar
 
 import numpy as np
 from joblib import Parallel, delayed
@@ -245,7 +246,7 @@ class DopplerDensityFilter(TransformerMixin, BaseEstimator):
     True
     """
 
-    _parameter_constraints: dict = {
+    _parameter_constraints: ClassVar[dict] = {
         "vr_threshold": [Interval(Real, 0, None, closed="left")],
         "d_xy": [Interval(Real, 0, None, closed="neither")],
         "dt": [Interval(Real, 0, None, closed="left")],
@@ -311,7 +312,15 @@ class DopplerDensityFilter(TransformerMixin, BaseEstimator):
         ratios, min_neighbors = self._rule()
         X, c = read_columns(self, X, FILTER_READS, reset=False)
         counts = _neighbor_counts(
-            c["x"], c["y"], c["t"], c["sequence"], self.d_xy, self.dt, self.causal, int(min_neighbors.max()), self.n_jobs
+            c["x"],
+            c["y"],
+            c["t"],
+            c["sequence"],
+            self.d_xy,
+            self.dt,
+            self.causal,
+            int(min_neighbors.max()),
+            self.n_jobs,
         )
         keep = _doppler_density_keep(c["v_r"], counts, self.vr_threshold, ratios, min_neighbors)
         return write_columns(X, {"keep": keep if hasattr(X, "columns") else keep.astype(np.float64)})

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from typing import ClassVar
+
 import numpy as np
 from sklearn.base import BaseEstimator, TransformerMixin, _fit_context
 from sklearn.utils._param_validation import StrOptions
@@ -9,6 +11,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from .._schema import FRAME_TRANSFORM_READS
 from .._validation import read_columns, write_columns
+
 
 class FrameTransform(TransformerMixin, BaseEstimator):
     """Give every detection working coordinates x, y (m), v_r (m/s), t (s) and heading (rad).
@@ -75,7 +78,7 @@ class FrameTransform(TransformerMixin, BaseEstimator):
     True
     """
 
-    _parameter_constraints: dict = {"frame": [StrOptions({"frame", "car"})]}
+    _parameter_constraints: ClassVar[dict] = {"frame": [StrOptions({"frame", "car"})]}
 
     def __init__(self, frame="frame"):
         self.frame = frame
