@@ -1,6 +1,7 @@
 """The scikit-optimize shim works with the installed scikit-learn and numpy."""
 
 import numpy as np
+import pytest
 from sklearn.cluster import DBSCAN
 from sklearn.datasets import make_blobs
 from sklearn.metrics import v_measure_score
@@ -27,6 +28,14 @@ def test_bayes_search_tunes_a_clusterer_with_grouped_cv():
         random_state=0,
     )
     search.fit(X, y, groups=groups)
-    assert len(search.cv_results_["params"]) == 8
-    assert 0.0 < search.best_score_ <= 1.0
-    assert 0.05 <= search.best_params_["eps"] <= 3.0
+    results = search.cv_results_
+    assert len(results["params"]) == 8
+    # Every candidate's score is its mean V-measure over the grouped folds, recomputed here with plain
+    # scikit-learn: DBSCAN fitted on each test fold (a clusterer scores what it clusters).
+    folds = [test for _, test in GroupKFold(n_splits=3).split(X, y, groups)]
+    for params, score in zip(results["params"], results["mean_test_score"]):
+        expected = np.mean([v_measure_score(y[test], DBSCAN(**params).fit_predict(X[test])) for test in folds])
+        assert score == pytest.approx(expected, abs=1e-12)
+        assert 0.05 <= params["eps"] <= 3.0 and 2 <= params["min_samples"] <= 10
+    assert search.best_score_ == max(results["mean_test_score"])
+    assert search.best_params_ == results["params"][int(np.argmax(results["mean_test_score"]))]
