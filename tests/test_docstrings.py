@@ -71,11 +71,6 @@ CUSTOM_CODES = {
 #: windowed baselines, FrameTransform and DopplerDensityFilter, the reproduce job).  They are being
 #: fixed there; remove an entry (or a code) as soon as it passes -- the test insists.
 KNOWN_GAPS = {
-    "sklearn_radar.cluster.ClusterMerger.fit": {"PR07"},
-    "sklearn_radar.cluster.ScanStream.update": {"PR07"},
-    "sklearn_radar.cluster.WindowedDBSCAN.fit": {"PR01", "RT01"},
-    "sklearn_radar.cluster.WindowedHDBSCAN": {"PR07"},
-    "sklearn_radar.cluster.WindowedHDBSCAN.fit": {"PR01", "RT01"},
     "sklearn_radar.reproduce.parse_experiments": {"PR01", "RT01"},
 }
 

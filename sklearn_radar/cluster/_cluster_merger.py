@@ -165,6 +165,9 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
         Parameters
         ----------
         X : DataFrame or array-like of shape (n_detections, n_columns)
+            Working detections (the output of :class:`FrameTransform`, optionally filtered by
+            :class:`DopplerDensityFilter`), or an array in the order of
+            :data:`~sklearn_radar._schema.WORK_LAYOUT`.
         y : None
             Ignored.
 

@@ -408,6 +408,7 @@ class ScanStream:
         t : float or array-like of float, s
             Scan time(s); never older than what was passed for the sequence.
         sequence : int or array-like, default=0
+            Sequence of each detection; each sequence has its own window.
         keep : array-like of bool, default=None
             False marks detections removed by the filter.
         range_sc : array-like of float, m, default=None

@@ -81,7 +81,21 @@ class WindowedDBSCAN(_WindowedClusterer):
 
     @_fit_context(prefer_skip_nested_validation=True)
     def fit(self, X, y=None):
-        """Cluster every window; one scikit-learn call with the windows laid far apart."""
+        """Cluster every window; one scikit-learn call with the windows laid far apart.
+
+        Parameters
+        ----------
+        X : DataFrame or array-like of shape (n_detections, n_columns)
+            Working detections with the columns ``x``, ``y`` (m), ``v_r`` (m/s), ``t`` (s) and
+            optionally ``sequence`` and ``keep``.
+        y : None
+            Ignored.
+
+        Returns
+        -------
+        self : WindowedDBSCAN
+            With ``labels_``.
+        """
         features, window_id, active = self._features(X, reset=True)
         labels = np.full(len(features), -1, dtype=np.int64)
         if active.any():
@@ -98,6 +112,7 @@ class WindowedHDBSCAN(_WindowedClusterer):
     Parameters
     ----------
     min_cluster_size : int, default=3
+        Smallest cluster, in detections.
     min_samples : int, default=None
         None: equal to ``min_cluster_size``.
     cluster_selection_epsilon : float, default=0.0
@@ -132,7 +147,21 @@ class WindowedHDBSCAN(_WindowedClusterer):
 
     @_fit_context(prefer_skip_nested_validation=True)
     def fit(self, X, y=None):
-        """Cluster every window with its own HDBSCAN."""
+        """Cluster every window with its own HDBSCAN.
+
+        Parameters
+        ----------
+        X : DataFrame or array-like of shape (n_detections, n_columns)
+            Working detections with the columns ``x``, ``y`` (m), ``v_r`` (m/s), ``t`` (s) and
+            optionally ``sequence`` and ``keep``.
+        y : None
+            Ignored.
+
+        Returns
+        -------
+        self : WindowedHDBSCAN
+            With ``labels_``.
+        """
         features, window_id, active = self._features(X, reset=True)
         labels = np.full(len(features), -1, dtype=np.int64)
         rows = np.flatnonzero(active)
