@@ -69,18 +69,15 @@ PARAM_VALIDATION_FUNCTION_LIST = [
     "sklearn_radar.model_selection.sequence_train_test_split",
     "sklearn_radar.preprocessing.doppler_density_keep",
     "sklearn_radar.preprocessing.neighbor_counts",
-]
-
-#: Public functions whose validation lands with the rework of ``sklearn_radar.reproduce``;
-#: they move into PARAM_VALIDATION_FUNCTION_LIST then.
-PENDING = [
     "sklearn_radar.reproduce.cluster_radarscenes",
     "sklearn_radar.reproduce.load_params",
     "sklearn_radar.reproduce.parse_experiments",
     "sklearn_radar.reproduce.reproduce",
     "sklearn_radar.reproduce.write_predictions",
 ]
-PENDING_REASON = "decorated in the reproduce rework"
+
+#: Public functions whose validation lands with the rework of ``sklearn_radar.reproduce``;
+#: they move into PARAM_VALIDATION_FUNCTION_LIST then.
 
 
 def _public_functions():
@@ -95,7 +92,7 @@ def _public_functions():
 
 
 def test_every_public_function_is_listed():
-    listed = PARAM_VALIDATION_FUNCTION_LIST + PENDING
+    listed = PARAM_VALIDATION_FUNCTION_LIST
     assert len(set(listed)) == len(listed), "a function is listed twice"
     assert set(listed) == _public_functions()
 
@@ -169,10 +166,7 @@ def _check_function_param_validation(func, func_name, func_params, required_para
                 func(**{**valid_required_params, param_name: bad_value})
 
 
-_PENDING_PARAMS = [pytest.param(name, marks=pytest.mark.skip(reason=PENDING_REASON)) for name in PENDING]
-
-
-@pytest.mark.parametrize("func_module", PARAM_VALIDATION_FUNCTION_LIST + _PENDING_PARAMS)
+@pytest.mark.parametrize("func_module", PARAM_VALIDATION_FUNCTION_LIST)
 def test_function_param_validation(func_module):
     func, func_name, func_params, required_params = _get_func_info(func_module)
     assert hasattr(func, "__wrapped__"), f"{func_module} is not decorated with validate_params"

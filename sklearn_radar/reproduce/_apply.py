@@ -3,10 +3,13 @@
 from __future__ import annotations
 
 import json
+import os
+from numbers import Integral
 from pathlib import Path
 
 import numpy as np
 from sklearn.base import BaseEstimator
+from sklearn.utils._param_validation import Interval, validate_params
 
 from .._schema import LABELS, STATIC_LABEL
 from ..datasets import load_radarscenes
@@ -17,6 +20,10 @@ from ._io import atomic_write_text
 CLASS_NAMES = {0: "NOISE", 1: "CLUSTERED"}
 
 
+_EXPERIMENT = [Interval(Integral, 1, None, closed="left"), None]
+
+
+@validate_params({"path": [str, os.PathLike], "experiment": _EXPERIMENT}, prefer_skip_nested_validation=True)
 def load_params(path, experiment=None):
     """The saved setting of ``experiment`` (default: the best) from a reproduce run's ``params.json``.
 
@@ -98,6 +105,10 @@ def _checked_setting(saved, path, experiment):
     return setting
 
 
+@validate_params(
+    {"data": [str, os.PathLike], "params": [str, os.PathLike], "out": [str, os.PathLike], "experiment": _EXPERIMENT},
+    prefer_skip_nested_validation=True,
+)
 def cluster_radarscenes(data, params, out, experiment=None):
     """Cluster every detection of a RadarScenes folder with saved parameters.
 
@@ -153,6 +164,9 @@ def _pipeline(setting, path):
     return pipeline
 
 
+@validate_params(
+    {"uuids": ["array-like"], "labels": ["array-like"], "out": [str, os.PathLike]}, prefer_skip_nested_validation=True
+)
 def write_predictions(uuids, labels, out):
     """Write cluster labels in the devkit's ``per_point_predictions_to_json`` layout, schema 2 (label and instance).
 

@@ -32,11 +32,13 @@ import tempfile
 import time
 import uuid
 from dataclasses import dataclass, field
+from numbers import Integral
 from pathlib import Path
 
 import numpy as np
 from sklearn.base import clone
 from sklearn.model_selection import GroupKFold
+from sklearn.utils._param_validation import HasMethods, Interval, validate_params
 from threadpoolctl import threadpool_limits
 
 from .. import __version__
@@ -125,8 +127,22 @@ class Run:
     started_utc: str = field(default_factory=lambda: _utc_now())
 
 
+@validate_params({"text": [str, None]}, prefer_skip_nested_validation=True)
 def parse_experiments(text):
-    """``"filter,1-8,13,baselines"`` -> the experiment keys, in run order; ValueError names unknown ones."""
+    """``"filter,1-8,13,baselines"`` -> the experiment keys, in run order; ValueError names unknown ones.
+
+    Parameters
+    ----------
+    text : str or None
+        Comma-separated keys: ``filter``, experiment numbers ``1``-``13``,
+        ranges such as ``2-9``, ``filter-effect`` and ``baselines``.  None
+        selects every step.
+
+    Returns
+    -------
+    keys : list of str
+        The selected steps, each once, in the order a run executes them.
+    """
     if text is None:
         return list(ALL_EXPERIMENTS)
     first, last = min(NUMBERS), max(NUMBERS)
@@ -151,6 +167,19 @@ def parse_experiments(text):
     return [key for key in ALL_EXPERIMENTS if key in chosen]
 
 
+@validate_params(
+    {
+        "data": [str, os.PathLike, None],
+        "out": [str, os.PathLike],
+        "n_iter": [Interval(Integral, 1, None, closed="left"), None],
+        "n_jobs": [Integral, None],
+        "experiments": [str, None],
+        "full": ["boolean"],
+        "seed": [Interval(Integral, 0, None, closed="left")],
+        "stream": [HasMethods(["write"]), None],
+    },
+    prefer_skip_nested_validation=True,
+)
 def reproduce(
     data=None,
     out="sklearn-radar-report",
