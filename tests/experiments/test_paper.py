@@ -1,11 +1,13 @@
 """The paper's experiments as data: Tables III/IV, pipelines and search spaces."""
 
 import math
+import re
 from numbers import Integral
 
 import numpy as np
 import pytest
 from sklearn.base import clone
+from sklearn.pipeline import Pipeline
 
 from sklearn_radar import ClusterMerger, DopplerDensityFilter, FrameTransform, RadarDBSCAN
 from sklearn_radar._skopt import Integer
@@ -35,36 +37,147 @@ OPTIMISED = {
 }
 
 
+#: The rows of Tables III and IV exactly as they stand in the paper's LaTeX source (copied, not retyped).
+#: The tests parse them, so every cell of sklearn_radar.experiments is checked against the paper itself.
+TABLE_III_LATEX = r"""
+ 		\parbox[t]{2mm}{\multirow{4}{*}{\rotatebox[origin=c]{90}{\textbf{Baseline}}}} & 1 & Expert Setting & CCS & \ref{eq:filter_metric}, \ref{eq:step1_1} & \SI{67.57}{\percent} &  $\epsilon_{xy}=1.00$, $\epsilon_{v_r}=5.00$, $N_{\text{min}}=3$, $v_{r,\text{min}}=0.40$ \\
+		& 2 & Baseline & CCS & \ref{eq:filter_metric}, \ref{eq:step1_1} & \SI{68.87}{\percent} &  $\epsilon_{xy}=0.62$, $\epsilon_{v_r}=11.2$, $N_{\text{min}}=3$, $v_{r,\text{min}}=0.23$ \\
+		& 3 & Baseline & FCS & \ref{eq:filter_metric}, \ref{eq:step1_1} & \SI{69.19}{\percent} &  $\epsilon_{xy}=0.60$, $\epsilon_{v_r}=12.3$, $N_{\text{min}}=3$, $v_{r,\text{min}}=0.25$ \\
+		& 4 & Baseline -- unfiltered & FCS & \ref{eq:step1_1} & \SI{69.19}{\percent} &  $\epsilon_{xy}=0.60$, $\epsilon_{v_r}=12.3$, $N_{\text{min}}=3$, $v_{r,\text{min}}=0.25$ \\
+ 		\parbox[t]{2mm}{\multirow{4}{*}{\rotatebox[origin=c]{90}{\textbf{Methods}}}} & 5 & Euclidean $xy$-distance & FCS & \ref{eq:filter_metric}, \ref{eq:step1_2} & \SI{69.33}{\percent} &  $\epsilon_{xy}=0.76$, $\epsilon_{v_r}=14.1$, $N_{\text{min}}=3$, $v_{r,\text{min}}=0.31$ \\
+ 		& 6 & Euclidean $xyv_r$-distance & FCS & \ref{eq:filter_metric}, \ref{eq:step1_3} & \SI{69.47}{\percent} &  $\epsilon_{xyv_r}=0.72$, $\epsilon^{'}_{v_r}=13.5$, $N_{\text{min}}=3$, $v_{r,\text{min}}=0.48$ \\
+ 		& 7 & Adaptive $N_{\text{min}}(r)$ & FCS & \ref{eq:filter_metric}, \ref{eq:min_pts}, \ref{eq:step1_1} & \SI{70.56}{\percent} &  $\epsilon_{xy}=0.76$, $\epsilon_{v_r}=8.63$, $N_\text{min,50}=3.02$, $v_{r,\text{min}}=0.46$, $\alpha_r=0.99$ \\
+  		& 8 & \textbf{Combined $\mathbf{N_{\text{min}}(r)}$ \& $\mathbf{\epsilon_{xyv_r}}$} & \textbf{FCS} & \textbf{\ref{eq:filter_metric}, \ref{eq:min_pts}, \ref{eq:step1_3}} & \textbf{\SI{71.55}{\percent}} &  $\epsilon_{xyv_r}=1.04$, $\epsilon^{'}_{v_r}=1.03$, $N_\text{min,50}=3.87$, $v_{r,\text{min}}=1.00$, $\alpha_r=0.99$ \\ 
+  		\parbox[t]{2mm}{\multirow{3}{*}{\rotatebox[origin=c]{90}{\textbf{Control}}}} & 9 & Combined -- unfiltered & FCS & \ref{eq:min_pts}, \ref{eq:step1_3} & \SI{69.91}{\percent} &  $\epsilon_{xyv_r}=1.18$, $\epsilon^{'}_{v_r}=1.01$, $N_\text{min,50}=3.81$, $v_{r,\text{min}}=0.98$, $\alpha_r=0.99$ \\ 
+  		& 10 & Best setting -- unfiltered & FCS & \ref{eq:min_pts}, \ref{eq:step1_3} & \SI{69.86}{\percent} &  $\epsilon_{xyv_r}=1.04$, $\epsilon^{'}_{v_r}=1.03$, $N_\text{min,50}=3.87$, $v_{r,\text{min}}=1.00$, $\alpha_r=0.99$ \\ 
+  		& 11 & Best setting on baseline & FCS & \ref{eq:filter_metric}, \ref{eq:step1_1} & \SI{67.73}{\percent} &  $\epsilon_{xy}=1.04$, $\epsilon_{v_r}=1.03$, $N_{\text{min}}=4$, $v_{r,\text{min}}=1.00$ \\ 
+"""
+#: Table IV (its caption: "All experiments are based on the frame coordinate system").
+TABLE_IV_LATEX = r"""
+ 		\parbox[t]{2mm}{\multirow{2}{*}{\rotatebox[origin=c]{90}{\textbf{Base.}}}} & 3 & Step 1 -- baseline setting & \SI{69.19}{\percent} &  $\epsilon_{xy}=0.60$, $\epsilon_{v_r}=12.3$, $N_{\text{min}}=3$, $v_{r,\text{min}}=0.25$ \\
+ 		& 8 & Step 1 -- best setting & \SI{71.55}{\percent} &  $\epsilon_{xyv_r}=1.04$, $\epsilon^{'}_{v_r}=1.03$, $N_\text{min,50}=3.87$, $v_{r,\text{min}}=1.00$, $\alpha_r=0.99$ \\
+ 		\parbox[t]{2mm}{\multirow{2}{*}{\rotatebox[origin=c]{90}{\textbf{Meth.}}}} & 12 & Step 2 -- real velocity estimate & \SI{70.36}{\percent} &  $\epsilon_{d}=1.00$, $\epsilon_{\phi}=\SI{23.11}{\degree}$, $\epsilon_{v}=1.04$, $N_{\text{min}}=1$, $\epsilon_{t2}=0.35$ \\
+ 		& 13 & \textbf{Step 2 -- cluster continuation} & \textbf{\SI{71.79}{\percent}} & $\epsilon_{\text{pred,min}}=0.94$, $\epsilon_{v}=2.72$, $N_{\text{min}}=1$, $\epsilon_{t2}=0.35$ \\
+"""
+#: The paper's symbols as parameter names of RadarDBSCAN (Table III) and ClusterMerger (Table IV).
+SYMBOLS = {
+    r"\epsilon_{xy}": "eps_xy", r"\epsilon_{v_r}": "eps_vr", r"N_{\text{min}}": "min_samples",
+    r"v_{r,\text{min}}": "vr_min", r"\epsilon_{xyv_r}": "eps_xyv", r"\epsilon^{'}_{v_r}": "vr_scale",
+    r"N_\text{min,50}": "min_samples", r"\alpha_r": "alpha_r", r"\epsilon_{d}": "eps_d",
+    r"\epsilon_{\phi}": "eps_phi", r"\epsilon_{v}": "eps_v", r"\epsilon_{t2}": "eps_t2",
+    r"\epsilon_{\text{pred,min}}": "eps_d",
+}  # fmt: skip
+#: Equation labels of the paper's source and their numbers; the criterion equations name the metric.
+EQUATIONS = {"filter_metric": 1, "min_pts": 2, "step1_1": 3, "step1_2": 4, "step1_3": 5}
+METRICS = {3: "box", 4: "xy", 5: "xyv"}
+#: Sec. IV-A: "The chosen setting of 0.1 m/s and 1.4 m velocity and distance thresholds".
+CHOSEN_FILTER = {"vr_threshold": 0.10, "d_xy": 1.4}
+
+
+def _value(text):
+    number = re.search(r"\d+(\.\d+)?", text).group()
+    return int(number) if "." not in number else float(number)
+
+
+def _parse(latex, stage):
+    """{number: {"frame", "equations", "v1", "params"}} from table rows of the paper's LaTeX source."""
+    rows = {}
+    for line in latex.strip().splitlines():
+        cells = [cell.strip() for cell in re.split(r"(?<!\\)&", line.strip().removesuffix("\\\\"))]
+        if stage == 1:
+            _, number, _, cs, equations, v1, params = cells
+        else:
+            (_, number, method, v1, params), cs, equations = cells, "FCS", ""
+        pairs = re.findall(r"\$(.+?)=(.+?)\$", params)
+        setting = {SYMBOLS[symbol]: _value(value) for symbol, value in pairs}
+        numbers = sorted(EQUATIONS[label] for label in re.findall(r"eq:(\w+)", equations))
+        if stage == 1:  # the criterion's equation names the metric; no Eq. 2 means a fixed N_min
+            setting = {"metric": METRICS[max(numbers)], **setting, "eps_t": 0.25}  # caption: eps_t = 0.25
+            setting.setdefault("alpha_r", 0.0)
+        elif int(number) >= 12:
+            setting = {"mode": "velocity" if "velocity" in method else "continuation", **setting}
+        rows[int(number)] = {"frame": "car" if "CCS" in cs else "frame", "equations": tuple(numbers),
+                             "v1": _value(v1), "params": setting}  # fmt: skip
+    return rows
+
+
+PAPER = _parse(TABLE_III_LATEX, 1)
+PAPER_STAGE2 = _parse(TABLE_IV_LATEX, 2)
+
+
+def _in_package_units(number):
+    """The paper's setting in the package's units: eps_phi in radians (the paper prints degrees)."""
+    params = dict(PAPER[number]["params"] if number < 12 else PAPER_STAGE2[number]["params"])
+    if "eps_phi" in params:
+        params["eps_phi"] = math.radians(params["eps_phi"])
+    return params
+
+
+def _hand_built(number):
+    """Experiment ``number`` assembled by hand from the parsed tables: frame, filter flag, estimator."""
+    base = PAPER[number if number < 12 else 8]  # Table IV: stage 2 starts from "Step 1 -- best setting", #8
+    stage1 = RadarDBSCAN(**base["params"])
+    last = ("cluster", stage1) if number < 12 else ("merge", ClusterMerger(**_in_package_units(number), stage1=stage1))
+    filtered = 1 in base["equations"]
+    return Pipeline([
+        ("frame", FrameTransform(frame=base["frame"])),
+        ("filter", DopplerDensityFilter(**CHOSEN_FILTER) if filtered else "passthrough"),
+        last,
+    ])  # fmt: skip
+
+
 @pytest.fixture(scope="module")
 def tiny():
     return make_scenes(n_sequences=1, duration=3.0, random_state=1).data
 
 
-def test_tables_are_transcribed():
+def test_the_latex_excerpt_parses_into_every_experiment():
+    assert sorted(PAPER) == list(range(1, 12)) and sorted(PAPER_STAGE2) == [3, 8, 12, 13]
+    assert list(paper_experiments().index) == [e.number for e in PAPER_EXPERIMENTS] == list(range(1, 14))
+    assert PAPER[8]["params"] == {"metric": "xyv", "eps_xyv": 1.04, "vr_scale": 1.03, "min_samples": 3.87,
+                                  "vr_min": 1.00, "alpha_r": 0.99, "eps_t": 0.25}  # the parser itself, one row by hand
+    # Table IV repeats the two stage-1 bases of Table III.
+    for number in (3, 8):
+        assert PAPER_STAGE2[number]["params"].items() <= PAPER[number]["params"].items()
+        assert PAPER_STAGE2[number]["v1"] == PAPER[number]["v1"]
+
+
+@pytest.mark.parametrize("number", range(1, 14))
+def test_tables_are_the_papers(number):
+    experiment, row = get_experiment(number), PAPER[number] if number < 12 else PAPER_STAGE2[number]
+    assert experiment.number == number
+    assert experiment.v1_percent == row["v1"]
+    assert experiment.frame == row["frame"]
+    assert experiment.params == _in_package_units(number)  # eps_phi: degrees -> radians
+    step = "cluster" if number < 12 else "merge"
+    assert paper_params(number) == {f"{step}__{key}": value for key, value in experiment.params.items()}
     table = paper_experiments()
-    assert list(table.index) == list(range(1, 14)) == [e.number for e in PAPER_EXPERIMENTS]
-    assert table.loc[8, "v1_percent"] == 71.55 and table.loc[13, "v1_percent"] == 71.79
-    assert table.loc[1, "v1_percent"] == 67.57
-    assert list(table.index[table["frame"] == "car"]) == [1, 2]
-    assert list(table.index[~table["filtered"]]) == [4, 9, 10]
-    assert list(table.index[table["stage"] == 2]) == [12, 13]
-    assert list(table.index[~table["tuned"]]) == FIXED
-    assert table.loc[3, ["cluster__eps_xy", "cluster__eps_vr", "cluster__min_samples", "cluster__vr_min"]].tolist() == [
-        0.60, 12.3, 3, 0.25
-    ]
-    assert table.loc[8, ["cluster__eps_xyv", "cluster__vr_scale", "cluster__min_samples", "cluster__vr_min",
-                         "cluster__alpha_r"]].tolist() == [1.04, 1.03, 3.87, 1.00, 0.99]
-    assert table.loc[13, ["merge__eps_d", "merge__eps_v", "merge__min_samples", "merge__eps_t2"]].tolist() == [
-        0.94, 2.72, 1, 0.35
-    ]
-    assert get_experiment(12).eps_phi_deg == 23.11
-    assert get_experiment(12).params["eps_phi"] == pytest.approx(math.radians(23.11))
-    assert all(e.params.get("eps_t", 0.25) == 0.25 for e in PAPER_EXPERIMENTS if e.stage == 1)
+    assert table.loc[number, "v1_percent"] == row["v1"] and table.loc[number, "frame"] == row["frame"]
+    if number < 12:
+        assert experiment.stage == 1
+        assert experiment.equations == row["equations"]
+        assert experiment.filtered == (1 in row["equations"])
+    else:
+        assert experiment.stage == 2 and experiment.derived_from == 8
+        assert experiment.filtered == (1 in PAPER[8]["equations"])  # stage 2 runs on #8's filtered data
+    if number == 12:
+        assert experiment.eps_phi_deg == PAPER_STAGE2[12]["params"]["eps_phi"] == 23.11
+
+
+def test_only_the_expert_setting_and_the_transfers_of_8_are_untuned():
+    # Sec. IV: #1 is the expert setting; #10 and #11 reuse #8's optimum (identical numbers in Table III for
+    # #10; #11 its eps values on the box criterion).  Everything else was optimised.
+    assert PAPER[10]["params"] == PAPER[8]["params"]
+    assert (PAPER[11]["params"]["eps_xy"], PAPER[11]["params"]["eps_vr"]) == (
+        PAPER[8]["params"]["eps_xyv"], PAPER[8]["params"]["vr_scale"])
+    assert [e.number for e in PAPER_EXPERIMENTS if not e.tuned] == FIXED == [1, 10, 11]
+    assert list(paper_experiments().index[~paper_experiments()["tuned"]]) == FIXED
 
 
 def test_expert_setting_is_radar_dbscans_default():
-    expert = experiment_pipeline(1).named_steps["cluster"].get_params()
-    assert expert == RadarDBSCAN().get_params()
+    expert = PAPER[1]["params"]  # Table III, #1
+    assert {key: RadarDBSCAN().get_params()[key] for key in expert} == expert
+    assert experiment_pipeline(1).named_steps["cluster"].get_params() == RadarDBSCAN().get_params()
 
 
 def test_fixed_experiments_derive_from_8():
@@ -108,13 +221,15 @@ def test_min_samples_is_integer_for_fixed_and_real_for_range_adaptive_n_min():
 
 @pytest.mark.parametrize("number", TUNED)
 def test_sampled_points_are_valid_pipeline_parameters(number, tiny):
+    # A sampled point changes exactly the searched parameters: the result is that of the hand-built
+    # pipeline (paper setting from the LaTeX tables) with the same point set.
     space = search_space(number)
     rng = np.random.RandomState(number)
     for _ in range(2):
         point = {key: dimension.rvs(random_state=rng)[0] for key, dimension in space.items()}
         pipeline = experiment_pipeline(number).set_params(**point)
         labels = clone(pipeline).fit_predict(tiny)
-        assert labels.shape == (len(tiny),) and labels.min() >= -1
+        np.testing.assert_array_equal(labels, _hand_built(number).set_params(**point).fit_predict(tiny))
 
 
 @pytest.mark.parametrize("number", range(1, 14))
@@ -131,15 +246,18 @@ def test_pipeline_steps(number, tiny):
     else:
         assert filter_step == "passthrough"
     last = pipeline.steps[-1][1]
+    setting = _in_package_units(number)
     if number < 12:
         assert isinstance(last, RadarDBSCAN) and last.n_jobs == 2
-        assert {k: last.get_params()[k] for k in experiment.params} == experiment.params
+        assert {k: last.get_params()[k] for k in setting} == setting
     else:
         assert isinstance(last, ClusterMerger) and isinstance(last.stage1, RadarDBSCAN)
-        assert {k: last.get_params()[k] for k in experiment.params} == experiment.params
-        assert {k: last.stage1.get_params()[k] for k in get_experiment(8).params} == get_experiment(8).params
+        assert {k: last.get_params()[k] for k in setting} == setting
+        assert {k: last.stage1.get_params()[k] for k in PAPER[8]["params"]} == PAPER[8]["params"]
+    # The same labels as the experiment assembled by hand from the paper's tables.
     labels = pipeline.fit_predict(tiny)
-    assert labels.shape == (len(tiny),)
+    np.testing.assert_array_equal(labels, _hand_built(number).fit_predict(tiny))
+    assert labels.max() >= 5  # a case with clusters to tell apart
 
 
 def test_memory_reaches_pipeline_and_cluster_merger(tmp_path):
