@@ -118,7 +118,13 @@ def find_chromium() -> str | None:
 def screenshot(chromium: str, page: Path, png: Path) -> str | None:
     """Save a screenshot of ``page``; return a problem description or None."""
     with tempfile.TemporaryDirectory(prefix="chromium-profile-") as profile:
-        command = [chromium, *CHROMIUM_FLAGS, f"--user-data-dir={profile}", f"--screenshot={png}", page.resolve().as_uri()]
+        command = [
+            chromium,
+            *CHROMIUM_FLAGS,
+            f"--user-data-dir={profile}",
+            f"--screenshot={png}",
+            page.resolve().as_uri(),
+        ]
         try:
             result = subprocess.run(command, capture_output=True, text=True, timeout=120)
         except subprocess.TimeoutExpired:

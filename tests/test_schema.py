@@ -6,8 +6,8 @@ import pytest
 
 from sklearn_radar._schema import (
     DETECTION_COLUMNS,
-    RADARSCENES_MOUNTING,
     RADAR_DATA_COLUMNS,
+    RADARSCENES_MOUNTING,
     attach_context,
     check_columns,
     describe_columns,
@@ -74,7 +74,9 @@ def test_make_frame_names_the_table_and_the_bad_column(change, match):
 
 def test_attach_context_copies_pose_and_mounting_per_row():
     radar = make_frame(_radar_rows(), RADAR_DATA_COLUMNS, table="t")
-    odometry = pd.DataFrame({"x_seq": [1.0, 2.0], "y_seq": [3.0, 4.0], "yaw_seq": [0.1, 0.2], "vx": [5.0, 6.0], "yaw_rate": [0.0, 0.5]})
+    odometry = pd.DataFrame(
+        {"x_seq": [1.0, 2.0], "y_seq": [3.0, 4.0], "yaw_seq": [0.1, 0.2], "vx": [5.0, 6.0], "yaw_rate": [0.0, 0.5]}
+    )
     data = attach_context(radar, 7, np.array([1, 0, 1]), odometry, RADARSCENES_MOUNTING)
     assert list(data.columns) == [c.name for c in DETECTION_COLUMNS]
     assert data["sequence"].tolist() == [7, 7, 7]

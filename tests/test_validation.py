@@ -80,9 +80,9 @@ def test_an_array_pipeline_equals_the_dataframe_pipeline_in_both_merging_modes()
     stage1 = RadarDBSCAN(metric="xyv", eps_xyv=1.2, min_samples=3, alpha_r=0.5, vr_min=0.5)
     for mode in ("velocity", "continuation"):
         merger = ClusterMerger(stage1=stage1, mode=mode, unknown_velocity="accept")
-        from_frame = (
-            merger.fit(DopplerDensityFilter().fit_transform(FrameTransform().fit_transform(data))).labels_.copy()
-        )
+        from_frame = merger.fit(
+            DopplerDensityFilter().fit_transform(FrameTransform().fit_transform(data))
+        ).labels_.copy()
         from_array = merger.fit(DopplerDensityFilter().fit_transform(FrameTransform().fit_transform(raw))).labels_
         assert from_frame.max() > 3
         np.testing.assert_array_equal(from_array, from_frame)

@@ -67,7 +67,9 @@ def reference_merges(labels, x, y, t, v_r, los, *, mode, eps_d, eps_phi, eps_v, 
                 frame_a = past_a[t[past_a] >= start_b - eps_t2]
                 if len(frame_a) == 0:
                     continue
-                d_min = np.sqrt(((x[frame_a, None] - x[None, rows_b]) ** 2 + (y[frame_a, None] - y[None, rows_b]) ** 2).min())
+                d_min = np.sqrt(
+                    ((x[frame_a, None] - x[None, rows_b]) ** 2 + (y[frame_a, None] - y[None, rows_b]) ** 2).min()
+                )
                 if d_min >= eps_d:
                     continue
                 va = np.array(estimate_velocity(v_r[frame_a], los[frame_a])[:2])
@@ -81,7 +83,9 @@ def reference_merges(labels, x, y, t, v_r, los, *, mode, eps_d, eps_phi, eps_v, 
                 end_a, pa, va = reference_continuation(past_a, x, y, t)
                 end_b, pb, vb = reference_continuation(rows_b, x, y, t)
                 at = start_b + np.array([0.0, 0.5, 1.0]) * eps_t2
-                gaps = (pa + (at[:, None] - end_a) * np.nan_to_num(va)) - (pb + (at[:, None] - end_b) * np.nan_to_num(vb))
+                gaps = (pa + (at[:, None] - end_a) * np.nan_to_num(va)) - (
+                    pb + (at[:, None] - end_b) * np.nan_to_num(vb)
+                )
                 if np.hypot(gaps[:, 0], gaps[:, 1]).min() >= eps_d:
                     continue
                 if not (np.isfinite(va).all() and np.isfinite(vb).all()):

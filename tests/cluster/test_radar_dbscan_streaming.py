@@ -17,7 +17,7 @@ def detections():
 
 
 def _same_partition(a, b):
-    pairs = set(zip(a.tolist(), b.tolist()))
+    pairs = set(zip(a.tolist(), b.tolist(), strict=True))
     return len(pairs) == len(set(a.tolist())) == len(set(b.tolist()))
 
 
@@ -42,7 +42,7 @@ def test_stream_and_offline_causal_give_the_same_labels(detections):
 def test_stream_never_uses_the_future(detections):
     t = detections["t"].to_numpy()
     cut = np.quantile(t, 0.5)
-    past = (t <= cut)
+    past = t <= cut
     full = RadarDBSCAN(causal=True, **PARAMS).fit(detections).labels_
     prefix = RadarDBSCAN(causal=True, **PARAMS).fit(detections[past]).labels_
     np.testing.assert_array_equal(full[past] == -1, prefix == -1)

@@ -21,7 +21,7 @@ def _data(seed=0, n=600):
 
 
 def _same_partition(a, b):
-    pairs = set(zip(a.tolist(), b.tolist()))
+    pairs = set(zip(a.tolist(), b.tolist(), strict=True))
     return len(pairs) == len(set(a.tolist())) == len(set(b.tolist()))
 
 

@@ -55,7 +55,11 @@ def test_labels_track_ids_and_uuids_agree(scenes):
 
 
 def test_coordinates_follow_the_radarscenes_formulas(scenes):
-    d = {name: scenes.data[name].to_numpy(dtype=float) for name in scenes.data.columns if name not in ("uuid", "track_id")}
+    d = {
+        name: scenes.data[name].to_numpy(dtype=float)
+        for name in scenes.data.columns
+        if name not in ("uuid", "track_id")
+    }
     mount = np.array([[RADARSCENES_MOUNTING[int(s)][f] for f in ("x", "y", "yaw")] for s in d["sensor_id"]])
     np.testing.assert_allclose(mount, np.c_[d["sensor_x"], d["sensor_y"], d["sensor_yaw"]], atol=1e-6)
     angle = d["azimuth_sc"] + mount[:, 2]
@@ -129,10 +133,18 @@ def test_azimuth_noise_grows_towards_the_edge_of_the_field_of_view():
     rng = np.random.default_rng(0)
     n = 4000
     scans = {"timestamp": np.array([0]), "sensor_id": np.array([3]), "odometry_index": np.array([0])}
-    odometry = pd.DataFrame({"timestamp": [0], "x_seq": [0.0], "y_seq": [0.0], "yaw_seq": [0.0], "vx": [0.0], "yaw_rate": [0.0]})
+    odometry = pd.DataFrame(
+        {"timestamp": [0], "x_seq": [0.0], "y_seq": [0.0], "yaw_seq": [0.0], "vx": [0.0], "yaw_rate": [0.0]}
+    )
     spread = {}
     for azimuth in (0.0, np.deg2rad(55.0)):
-        truth = {"scan": np.zeros(n, int), "range": np.full(n, 20.0), "azimuth": np.full(n, azimuth), "vr": np.zeros(n), "rcs": np.zeros(n)}
+        truth = {
+            "scan": np.zeros(n, int),
+            "range": np.full(n, 20.0),
+            "azimuth": np.full(n, azimuth),
+            "vr": np.zeros(n),
+            "rcs": np.zeros(n),
+        }
         measured = _measure(truth, scans, odometry, rng)
         spread[azimuth] = np.std(measured["azimuth_sc"].astype(float) - azimuth)
     boresight, edge = spread.values()
@@ -174,7 +186,9 @@ def test_detections_per_object_fall_with_range_and_grow_with_size(scenes):
 
 def test_pedestrians_show_micro_doppler_spread(scenes):
     objects = scenes.data[scenes.target >= 0].assign(instance=scenes.target[scenes.target >= 0])
-    spread = objects.groupby(["instance", "timestamp"]).agg(std=("vr_compensated", "std"), n=("vr", "size"), label=("label_id", "first"))
+    spread = objects.groupby(["instance", "timestamp"]).agg(
+        std=("vr_compensated", "std"), n=("vr", "size"), label=("label_id", "first")
+    )
     spread = spread[spread["n"] >= 2].groupby("label")["std"].median()
     assert spread[7] > 2 * spread[0]
 
@@ -214,8 +228,12 @@ def test_plain_dbscan_scores_well_between_0_and_1(scenes):
     labels = np.full(len(data), -1)
     for number in np.unique(scenes.groups):
         rows = np.flatnonzero(scenes.groups == number)
-        X = np.c_[data["x_seq"].to_numpy()[rows], data["y_seq"].to_numpy()[rows],
-                  data["vr_compensated"].to_numpy()[rows], data["timestamp"].to_numpy()[rows] * 4e-6]
+        X = np.c_[
+            data["x_seq"].to_numpy()[rows],
+            data["y_seq"].to_numpy()[rows],
+            data["vr_compensated"].to_numpy()[rows],
+            data["timestamp"].to_numpy()[rows] * 4e-6,
+        ]
         found = DBSCAN(eps=1.0, min_samples=4).fit_predict(X)
         labels[rows] = np.where(found >= 0, found + 100_000 * number, -1)
     score = v_measure_score(scenes.target, labels)

@@ -67,7 +67,7 @@ def test_bayes_search_with_grouped_cv_on_simulated_data(scenes, capsys):
     for key, dimension in search_space(8).items():
         assert search.best_params_[key] in dimension
     # Grouped CV: every scored test fold holds whole sequences (all their detections).
-    sizes = dict(zip(*np.unique(scenes.groups, return_counts=True)))
+    sizes = dict(zip(*np.unique(scenes.groups, return_counts=True), strict=True))
     assert len(scored_sequences) == 6 * 2
     for sequence in scored_sequences:
         ids, counts = np.unique(sequence, return_counts=True)
@@ -99,7 +99,9 @@ def test_progress_printer_prints_one_line_per_candidate_of_a_batch():
 
 def test_silent_by_default_and_callbacks_are_kept(scenes, capsys):
     seen = []
-    search = make_bayes_search(experiment_pipeline(3), search_space(3), n_iter=2, n_initial_points=2, cv=2, random_state=1)
+    search = make_bayes_search(
+        experiment_pipeline(3), search_space(3), n_iter=2, n_initial_points=2, cv=2, random_state=1
+    )
     search.fit(scenes.data, scenes.y, groups=scenes.groups, callback=lambda result: seen.append(len(result.func_vals)))
     assert capsys.readouterr().out == ""
     assert seen == [1, 2]
@@ -107,8 +109,15 @@ def test_silent_by_default_and_callbacks_are_kept(scenes, capsys):
 
 def test_candidates_run_in_parallel_with_a_shared_cache(scenes, tmp_path, capsys):
     search = make_bayes_search(
-        experiment_pipeline(3, memory=str(tmp_path)), search_space(3), n_iter=4, n_initial_points=4, cv=2,
-        n_jobs=2, n_points=2, random_state=0, verbose=1,
+        experiment_pipeline(3, memory=str(tmp_path)),
+        search_space(3),
+        n_iter=4,
+        n_initial_points=4,
+        cv=2,
+        n_jobs=2,
+        n_points=2,
+        random_state=0,
+        verbose=1,
     )
     search.fit(scenes.X, scenes.y, groups=scenes.groups)
     scores = search.cv_results_["mean_test_score"]
@@ -122,13 +131,21 @@ def test_sklearn_searches_run_unchanged_with_the_scorer_and_groups(scenes, make_
     pipeline = experiment_pipeline(3)
     if make_search == "grid":
         search = GridSearchCV(
-            pipeline, {"cluster__eps_xy": [0.6, 1.0], "cluster__vr_min": [0.25]},
-            scoring=radar_v_measure_scorer, cv=GroupKFold(n_splits=2), error_score=0.0,
+            pipeline,
+            {"cluster__eps_xy": [0.6, 1.0], "cluster__vr_min": [0.25]},
+            scoring=radar_v_measure_scorer,
+            cv=GroupKFold(n_splits=2),
+            error_score=0.0,
         )
     else:
         search = RandomizedSearchCV(
-            pipeline, {"cluster__eps_xy": uniform(0.2, 2.8), "cluster__eps_vr": uniform(0.5, 19.5)}, n_iter=2,
-            scoring=radar_v_measure_scorer, cv=GroupKFold(n_splits=2), error_score=0.0, random_state=0,
+            pipeline,
+            {"cluster__eps_xy": uniform(0.2, 2.8), "cluster__eps_vr": uniform(0.5, 19.5)},
+            n_iter=2,
+            scoring=radar_v_measure_scorer,
+            cv=GroupKFold(n_splits=2),
+            error_score=0.0,
+            random_state=0,
         )
     search.fit(scenes.data, scenes.y, groups=scenes.groups)
     scores = search.cv_results_["mean_test_score"]
@@ -155,8 +172,11 @@ def test_pipeline_memory_computes_frame_and_filter_once_per_data_subset(scenes, 
         frame_calls = _count_calls(monkeypatch, FrameTransform, "transform")
         filter_calls = _count_calls(monkeypatch, DopplerDensityFilter, "transform")
         search = GridSearchCV(
-            experiment_pipeline(3, memory=memory), grid, scoring=radar_v_measure_scorer,
-            cv=GroupKFold(n_splits=2), refit=False,
+            experiment_pipeline(3, memory=memory),
+            grid,
+            scoring=radar_v_measure_scorer,
+            cv=GroupKFold(n_splits=2),
+            refit=False,
         )
         search.fit(scenes.X, scenes.y, groups=scenes.groups)
         results[memory is not None] = (len(frame_calls), len(filter_calls), search.cv_results_["mean_test_score"])
@@ -177,8 +197,11 @@ def test_cluster_merger_memory_computes_stage1_once_per_data_subset(scenes, tmp_
     for memory in (None, Memory(tmp_path / "cache", verbose=0)):
         stage1_fits = _count_calls(monkeypatch, RadarDBSCAN, "fit")
         search = GridSearchCV(
-            experiment_pipeline(13, memory=memory), grid, scoring=radar_v_measure_scorer,
-            cv=GroupKFold(n_splits=2), refit=False,
+            experiment_pipeline(13, memory=memory),
+            grid,
+            scoring=radar_v_measure_scorer,
+            cv=GroupKFold(n_splits=2),
+            refit=False,
         )
         search.fit(scenes.X, scenes.y, groups=scenes.groups)
         results[memory is not None] = (len(stage1_fits), search.cv_results_["mean_test_score"])

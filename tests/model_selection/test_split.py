@@ -49,7 +49,7 @@ def test_deterministic_for_an_int_seed_and_ties_depend_on_it():
     groups = np.repeat(np.arange(8), 100)  # all sizes equal: everything is a tie
     first = sequence_train_test_split(groups, random_state=3)
     again = sequence_train_test_split(groups, random_state=3)
-    assert all(np.array_equal(a, b) for a, b in zip(first, again))
+    assert all(np.array_equal(a, b) for a, b in zip(first, again, strict=True))
     assert len(first[0]) == len(first[1]) == 400
     tests = {tuple(np.unique(groups[sequence_train_test_split(groups, random_state=s)[1]])) for s in range(10)}
     assert len(tests) > 1
