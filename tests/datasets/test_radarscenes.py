@@ -21,7 +21,7 @@ from sklearn_radar._schema import (
     make_frame,
     nearest_odometry_index,
 )
-from sklearn_radar.datasets import _radarscenes
+from sklearn_radar.datasets import _radarscenes, make_scenes
 from sklearn_radar.datasets._radarscenes import load_radarscenes, write_radarscenes
 
 SEQUENCES = {2: "train", 5: "validation"}
@@ -661,10 +661,6 @@ def test_write_into_existing_empty_folder(tmp_path):
 
 
 def test_simulated_scenes_round_trip_and_devkit(tmp_path):
-    if not (Path(_radarscenes.__file__).parent / "_simulator.py").exists():
-        pytest.skip("sklearn_radar.datasets._simulator is not written yet")
-    from sklearn_radar.datasets._simulator import make_scenes
-
     bunch = make_scenes(n_sequences=2, duration=3.0, random_state=0)
     root = write_radarscenes(bunch, tmp_path / "data")
     assert_bunch_equal(load_radarscenes(root), bunch)
