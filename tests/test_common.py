@@ -1,8 +1,8 @@
 """scikit-learn's common estimator checks, with every expected failure and its reason in one table."""
 
-from sklearn.utils.estimator_checks import parametrize_with_checks
-
 import numpy as np
+import pytest
+from sklearn.utils.estimator_checks import parametrize_with_checks
 
 from sklearn_radar import ClusterMerger, DopplerDensityFilter, FrameTransform, RadarDBSCAN
 from sklearn_radar.cluster import WindowedDBSCAN, WindowedHDBSCAN
@@ -35,7 +35,23 @@ def _expected_failed_checks(estimator):
     return EXPECTED_FAILED_CHECKS.get(repr(estimator), {})
 
 
-@parametrize_with_checks(
+def _strict(parametrize):
+    """The same parametrization with every expected failure strict: a check that passes fails the run.
+
+    (scikit-learn >= 1.8 has ``xfail_strict=True``; rewriting the marks works with every version we support.)
+    """
+    argnames, params = parametrize.args
+    strict = []
+    for param in params:
+        marks = [
+            pytest.mark.xfail(reason=mark.kwargs.get("reason", ""), strict=True) if mark.name == "xfail" else mark
+            for mark in getattr(param, "marks", ())
+        ]
+        strict.append(pytest.param(*param.values, marks=marks, id=param.id) if marks else param)
+    return pytest.mark.parametrize(argnames, strict, **parametrize.kwargs)
+
+
+CHECKS = _strict(parametrize_with_checks(
     [
         FrameTransform(),
         FrameTransform(frame="car"),
@@ -51,6 +67,17 @@ def _expected_failed_checks(estimator):
         WindowedHDBSCAN(),
     ],
     expected_failed_checks=_expected_failed_checks,
-)
+))  # fmt: skip
+
+
+@CHECKS
 def test_sklearn_compatible_estimator(estimator, check):
     check(estimator)
+
+
+def test_every_expected_failure_is_strict_and_matches_a_check():
+    # One strict xfail per table entry: a misspelt check name would leave a check unmarked (and failing), a
+    # fixed estimator would turn its xfail into a failure instead of a quiet XPASS.
+    marks = [mark for param in CHECKS.args[1] for mark in getattr(param, "marks", ()) if mark.name == "xfail"]
+    assert len(marks) == sum(len(checks) for checks in EXPECTED_FAILED_CHECKS.values())
+    assert all(mark.kwargs["strict"] is True for mark in marks)
