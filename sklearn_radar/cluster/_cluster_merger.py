@@ -15,14 +15,14 @@ from .._labels import consecutive_labels
 from .._schema import MERGER_READS, STAGE1_READS
 from .._validation import read_columns, sequence_slices
 from ._merge_kernels import (
+    candidate_pairs,
     cluster_runs,
     continuation_edges,
     merge_components,
-    time_compatible_pairs,
     velocity_frames,
 )
 from ._radar_dbscan import RadarDBSCAN
-from ._velocity import estimate_velocities
+from ._velocity import _estimate_velocities
 
 
 def _stage1_labels(stage1, columns):
@@ -206,7 +206,7 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
         roots = np.full(len(rows), -1, dtype=np.int64)
         if len(runs.ids) == 0:
             return roots, []
-        pair_a, pair_b = time_compatible_pairs(runs, self.eps_t2)
+        pair_a, pair_b = candidate_pairs(runs, self.eps_t2, self.eps_d, self.mode)
         if self.mode == "velocity":
             merge = self._velocity_merges(runs, pair_a, pair_b, c["v_r"][rows], los[rows])
         else:
@@ -232,7 +232,7 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
         group = np.repeat(np.arange(len(first)), length)
         position = np.arange(len(group)) - np.repeat(np.cumsum(length) - length, length) + np.repeat(first, length)
         rows = runs.order[position]
-        vx, vy, _, groups = estimate_velocities(v_r[rows], los[rows], group)
+        vx, vy, _, groups = _estimate_velocities(v_r[rows], los[rows], group)
         velocity = np.full((len(first), 2), np.nan)
         velocity[groups.astype(np.int64)] = np.c_[vx, vy]
         va, vb = velocity[0::2], velocity[1::2]

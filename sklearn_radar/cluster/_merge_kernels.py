@@ -80,7 +80,11 @@ def cluster_runs(labels, x, y, t):
 
 @numba.njit(cache=True, nogil=True)
 def _time_compatible_pairs(start, end, eps_t2):
-    """Pairs (a, b): a starts no later than b (ties: by index) and has a detection after s_b - eps_t2."""
+    """Pairs (a, b): a starts no later than b (ties: by index) and has a detection after s_b - eps_t2.
+
+    The unpruned enumeration, quadratic in the clusters alive at once: the
+    reference of :func:`_candidate_pairs` in the tests.
+    """
     by_start = np.argsort(start, kind="mergesort")
     first_a, second_b = [], []
     for position in range(len(by_start)):
@@ -91,6 +95,200 @@ def _time_compatible_pairs(start, end, eps_t2):
                 first_a.append(a)
                 second_b.append(b)
     return np.array(first_a, dtype=np.int64), np.array(second_b, dtype=np.int64)
+
+
+_MAX_CELLS = 64  # a cluster whose reach covers more grid cells is compared with every other one
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _cell_key(cx, cy):
+    """Hash of a grid cell; collisions only add candidates, which the box test then drops."""
+    return cx * np.int64(73856093) ^ cy * np.int64(19349663)
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _boxes_close(a, b, lo_x, hi_x, lo_y, hi_y, half):
+    """False only when the boxes of a and b are ``half[a] + half[b]`` or more apart along x or along y."""
+    reach = half[a] + half[b]
+    if not reach < np.inf:  # unbounded (or nan): never prune
+        return True
+    gap_x = max(lo_x[b] - hi_x[a], lo_x[a] - hi_x[b])
+    gap_y = max(lo_y[b] - hi_y[a], lo_y[a] - hi_y[b])
+    return not (gap_x >= reach or gap_y >= reach)
+
+
+@numba.njit(cache=True, nogil=True)
+def _candidate_pairs(by_start, start, end, eps_t2, lo_x, hi_x, lo_y, hi_y, half):
+    """The pairs of :func:`_time_compatible_pairs` (same order) whose boxes are less than ``half[a] + half[b]`` apart.
+
+    ``by_start`` orders the clusters (a pair's a comes first); the boxes
+    ``[lo_x, hi_x] x [lo_y, hi_y]`` (m) bound each cluster, ``half`` is the
+    reach of each cluster (m, inf for unbounded).  A uniform grid over the
+    boxes expanded by ``half`` gives each cluster its spatial neighbours; a
+    cluster covering more than ``_MAX_CELLS`` cells is compared with all.
+    Memory is linear in the clusters plus the pairs returned.
+    """
+    n = len(by_start)
+    rank = np.empty(n, dtype=np.int64)
+    for position in range(n):
+        rank[by_start[position]] = position
+    # Cell side: the median expanded extent (at least one grid cell per typical cluster).
+    extent = np.empty(n)
+    for c in range(n):
+        extent[c] = max(hi_x[c] - lo_x[c], hi_y[c] - lo_y[c]) + 2.0 * half[c]
+    finite = extent[np.isfinite(extent)]
+    side = np.median(finite) if len(finite) > 0 else 1.0
+    if not (side > 0.0 and side < np.inf):
+        side = 1.0
+    cell_x0 = np.zeros(n, dtype=np.int64)
+    cell_x1 = np.zeros(n, dtype=np.int64)
+    cell_y0 = np.zeros(n, dtype=np.int64)
+    cell_y1 = np.zeros(n, dtype=np.int64)
+    large = np.zeros(n, dtype=np.bool_)
+    n_entries = 0
+    for c in range(n):
+        fx0 = np.floor((lo_x[c] - half[c]) / side) - 1.0  # one spare cell each side: rounding cannot hide a pair
+        fx1 = np.floor((hi_x[c] + half[c]) / side) + 1.0
+        fy0 = np.floor((lo_y[c] - half[c]) / side) - 1.0
+        fy1 = np.floor((hi_y[c] + half[c]) / side) + 1.0
+        if not (abs(fx0) < 1e15 and abs(fx1) < 1e15 and abs(fy0) < 1e15 and abs(fy1) < 1e15):
+            large[c] = True
+            continue
+        if (fx1 - fx0 + 1.0) * (fy1 - fy0 + 1.0) > _MAX_CELLS:
+            large[c] = True
+            continue
+        cell_x0[c], cell_x1[c], cell_y0[c], cell_y1[c] = int(fx0), int(fx1), int(fy0), int(fy1)
+        n_entries += (cell_x1[c] - cell_x0[c] - 1) * (cell_y1[c] - cell_y0[c] - 1)
+    # Each small cluster is entered in the cells of its own expanded box (without the spare ring), by rank.
+    keys = np.empty(n_entries, dtype=np.int64)
+    members = np.empty(n_entries, dtype=np.int64)
+    k = 0
+    large_by_rank = []
+    for position in range(n):
+        c = by_start[position]
+        if large[c]:
+            large_by_rank.append(c)
+            continue
+        for cx in range(cell_x0[c] + 1, cell_x1[c]):
+            for cy in range(cell_y0[c] + 1, cell_y1[c]):
+                keys[k] = _cell_key(cx, cy)
+                members[k] = c
+                k += 1
+    order = np.argsort(keys, kind="mergesort")  # stable: by rank within a cell
+    keys = keys[order]
+    members = members[order]
+
+    first_a, second_b = [], []
+    seen = np.full(n, -1, dtype=np.int64)
+    found = np.empty(n, dtype=np.int64)
+    for position in range(n):
+        b = by_start[position]
+        n_found = 0
+        if large[b]:
+            for earlier in range(position):
+                a = by_start[earlier]
+                if end[a] > start[b] - eps_t2 and _boxes_close(a, b, lo_x, hi_x, lo_y, hi_y, half):
+                    found[n_found] = a
+                    n_found += 1
+        else:
+            for cx in range(cell_x0[b], cell_x1[b] + 1):
+                for cy in range(cell_y0[b], cell_y1[b] + 1):
+                    key = _cell_key(cx, cy)
+                    m = np.searchsorted(keys, key)
+                    while m < len(keys) and keys[m] == key:
+                        a = members[m]
+                        m += 1
+                        if rank[a] >= position:
+                            break
+                        if seen[a] == b:
+                            continue
+                        seen[a] = b
+                        if end[a] > start[b] - eps_t2 and _boxes_close(a, b, lo_x, hi_x, lo_y, hi_y, half):
+                            found[n_found] = a
+                            n_found += 1
+            for a in large_by_rank:
+                if rank[a] >= position:
+                    break
+                if end[a] > start[b] - eps_t2 and _boxes_close(a, b, lo_x, hi_x, lo_y, hi_y, half):
+                    found[n_found] = a
+                    n_found += 1
+            if n_found > 1:
+                ranks = np.empty(n_found, dtype=np.int64)
+                for i in range(n_found):
+                    ranks[i] = rank[found[i]]
+                found[:n_found] = found[:n_found][np.argsort(ranks)]
+        for i in range(n_found):
+            first_a.append(found[i])
+            second_b.append(b)
+    return np.array(first_a, dtype=np.int64), np.array(second_b, dtype=np.int64)
+
+
+@numba.njit(cache=True, nogil=True)
+def _max_speeds(scan_t, scan_x, scan_y, scan_start, scan_end):
+    """Per cluster, the largest finite speed (m/s) :func:`_continuation` gives for any prefix of its track (0 if none).
+
+    inf when a finite velocity's norm overflows.
+    """
+    n = len(scan_start)
+    speed = np.zeros(n)
+    for c in range(n):
+        for length in range(2, scan_end[c] - scan_start[c] + 1):
+            _end_t, _x, _y, vx, vy = _continuation(scan_t, scan_x, scan_y, scan_start[c], length)
+            if np.isfinite(vx) and np.isfinite(vy):
+                speed[c] = max(speed[c], np.hypot(vx, vy))
+    return speed
+
+
+def _cluster_boxes(runs):
+    """Per cluster (lo_x, hi_x, lo_y, hi_y), m: the bounding box of its detections (and of its scan centres)."""
+    lo_x = np.minimum.reduceat(runs.x, runs.run_start)
+    hi_x = np.maximum.reduceat(runs.x, runs.run_start)
+    lo_y = np.minimum.reduceat(runs.y, runs.run_start)
+    hi_y = np.maximum.reduceat(runs.y, runs.run_start)
+    return lo_x, hi_x, lo_y, hi_y
+
+
+def candidate_pairs(runs, eps_t2, eps_d, mode):
+    """Pairs (a, b) of clusters, a starting no later than b, alive within ``eps_t2`` (s) of b's start, and close.
+
+    The same pairs, in the same order, as the plain time test
+    (:func:`_time_compatible_pairs`) minus those the merge criterion of
+    ``mode`` is certain to reject on distance: a conservative spatial
+    prefilter, so that the pairs (and memory) grow with the clusters that
+    are near each other in space and time rather than with the square of
+    the clusters alive at once.
+
+    * ``"velocity"``: d_min (m) is a distance between detections of A and
+      B, at least the gap between their bounding boxes along x or y.
+    * ``"continuation"``: a continued centre is the raw mean of a scan (in
+      the box) plus ``lag * v``, with ``|lag| <= 2 eps_t2`` (the frame
+      ``[s_B, s_B + eps_t2]`` against an end time in ``(s_B - eps_t2, tau]``)
+      and ``|v|`` at most the largest speed of any prefix of the track
+      (:func:`_max_speeds`), so the two centres are at least the box gap
+      minus ``2 eps_t2 (|v_A|max + |v_B|max)`` apart.  The bound uses the
+      velocities actually estimated (not a guessed top speed); a track with
+      an unbounded one is compared with every cluster.
+
+    Relative margins of 1e-6 (and 1e-9 of the coordinates' and times'
+    magnitudes) absorb rounding, so a pair at the threshold is kept.
+    """
+    n = len(runs.ids)
+    if n < 2:
+        return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    start, end = np.ascontiguousarray(runs.start), np.ascontiguousarray(runs.end)
+    by_start = np.argsort(start, kind="mergesort")
+    lo_x, hi_x, lo_y, hi_y = _cluster_boxes(runs)
+    scale = np.maximum.reduce([np.abs(lo_x), np.abs(hi_x), np.abs(lo_y), np.abs(hi_y)])
+    with np.errstate(over="ignore", invalid="ignore"):
+        reach = np.zeros(n)
+        if mode == "continuation":
+            t_scale = float(np.max(np.abs(runs.t)))
+            lag = (2.0 * float(eps_t2) + 1e-9 * t_scale) * (1.0 + 1e-6)
+            speed = _max_speeds(runs.scan_t, runs.scan_x, runs.scan_y, runs.scan_start, runs.scan_end)
+            reach = lag * speed
+        half = (0.5 * float(eps_d) + reach) * (1.0 + 1e-6) + 1e-9 * scale
+    half = np.where(np.isnan(half), np.inf, half)
+    return _candidate_pairs(by_start, start, end, float(eps_t2), lo_x, hi_x, lo_y, hi_y, np.ascontiguousarray(half))
 
 
 def time_compatible_pairs(runs, eps_t2):
