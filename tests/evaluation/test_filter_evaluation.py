@@ -3,6 +3,7 @@ agreement with DopplerDensityFilter run directly."""
 
 import re
 import sys
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
@@ -62,7 +63,7 @@ def _hand_made():
     rows = []
     # Object 0, t0 = 0.00, t1 = 0.50 -> complete windows k = 0, 1, 2 (0.45 <= 0.50; 0.60 > 0.50).
     #   k=0 [0.00, 0.15): 4 detections, 3 kept -> 75 % exactly -> not an error
-    rows += [(0, t, kept) for t, kept in zip((0.00, 0.03, 0.06, 0.09), (True, True, False, True))]
+    rows += [(0, t, kept) for t, kept in zip((0.00, 0.03, 0.06, 0.09), (True, True, False, True), strict=True)]
     #   k=1 [0.15, 0.30): 50 detections, 37 kept -> 74 % -> error
     times = np.linspace(0.16, 0.28, 50)
     rows += [(0, t, i < 37) for i, t in enumerate(times)]
@@ -77,7 +78,7 @@ def _hand_made():
     rows += [(3, 1.00, False), (3, 1.10, True), (3, 1.15, False)]
     # Background, all removed and interleaved: never counted.
     rows += [(-1, t, False) for t in (0.0, 0.2, 1.05, 2.02)]
-    target, t, keep = (np.array(column) for column in zip(*rows))
+    target, t, keep = (np.array(column) for column in zip(*rows, strict=True))
     order = np.random.default_rng(0).permutation(len(target))  # order must not matter
     return keep.astype(bool)[order], target.astype(int)[order], t.astype(float)[order]
 
@@ -238,29 +239,37 @@ def test_grid_rejects_bad_input(scenes):
 # ----------------------------------------------------------------------------
 # Table II
 # ----------------------------------------------------------------------------
-#: The rows of Table II exactly as they stand in the paper's LaTeX source (copied, not retyped).
-TABLE_II_LATEX = r"""
-		CCS & \SI{0.10}{\meter\per\second} & \SI{1.4}{\meter} &  \SI{25.10}{\%} & 0 \\
-		\textbf{FCS} & \textbf{\SI{0.10}{\meter\per\second}} & \textbf{\SI{1.4}{\meter}} &  \textbf{\SI{29.10}{\%}} & \textbf{0} \\
-		FCS & \SI{0.35}{\meter\per\second} & \SI{0.8}{\meter} &  \SI{31.47}{\%} & 0 \\
-		FCS & \SI{0.20}{\meter\per\second} & \SI{1.4}{\meter} &  \SI{35.45}{\%} & 1 \\
-		FCS & \SI{0.35}{\meter\per\second} & \SI{1.2}{\meter} &  \SI{36.91}{\%} & 1 \\
-"""
+#: The rows of Tables II-IV exactly as they stand in the paper's LaTeX source (copied, not retyped).
+PAPER_TABLES = Path(__file__).resolve().parents[1] / "data" / "scheiner2019_tables.tex"
 
 
-def _parse_table_ii(latex):
+def _latex_rows(table):
+    """The rows of ``table`` ("II", "III" or "IV") in PAPER_TABLES."""
+    rows, current = {}, None
+    for line in PAPER_TABLES.read_text(encoding="utf-8").splitlines():
+        if line.startswith("% Table "):
+            current = line.removeprefix("% Table ").strip()
+        elif line.strip() and not line.startswith("%"):
+            rows.setdefault(current, []).append(line)
+    return rows[table]
+
+
+def _number(cell):
+    return re.search(r"\d+(\.\d+)?", cell).group()
+
+
+def _parse_table_ii(lines):
     """(frame, vr_threshold m/s, d_xy m, removal rate %, errors) per row: the numbers of each cell, in order."""
     rows = []
-    for line in latex.strip().splitlines():
+    for line in lines:
         cs, vr, d, rate, errors = (cell.strip() for cell in line.strip().removesuffix("\\\\").split("&"))
-        number = lambda cell: re.search(r"\d+(\.\d+)?", cell).group()  # noqa: E731
-        rows.append(("car" if "CCS" in cs else "frame", float(number(vr)), float(number(d)), float(number(rate)),
-                     int(number(errors))))  # fmt: skip
+        frame = "car" if "CCS" in cs else "frame"
+        rows.append((frame, float(_number(vr)), float(_number(d)), float(_number(rate)), int(_number(errors))))
     return rows
 
 
 def test_paper_table_ii():
-    paper = _parse_table_ii(TABLE_II_LATEX)
+    paper = _parse_table_ii(_latex_rows("II"))
     assert paper[1] == ("frame", 0.10, 1.4, 29.10, 0)  # the parser, on the bold (chosen) row, by hand
     assert list(PAPER_TABLE_II.columns) == ["frame", "vr_threshold", "d_xy", "paper_removal_rate", "paper_errors"]
     assert list(PAPER_TABLE_II.itertuples(index=False, name=None)) == paper
@@ -271,7 +280,7 @@ def test_paper_table_ii():
 def test_settings_table(scenes):
     table = filter_settings_table(scenes.data, scenes.target)
     paper_columns = ["frame", "vr_threshold", "d_xy", "paper_removal_rate", "paper_errors"]
-    assert list(table.columns) == paper_columns + ["removal_rate", "object_removal_rate", "errors"]
+    assert list(table.columns) == [*paper_columns, "removal_rate", "object_removal_rate", "errors"]
     pd.testing.assert_frame_equal(table[paper_columns], PAPER_TABLE_II)
     assert table["removal_rate"].between(0, 100).all() and table["removal_rate"].gt(0).all()
     assert table["object_removal_rate"].between(0, 100).all()

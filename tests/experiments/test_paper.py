@@ -3,6 +3,7 @@
 import math
 import re
 from numbers import Integral
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -37,28 +38,22 @@ OPTIMISED = {
 }
 
 
-#: The rows of Tables III and IV exactly as they stand in the paper's LaTeX source (copied, not retyped).
-#: The tests parse them, so every cell of sklearn_radar.experiments is checked against the paper itself.
-TABLE_III_LATEX = r"""
- 		\parbox[t]{2mm}{\multirow{4}{*}{\rotatebox[origin=c]{90}{\textbf{Baseline}}}} & 1 & Expert Setting & CCS & \ref{eq:filter_metric}, \ref{eq:step1_1} & \SI{67.57}{\percent} &  $\epsilon_{xy}=1.00$, $\epsilon_{v_r}=5.00$, $N_{\text{min}}=3$, $v_{r,\text{min}}=0.40$ \\
-		& 2 & Baseline & CCS & \ref{eq:filter_metric}, \ref{eq:step1_1} & \SI{68.87}{\percent} &  $\epsilon_{xy}=0.62$, $\epsilon_{v_r}=11.2$, $N_{\text{min}}=3$, $v_{r,\text{min}}=0.23$ \\
-		& 3 & Baseline & FCS & \ref{eq:filter_metric}, \ref{eq:step1_1} & \SI{69.19}{\percent} &  $\epsilon_{xy}=0.60$, $\epsilon_{v_r}=12.3$, $N_{\text{min}}=3$, $v_{r,\text{min}}=0.25$ \\
-		& 4 & Baseline -- unfiltered & FCS & \ref{eq:step1_1} & \SI{69.19}{\percent} &  $\epsilon_{xy}=0.60$, $\epsilon_{v_r}=12.3$, $N_{\text{min}}=3$, $v_{r,\text{min}}=0.25$ \\
- 		\parbox[t]{2mm}{\multirow{4}{*}{\rotatebox[origin=c]{90}{\textbf{Methods}}}} & 5 & Euclidean $xy$-distance & FCS & \ref{eq:filter_metric}, \ref{eq:step1_2} & \SI{69.33}{\percent} &  $\epsilon_{xy}=0.76$, $\epsilon_{v_r}=14.1$, $N_{\text{min}}=3$, $v_{r,\text{min}}=0.31$ \\
- 		& 6 & Euclidean $xyv_r$-distance & FCS & \ref{eq:filter_metric}, \ref{eq:step1_3} & \SI{69.47}{\percent} &  $\epsilon_{xyv_r}=0.72$, $\epsilon^{'}_{v_r}=13.5$, $N_{\text{min}}=3$, $v_{r,\text{min}}=0.48$ \\
- 		& 7 & Adaptive $N_{\text{min}}(r)$ & FCS & \ref{eq:filter_metric}, \ref{eq:min_pts}, \ref{eq:step1_1} & \SI{70.56}{\percent} &  $\epsilon_{xy}=0.76$, $\epsilon_{v_r}=8.63$, $N_\text{min,50}=3.02$, $v_{r,\text{min}}=0.46$, $\alpha_r=0.99$ \\
-  		& 8 & \textbf{Combined $\mathbf{N_{\text{min}}(r)}$ \& $\mathbf{\epsilon_{xyv_r}}$} & \textbf{FCS} & \textbf{\ref{eq:filter_metric}, \ref{eq:min_pts}, \ref{eq:step1_3}} & \textbf{\SI{71.55}{\percent}} &  $\epsilon_{xyv_r}=1.04$, $\epsilon^{'}_{v_r}=1.03$, $N_\text{min,50}=3.87$, $v_{r,\text{min}}=1.00$, $\alpha_r=0.99$ \\ 
-  		\parbox[t]{2mm}{\multirow{3}{*}{\rotatebox[origin=c]{90}{\textbf{Control}}}} & 9 & Combined -- unfiltered & FCS & \ref{eq:min_pts}, \ref{eq:step1_3} & \SI{69.91}{\percent} &  $\epsilon_{xyv_r}=1.18$, $\epsilon^{'}_{v_r}=1.01$, $N_\text{min,50}=3.81$, $v_{r,\text{min}}=0.98$, $\alpha_r=0.99$ \\ 
-  		& 10 & Best setting -- unfiltered & FCS & \ref{eq:min_pts}, \ref{eq:step1_3} & \SI{69.86}{\percent} &  $\epsilon_{xyv_r}=1.04$, $\epsilon^{'}_{v_r}=1.03$, $N_\text{min,50}=3.87$, $v_{r,\text{min}}=1.00$, $\alpha_r=0.99$ \\ 
-  		& 11 & Best setting on baseline & FCS & \ref{eq:filter_metric}, \ref{eq:step1_1} & \SI{67.73}{\percent} &  $\epsilon_{xy}=1.04$, $\epsilon_{v_r}=1.03$, $N_{\text{min}}=4$, $v_{r,\text{min}}=1.00$ \\ 
-"""
-#: Table IV (its caption: "All experiments are based on the frame coordinate system").
-TABLE_IV_LATEX = r"""
- 		\parbox[t]{2mm}{\multirow{2}{*}{\rotatebox[origin=c]{90}{\textbf{Base.}}}} & 3 & Step 1 -- baseline setting & \SI{69.19}{\percent} &  $\epsilon_{xy}=0.60$, $\epsilon_{v_r}=12.3$, $N_{\text{min}}=3$, $v_{r,\text{min}}=0.25$ \\
- 		& 8 & Step 1 -- best setting & \SI{71.55}{\percent} &  $\epsilon_{xyv_r}=1.04$, $\epsilon^{'}_{v_r}=1.03$, $N_\text{min,50}=3.87$, $v_{r,\text{min}}=1.00$, $\alpha_r=0.99$ \\
- 		\parbox[t]{2mm}{\multirow{2}{*}{\rotatebox[origin=c]{90}{\textbf{Meth.}}}} & 12 & Step 2 -- real velocity estimate & \SI{70.36}{\percent} &  $\epsilon_{d}=1.00$, $\epsilon_{\phi}=\SI{23.11}{\degree}$, $\epsilon_{v}=1.04$, $N_{\text{min}}=1$, $\epsilon_{t2}=0.35$ \\
- 		& 13 & \textbf{Step 2 -- cluster continuation} & \textbf{\SI{71.79}{\percent}} & $\epsilon_{\text{pred,min}}=0.94$, $\epsilon_{v}=2.72$, $N_{\text{min}}=1$, $\epsilon_{t2}=0.35$ \\
-"""
+#: The rows of Tables II-IV exactly as they stand in the paper's LaTeX source (copied, not retyped).  The
+#: tests parse them, so every cell of sklearn_radar.experiments is checked against the paper itself.
+PAPER_TABLES = Path(__file__).resolve().parents[1] / "data" / "scheiner2019_tables.tex"
+
+
+def _latex_rows(table):
+    """The rows of ``table`` ("II", "III" or "IV") in PAPER_TABLES."""
+    rows, current = {}, None
+    for line in PAPER_TABLES.read_text(encoding="utf-8").splitlines():
+        if line.startswith("% Table "):
+            current = line.removeprefix("% Table ").strip()
+        elif line.strip() and not line.startswith("%"):
+            rows.setdefault(current, []).append(line)
+    return rows[table]
+
+
 #: The paper's symbols as parameter names of RadarDBSCAN (Table III) and ClusterMerger (Table IV).
 SYMBOLS = {
     r"\epsilon_{xy}": "eps_xy", r"\epsilon_{v_r}": "eps_vr", r"N_{\text{min}}": "min_samples",
@@ -70,7 +65,7 @@ SYMBOLS = {
 #: Equation labels of the paper's source and their numbers; the criterion equations name the metric.
 EQUATIONS = {"filter_metric": 1, "min_pts": 2, "step1_1": 3, "step1_2": 4, "step1_3": 5}
 METRICS = {3: "box", 4: "xy", 5: "xyv"}
-#: Sec. IV-A: "The chosen setting of 0.1 m/s and 1.4 m velocity and distance thresholds".
+#: The paper, on Table II: "The chosen setting of 0.1 m/s and 1.4 m velocity and distance thresholds".
 CHOSEN_FILTER = {"vr_threshold": 0.10, "d_xy": 1.4}
 
 
@@ -79,10 +74,10 @@ def _value(text):
     return int(number) if "." not in number else float(number)
 
 
-def _parse(latex, stage):
+def _parse(lines, stage):
     """{number: {"frame", "equations", "v1", "params"}} from table rows of the paper's LaTeX source."""
     rows = {}
-    for line in latex.strip().splitlines():
+    for line in lines:
         cells = [cell.strip() for cell in re.split(r"(?<!\\)&", line.strip().removesuffix("\\\\"))]
         if stage == 1:
             _, number, _, cs, equations, v1, params = cells
@@ -101,8 +96,8 @@ def _parse(latex, stage):
     return rows
 
 
-PAPER = _parse(TABLE_III_LATEX, 1)
-PAPER_STAGE2 = _parse(TABLE_IV_LATEX, 2)
+PAPER = _parse(_latex_rows("III"), 1)
+PAPER_STAGE2 = _parse(_latex_rows("IV"), 2)
 
 
 def _in_package_units(number):
@@ -134,8 +129,15 @@ def tiny():
 def test_the_latex_excerpt_parses_into_every_experiment():
     assert sorted(PAPER) == list(range(1, 12)) and sorted(PAPER_STAGE2) == [3, 8, 12, 13]
     assert list(paper_experiments().index) == [e.number for e in PAPER_EXPERIMENTS] == list(range(1, 14))
-    assert PAPER[8]["params"] == {"metric": "xyv", "eps_xyv": 1.04, "vr_scale": 1.03, "min_samples": 3.87,
-                                  "vr_min": 1.00, "alpha_r": 0.99, "eps_t": 0.25}  # the parser itself, one row by hand
+    assert PAPER[8]["params"] == {
+        "metric": "xyv",
+        "eps_xyv": 1.04,
+        "vr_scale": 1.03,
+        "min_samples": 3.87,
+        "vr_min": 1.00,
+        "alpha_r": 0.99,
+        "eps_t": 0.25,
+    }  # the parser itself, one row by hand
     # Table IV repeats the two stage-1 bases of Table III.
     for number in (3, 8):
         assert PAPER_STAGE2[number]["params"].items() <= PAPER[number]["params"].items()
@@ -169,7 +171,9 @@ def test_only_the_expert_setting_and_the_transfers_of_8_are_untuned():
     # #10; #11 its eps values on the box criterion).  Everything else was optimised.
     assert PAPER[10]["params"] == PAPER[8]["params"]
     assert (PAPER[11]["params"]["eps_xy"], PAPER[11]["params"]["eps_vr"]) == (
-        PAPER[8]["params"]["eps_xyv"], PAPER[8]["params"]["vr_scale"])
+        PAPER[8]["params"]["eps_xyv"],
+        PAPER[8]["params"]["vr_scale"],
+    )
     assert [e.number for e in PAPER_EXPERIMENTS if not e.tuned] == FIXED == [1, 10, 11]
     assert list(paper_experiments().index[~paper_experiments()["tuned"]]) == FIXED
 
@@ -187,7 +191,9 @@ def test_fixed_experiments_derive_from_8():
     tuned = {"cluster__eps_xyv": 1.3, "cluster__vr_scale": 2.5, "cluster__min_samples": 3.4, "cluster__vr_min": 0.7}
     transferred = derived_params(11, tuned)
     assert (transferred["cluster__eps_xy"], transferred["cluster__eps_vr"], transferred["cluster__min_samples"]) == (
-        1.3, 2.5, 3
+        1.3,
+        2.5,
+        3,
     )
     assert transferred["cluster__metric"] == "box" and transferred["cluster__alpha_r"] == 0.0
     experiment_pipeline(11, params=transferred)  # valid pipeline parameters
