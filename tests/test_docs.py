@@ -29,10 +29,10 @@ if os.environ.get("SKLEARN_RADAR_SKIP_DOCS") == "1":
     pytest.skip("SKLEARN_RADAR_SKIP_DOCS=1: docs build skipped on request", allow_module_level=True)
 
 # Plain imports: without the toolchain this module errors instead of skipping quietly.
-import numpydoc  # noqa: E402, F401
-import pydata_sphinx_theme  # noqa: E402, F401
-import sphinx  # noqa: E402, F401
-import sphinx_gallery  # noqa: E402, F401
+import numpydoc  # noqa: F401
+import pydata_sphinx_theme  # noqa: F401
+import sphinx  # noqa: F401
+import sphinx_gallery  # noqa: F401
 
 ROOT = Path(__file__).resolve().parents[1]
 
@@ -67,8 +67,9 @@ class _Images(HTMLParser):
 def built_docs(tmp_path_factory):
     """Build a copy of docs/ and examples/; return the HTML folder."""
     work = tmp_path_factory.mktemp("docs")
-    ignore = shutil.ignore_patterns("_build", "auto_examples", "generated", "_generated", "sg_execution_times.rst",
-                                    "__pycache__")
+    ignore = shutil.ignore_patterns(
+        "_build", "auto_examples", "generated", "_generated", "sg_execution_times.rst", "__pycache__"
+    )
     shutil.copytree(ROOT / "docs", work / "docs", ignore=ignore)
     shutil.copytree(ROOT / "examples", work / "examples", ignore=ignore)
     html = work / "html"

@@ -33,7 +33,7 @@ def test_bayes_search_tunes_a_clusterer_with_grouped_cv():
     # Every candidate's score is its mean V-measure over the grouped folds, recomputed here with plain
     # scikit-learn: DBSCAN fitted on each test fold (a clusterer scores what it clusters).
     folds = [test for _, test in GroupKFold(n_splits=3).split(X, y, groups)]
-    for params, score in zip(results["params"], results["mean_test_score"]):
+    for params, score in zip(results["params"], results["mean_test_score"], strict=True):
         expected = np.mean([v_measure_score(y[test], DBSCAN(**params).fit_predict(X[test])) for test in folds])
         assert score == pytest.approx(expected, abs=1e-12)
         assert 0.05 <= params["eps"] <= 3.0 and 2 <= params["min_samples"] <= 10

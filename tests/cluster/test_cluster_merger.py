@@ -62,7 +62,9 @@ def test_eq_6_compares_direction_and_speed_not_the_velocity_vector(eps_phi, merg
     # (The norm of the velocity difference, 2 * 10 * sin(0.15) = 2.99 m/s, would refuse it.)
     turned = 10.0 * np.array([np.cos(0.3), np.sin(0.3)])
     start = np.array([20.0 + 10.0 * 1.3, 5.0]) - turned * 1.3  # where the first part would be at t = 1.3 s
-    X = pd.concat([_car(SCANS, (20.0, 5.0), (10.0, 0.0)), _car(AFTER_GAP, tuple(start), tuple(turned))], ignore_index=True)
+    X = pd.concat(
+        [_car(SCANS, (20.0, 5.0), (10.0, 0.0)), _car(AFTER_GAP, tuple(start), tuple(turned))], ignore_index=True
+    )
     model = ClusterMerger(mode="velocity", eps_d=1.0, eps_phi=eps_phi, eps_v=1.0, eps_t2=0.35, stage1=STAGE1).fit(X)
     assert len(set(model.stage1_labels_.tolist())) == 2
     assert len(set(model.labels_.tolist())) == (1 if merged else 2)
@@ -131,7 +133,13 @@ def test_unknown_velocities_are_rejected_or_accepted_as_asked():
 
 
 def test_noise_stays_noise_and_rows_stay_in_order():
-    X = pd.concat([_split_by_a_gap(), pd.DataFrame([(90.0, 90.0, 0.0, 0.5, 1, 0.0, 0.0)], columns=_car([0], (0, 0), (0, 0)).columns)], ignore_index=True)
+    X = pd.concat(
+        [
+            _split_by_a_gap(),
+            pd.DataFrame([(90.0, 90.0, 0.0, 0.5, 1, 0.0, 0.0)], columns=_car([0], (0, 0), (0, 0)).columns),
+        ],
+        ignore_index=True,
+    )
     model = ClusterMerger(eps_d=1.0, eps_v=1.0, stage1=STAGE1).fit(X)
     assert model.labels_.shape == (len(X),)
     assert model.stage1_labels_[-1] == -1 and model.labels_[-1] == -1

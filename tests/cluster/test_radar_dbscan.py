@@ -15,7 +15,7 @@ UNRESTRICTED = dict(eps_t=None, alpha_r=0.0, vr_min=-np.inf)
 
 def _same_partition(a, b):
     """True when two labelings of the same rows group them identically (ids may differ)."""
-    pairs = set(zip(a.tolist(), b.tolist()))
+    pairs = set(zip(a.tolist(), b.tolist(), strict=True))
     return len(pairs) == len(set(a.tolist())) == len(set(b.tolist()))
 
 
@@ -76,8 +76,12 @@ def test_a_point_counts_itself_toward_min_samples():
 
 def test_real_valued_min_samples_rounds_up():
     X = np.array([[0.0, 0.0], [0.3, 0.0], [0.6, 0.0]])
-    assert RadarDBSCAN(metric="xy", eps_xy=0.5, min_samples=2.01, **UNRESTRICTED).fit(X).core_sample_indices_.tolist() == [1]
-    assert RadarDBSCAN(metric="xy", eps_xy=0.5, min_samples=2.0, **UNRESTRICTED).fit(X).core_sample_indices_.tolist() == [0, 1, 2]
+    assert RadarDBSCAN(metric="xy", eps_xy=0.5, min_samples=2.01, **UNRESTRICTED).fit(
+        X
+    ).core_sample_indices_.tolist() == [1]
+    assert RadarDBSCAN(metric="xy", eps_xy=0.5, min_samples=2.0, **UNRESTRICTED).fit(
+        X
+    ).core_sample_indices_.tolist() == [0, 1, 2]
 
 
 def _frame(rows):
@@ -85,7 +89,9 @@ def _frame(rows):
 
 
 def test_spatial_and_doppler_comparisons_are_strict_and_time_is_inclusive():
-    pair = lambda **d: _frame([(0.0, 0.0, 2.0, 0.0), (d.get("x", 0.0), d.get("y", 0.0), 2.0 + d.get("v", 0.0), d.get("t", 0.0))])
+    def pair(x=0.0, y=0.0, v=0.0, t=0.0):
+        return _frame([(0.0, 0.0, 2.0, 0.0), (x, y, 2.0 + v, t)])
+
     def linked(X, **params):
         return RadarDBSCAN(min_samples=2, vr_min=-np.inf, **params).fit(X).labels_[0] >= 0
 
@@ -197,7 +203,10 @@ def test_causal_time_window_is_inclusive_too():
     # (1 neighbour + itself = 2); the earlier one had no past and stays noise.
     params = dict(metric="xy", causal=True, min_samples=2, vr_min=-np.inf)
     assert RadarDBSCAN(**params).fit(_frame([(0.0, 0.0, 2.0, 0.0), (0.0, 0.0, 2.0, 0.25)])).labels_.tolist() == [-1, 0]
-    assert RadarDBSCAN(**params).fit(_frame([(0.0, 0.0, 2.0, 0.0), (0.0, 0.0, 2.0, 0.2501)])).labels_.tolist() == [-1, -1]
+    assert RadarDBSCAN(**params).fit(_frame([(0.0, 0.0, 2.0, 0.0), (0.0, 0.0, 2.0, 0.2501)])).labels_.tolist() == [
+        -1,
+        -1,
+    ]
 
 
 def test_only_fast_enough_detections_become_core_points():
@@ -210,7 +219,9 @@ def test_only_fast_enough_detections_become_core_points():
 
 
 def test_removed_rows_are_noise_and_bridge_nothing():
-    X = _frame([(0.0, 0.0, 3.0, 0.0), (0.5, 0.0, 3.0, 0.0), (1.0, 0.0, 3.0, 0.0), (1.5, 0.0, 3.0, 0.0), (2.0, 0.0, 3.0, 0.0)])
+    X = _frame(
+        [(0.0, 0.0, 3.0, 0.0), (0.5, 0.0, 3.0, 0.0), (1.0, 0.0, 3.0, 0.0), (1.5, 0.0, 3.0, 0.0), (2.0, 0.0, 3.0, 0.0)]
+    )
     params = dict(metric="xy", eps_xy=0.6, min_samples=2, vr_min=0.0)
     assert RadarDBSCAN(**params).fit(X).labels_.tolist() == [0, 0, 0, 0, 0]
     split = RadarDBSCAN(**params).fit(X.assign(keep=[True, True, False, True, True]))
@@ -289,7 +300,9 @@ def test_labels_are_consecutive_in_order_of_first_row():
 
 def test_n_jobs_gives_the_same_labels():
     rng = np.random.default_rng(3)
-    X = _frame(np.c_[rng.uniform(0, 20, (2000, 2)), rng.normal(0, 4, 2000), rng.uniform(0, 2, 2000)]).assign(sequence=rng.integers(0, 5, 2000))
+    X = _frame(np.c_[rng.uniform(0, 20, (2000, 2)), rng.normal(0, 4, 2000), rng.uniform(0, 2, 2000)]).assign(
+        sequence=rng.integers(0, 5, 2000)
+    )
     params = dict(metric="xyv", eps_xyv=1.0, vr_scale=2.0, min_samples=3, vr_min=0.5)
     np.testing.assert_array_equal(RadarDBSCAN(n_jobs=2, **params).fit(X).labels_, RadarDBSCAN(**params).fit(X).labels_)
 
@@ -313,7 +326,9 @@ def test_invariants(case):
     X = _frame(np.c_[rng.uniform(0, 6, (n, 2)).round(2), rng.normal(0, 2, n).round(1), rng.integers(0, 12, n) * 0.0625])
     X["sequence"] = rng.integers(0, 3, n)
     X["heading"] = rng.uniform(-np.pi, np.pi, n)
-    model = RadarDBSCAN(metric=metric, eps_xy=eps, eps_xyv=eps, eps_vr=1.5, vr_scale=1.5, min_samples=min_samples, vr_min=0.3)
+    model = RadarDBSCAN(
+        metric=metric, eps_xy=eps, eps_xyv=eps, eps_vr=1.5, vr_scale=1.5, min_samples=min_samples, vr_min=0.3
+    )
     labels = model.fit(X).labels_
     assert labels.shape == (n,)
     core = np.zeros(n, dtype=bool)

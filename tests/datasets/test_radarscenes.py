@@ -2,7 +2,6 @@
 
 import json
 import shutil
-from pathlib import Path
 
 import h5py
 import numpy as np
@@ -209,7 +208,7 @@ def test_round_trip_gives_the_same_bunch(written):
 
 
 def test_written_layout_and_json_keys(written):
-    root, bunch = written
+    root, _ = written
     sensors = json.loads((root / "sensors.json").read_text())
     assert sensors["radar_1"] == {"id": 1, **RADARSCENES_MOUNTING[1]}
     sequences = json.loads((root / "sequences.json").read_text())["sequences"]
@@ -246,9 +245,7 @@ def check_devkit_reads(root, bunch):
             assert [scene.timestamp for scene in own] == scan_sensor.index[scan_sensor == sensor].tolist()
         for scene in scenes:
             radar = scene.radar_data
-            x_cc, y_cc = transform_detections_sequence_to_car(
-                radar["x_seq"], radar["y_seq"], scene.odometry_data
-            )
+            x_cc, y_cc = transform_detections_sequence_to_car(radar["x_seq"], radar["y_seq"], scene.odometry_data)
             np.testing.assert_allclose(x_cc, radar["x_cc"], atol=1e-3, rtol=0)
             np.testing.assert_allclose(y_cc, radar["y_cc"], atol=1e-3, rtol=0)
     train = bunch.sequences.loc[bunch.sequences["category"] == "train", "name"].tolist()
@@ -291,7 +288,7 @@ def test_round_trip_of_a_sequence_without_detections(tmp_path):
 
 
 def test_loader_takes_ego_row_from_scenes_json(written):
-    root, bunch = written
+    root, _ = written
     scenes_file = root / "sequence_2" / "scenes.json"
     key, scene = scene_items(json.loads(scenes_file.read_text()))[0]
     edit_json(scenes_file, lambda content: content["scenes"][key].update(odometry_index=7))
@@ -307,9 +304,13 @@ def test_load_accepts_other_widths(written):
     wide_radar = retype(
         radar_data,
         {
-            "timestamp": "<i8", "sensor_id": "<i4", "label_id": "<f8",
-            "range_sc": "<f8", "uuid": "S40", "track_id": "S33",
-        },  # fmt: skip
+            "timestamp": "<i8",
+            "sensor_id": "<i4",
+            "label_id": "<f8",
+            "range_sc": "<f8",
+            "uuid": "S40",
+            "track_id": "S33",
+        },
     )
     wide_odometry = retype(odometry, {"timestamp": "<f8", "x_seq": "<f8"})
     rewrite_h5(file, radar_data=wide_radar, odometry=wide_odometry)
@@ -356,14 +357,14 @@ def test_load_truncated_h5(written):
     root, _ = written
     file = root / "sequence_2" / "radar_data.h5"
     file.write_bytes(file.read_bytes()[: file.stat().st_size // 2])
-    with pytest.raises(ValueError, match="sequence_2/radar_data.h5"):
+    with pytest.raises(ValueError, match=r"sequence_2/radar_data\.h5"):
         load_radarscenes(root)
 
 
 def test_load_non_hdf5_file(written):
     root, _ = written
     (root / "sequence_2" / "radar_data.h5").write_text("timestamp,sensor_id\n1,2\n")
-    with pytest.raises(ValueError, match="sequence_2/radar_data.h5.*HDF5"):
+    with pytest.raises(ValueError, match=r"sequence_2/radar_data\.h5.*HDF5"):
         load_radarscenes(root)
 
 
@@ -371,7 +372,7 @@ def test_load_non_hdf5_file(written):
 def test_load_foreign_h5(written, missing):
     root, _ = written
     file = root / "sequence_2" / "radar_data.h5"
-    arrays = dict(zip(["radar_data", "odometry"], read_h5(file)))
+    arrays = dict(zip(["radar_data", "odometry"], read_h5(file), strict=True))
     del arrays[missing]
     rewrite_h5(file, images=np.zeros(3), **arrays)
     with pytest.raises(ValueError, match=f"radar_data.h5.*{missing}"):
@@ -382,7 +383,7 @@ def test_load_dataset_that_is_not_compound(written):
     root, _ = written
     file = root / "sequence_2" / "radar_data.h5"
     rewrite_h5(file, radar_data=np.zeros((4, 14)), odometry=read_h5(file)[1])
-    with pytest.raises(ValueError, match="radar_data.h5.*radar_data.*compound"):
+    with pytest.raises(ValueError, match=r"radar_data\.h5.*radar_data.*compound"):
         load_radarscenes(root)
 
 
@@ -392,7 +393,7 @@ def test_load_dataset_that_is_not_compound(written):
 def test_load_missing_field(written, dataset, field):
     root, _ = written
     file = root / "sequence_2" / "radar_data.h5"
-    arrays = dict(zip(["radar_data", "odometry"], read_h5(file)))
+    arrays = dict(zip(["radar_data", "odometry"], read_h5(file), strict=True))
     arrays[dataset] = retype(arrays[dataset], {field: None})
     rewrite_h5(file, **arrays)
     with pytest.raises(ValueError, match=f"radar_data.h5 \\[{dataset}\\].*{field}"):
@@ -406,7 +407,7 @@ def test_load_string_where_float_belongs(written):
     as_text = np.char.encode(radar_data["range_sc"].astype("U12"), "ascii")
     radar_data = retype(radar_data, {"range_sc": "S12"}, {"range_sc": as_text})
     rewrite_h5(file, radar_data=radar_data, odometry=odometry)
-    with pytest.raises(ValueError, match="radar_data.h5.*range_sc"):
+    with pytest.raises(ValueError, match=r"radar_data\.h5.*range_sc"):
         load_radarscenes(root)
 
 
@@ -417,7 +418,7 @@ def test_load_float_with_fraction_where_int_belongs(written):
     fractional = radar_data["sensor_id"] + 0.5
     radar_data = retype(radar_data, {"sensor_id": "<f8"}, {"sensor_id": fractional})
     rewrite_h5(file, radar_data=radar_data, odometry=odometry)
-    with pytest.raises(ValueError, match="radar_data.h5.*sensor_id.*integers"):
+    with pytest.raises(ValueError, match=r"radar_data\.h5.*sensor_id.*integers"):
         load_radarscenes(root)
 
 
@@ -427,7 +428,7 @@ def test_load_number_where_string_belongs(written):
     radar_data, odometry = read_h5(file)
     numbers = np.arange(len(radar_data))
     rewrite_h5(file, radar_data=retype(radar_data, {"uuid": "<i8"}, {"uuid": numbers}), odometry=odometry)
-    with pytest.raises(ValueError, match="radar_data.h5.*uuid"):
+    with pytest.raises(ValueError, match=r"radar_data\.h5.*uuid"):
         load_radarscenes(root)
 
 
@@ -437,7 +438,7 @@ def test_load_non_ascii_bytes(written):
     radar_data, odometry = read_h5(file)
     radar_data["track_id"][0] = b"\xff\xfe"
     rewrite_h5(file, radar_data=radar_data, odometry=odometry)
-    with pytest.raises(ValueError, match="radar_data.h5.*track_id.*ASCII"):
+    with pytest.raises(ValueError, match=r"radar_data\.h5.*track_id.*ASCII"):
         load_radarscenes(root)
 
 
@@ -445,7 +446,7 @@ def test_load_non_ascii_bytes(written):
 def test_load_unsorted_timestamps(written, dataset):
     root, _ = written
     file = root / "sequence_2" / "radar_data.h5"
-    arrays = dict(zip(["radar_data", "odometry"], read_h5(file)))
+    arrays = dict(zip(["radar_data", "odometry"], read_h5(file), strict=True))
     arrays[dataset] = arrays[dataset][::-1].copy()
     rewrite_h5(file, **arrays)
     with pytest.raises(ValueError, match=f"radar_data.h5 \\[{dataset}\\].*timestamp.*sorted"):
@@ -520,30 +521,31 @@ def test_load_scenes_json_inconsistent_with_radar_data(written, edit, field):
 def test_load_sensors_json_missing_field(written):
     root, _ = written
     edit_json(root / "sensors.json", lambda content: content["radar_2"].pop("yaw"))
-    with pytest.raises(ValueError, match="sensors.json.*radar_2.*yaw"):
+    with pytest.raises(ValueError, match=r"sensors\.json.*radar_2.*yaw"):
         load_radarscenes(root)
 
 
 def test_load_sensor_without_mounting(written):
     root, _ = written
     edit_json(root / "sensors.json", lambda content: content.pop("radar_3"))
-    with pytest.raises(ValueError, match="radar_data.h5.*sensor_id.*sensors.json"):
+    with pytest.raises(ValueError, match=r"radar_data\.h5.*sensor_id.*sensors\.json"):
         load_radarscenes(root)
 
 
 def test_load_sequences_json_bad_category(written):
     root, _ = written
+
     def set_bad_category(content):
         content["sequences"]["sequence_2"]["category"] = "test"
 
     edit_json(root / "sequences.json", set_bad_category)
-    with pytest.raises(ValueError, match="sequences.json.*category"):
+    with pytest.raises(ValueError, match=r"sequences\.json.*category"):
         load_radarscenes(root)
 
 
 def test_load_unknown_sequence(written):
     root, _ = written
-    with pytest.raises(ValueError, match="sequences.json.*sequence_9"):
+    with pytest.raises(ValueError, match=r"sequences\.json.*sequence_9"):
         load_radarscenes(root, sequences=["sequence_9"])
     with pytest.raises(ValueError, match="seq_2"):
         load_radarscenes(root, sequences=["seq_2"])
@@ -591,7 +593,7 @@ def test_write_string_not_representable(tmp_path, column, value):
 def test_write_string_where_float_belongs(tmp_path):
     bunch = make_test_bunch()
     bunch.data["rcs"] = bunch.data["rcs"].astype(str)
-    with pytest.raises(ValueError, match="bunch.data.*rcs"):
+    with pytest.raises(ValueError, match=r"bunch\.data.*rcs"):
         write_radarscenes(bunch, tmp_path / "data")
 
 

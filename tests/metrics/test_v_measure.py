@@ -16,7 +16,9 @@ from sklearn_radar.metrics import (
 )
 
 labelings = st.integers(4, 60).flatmap(
-    lambda n: st.tuples(st.lists(st.integers(-1, 4), min_size=n, max_size=n), st.lists(st.integers(-1, 5), min_size=n, max_size=n))
+    lambda n: st.tuples(
+        st.lists(st.integers(-1, 4), min_size=n, max_size=n), st.lists(st.integers(-1, 5), min_size=n, max_size=n)
+    )
 )
 
 

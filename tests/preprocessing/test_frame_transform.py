@@ -15,15 +15,34 @@ def scenes():
 
 
 def _detection(**values):
-    row = dict(range_sc=0.0, azimuth_sc=0.0, vr=0.0, timestamp=0, sensor_x=0.0, sensor_y=0.0, sensor_yaw=0.0,
-               ego_x_seq=0.0, ego_y_seq=0.0, ego_yaw_seq=0.0, ego_vx=0.0, ego_yaw_rate=0.0, sequence=1)
+    row = dict(
+        range_sc=0.0,
+        azimuth_sc=0.0,
+        vr=0.0,
+        timestamp=0,
+        sensor_x=0.0,
+        sensor_y=0.0,
+        sensor_yaw=0.0,
+        ego_x_seq=0.0,
+        ego_y_seq=0.0,
+        ego_yaw_seq=0.0,
+        ego_vx=0.0,
+        ego_yaw_rate=0.0,
+        sequence=1,
+    )
     row.update(values)
     return row
 
 
 def test_hand_computed_car_and_frame_coordinates():
     # Sensor 1 m ahead of the rear axle looking left; target 2 m along its boresight.
-    X = pd.DataFrame([_detection(range_sc=2.0, sensor_x=1.0, sensor_yaw=np.pi / 2, ego_x_seq=10.0, ego_y_seq=5.0, ego_yaw_seq=np.pi / 2)])
+    X = pd.DataFrame(
+        [
+            _detection(
+                range_sc=2.0, sensor_x=1.0, sensor_yaw=np.pi / 2, ego_x_seq=10.0, ego_y_seq=5.0, ego_yaw_seq=np.pi / 2
+            )
+        ]
+    )
     car = FrameTransform(frame="car").fit_transform(X)
     np.testing.assert_allclose(car[["x", "y"]].to_numpy(), [[1.0, 2.0]], atol=1e-12)
     # Car heading along world +y: car x -> world +y, car y -> world -x.
@@ -69,7 +88,15 @@ def test_a_static_point_stays_in_place_in_the_frame_system_but_moves_in_the_car_
     for k in range(3):
         ego_x = 1.0 * k
         dx, dy = 30.0 - ego_x, 4.0
-        rows.append(_detection(range_sc=np.hypot(dx, dy), azimuth_sc=np.arctan2(dy, dx), ego_x_seq=ego_x, ego_vx=10.0, timestamp=100_000 * k))
+        rows.append(
+            _detection(
+                range_sc=np.hypot(dx, dy),
+                azimuth_sc=np.arctan2(dy, dx),
+                ego_x_seq=ego_x,
+                ego_vx=10.0,
+                timestamp=100_000 * k,
+            )
+        )
     X = pd.DataFrame(rows)
     frame = FrameTransform(frame="frame").fit_transform(X)
     np.testing.assert_allclose(frame[["x", "y"]].to_numpy(), [[30.0, 4.0]] * 3, atol=1e-9)
@@ -93,7 +120,9 @@ def _rigid_body_detections(n, seed):
     ego0 = rng.uniform(-50.0, 50.0, (n, 2))
     mount = np.c_[rng.uniform(-1.0, 4.0, n), rng.uniform(-1.0, 1.0, n)]
     sensor_yaw = rng.uniform(-np.pi, np.pi, n)
-    target0 = ego0 + rng.uniform(3.0, 60.0, n)[:, None] * np.c_[np.cos(angle := rng.uniform(-np.pi, np.pi, n)), np.sin(angle)]
+    target0 = (
+        ego0 + rng.uniform(3.0, 60.0, n)[:, None] * np.c_[np.cos(angle := rng.uniform(-np.pi, np.pi, n)), np.sin(angle)]
+    )
     target_velocity = rng.uniform(-15.0, 15.0, (n, 2))
 
     def sensor(t):
@@ -143,7 +172,9 @@ def test_frame_coordinates_map_back_to_car_coordinates_with_the_devkit(scenes):
             [tuple(X.loc[scan[0], ["ego_x_seq", "ego_y_seq", "ego_yaw_seq"]])],
             dtype=[("x_seq", "f8"), ("y_seq", "f8"), ("yaw_seq", "f8")],
         )[0]
-        x_cc, y_cc = transform_detections_sequence_to_car(frame.loc[scan, "x"].to_numpy(), frame.loc[scan, "y"].to_numpy(), pose)
+        x_cc, y_cc = transform_detections_sequence_to_car(
+            frame.loc[scan, "x"].to_numpy(), frame.loc[scan, "y"].to_numpy(), pose
+        )
         np.testing.assert_allclose(x_cc, car.loc[scan, "x"], atol=1e-6)
         np.testing.assert_allclose(y_cc, car.loc[scan, "y"], atol=1e-6)
 
@@ -170,7 +201,10 @@ def test_plain_array_is_read_by_position():
     r, az = np.array([1.0, 2.0]), np.array([0.0, np.pi / 2])
     Xt = FrameTransform().fit_transform(np.c_[r, az])
     # [x, y, v_r, t, sequence, keep, range_sc, heading, azimuth_sc, sensor_yaw]
-    expected = [[1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0], [0.0, 2.0, 0.0, 0.0, 0.0, 1.0, 2.0, 0.0, np.pi / 2, 0.0]]
+    expected = [
+        [1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 1.0, 0.0, 0.0, 0.0],
+        [0.0, 2.0, 0.0, 0.0, 0.0, 1.0, 2.0, 0.0, np.pi / 2, 0.0],
+    ]
     np.testing.assert_allclose(Xt, expected, atol=1e-12)
 
 
