@@ -202,7 +202,8 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
 
     def _merge_sequence(self, rows, c, stage1_labels, los):
         """Root row (global row number of a cluster's representative) per row of one sequence."""
-        runs = cluster_runs(stage1_labels[rows], c["x"][rows], c["y"][rows], c["t"][rows])
+        extra = (c["v_r"][rows],) if los is None else (c["v_r"][rows], los[rows])  # ties of (t, x, y): by value
+        runs = cluster_runs(stage1_labels[rows], c["x"][rows], c["y"][rows], c["t"][rows], extra)
         roots = np.full(len(rows), -1, dtype=np.int64)
         if len(runs.ids) == 0:
             return roots, []

@@ -24,7 +24,7 @@ class ClusterRuns:
     """The detections of each stage-1 cluster of one sequence, as runs of a flat, (cluster, time)-sorted array."""
 
     ids: np.ndarray  # cluster labels, ascending
-    order: np.ndarray  # flat position -> row, sorted by (cluster, time, row)
+    order: np.ndarray  # flat position -> row, sorted by (cluster, time, x, y, extra keys, row)
     run_start: np.ndarray  # first flat position of each cluster
     run_end: np.ndarray  # one past the last
     t: np.ndarray  # s, time of each flat position
@@ -35,6 +35,7 @@ class ClusterRuns:
     scan_y: np.ndarray
     scan_start: np.ndarray  # first scan of each cluster
     scan_end: np.ndarray
+    by_start: np.ndarray  # the clusters by (first detection (t, x, y, extra keys), size): A before B in a pair
 
     @property
     def start(self):
@@ -47,10 +48,19 @@ class ClusterRuns:
         return self.t[self.run_end - 1]
 
 
-def cluster_runs(labels, x, y, t):
-    """Sort the non-noise rows by (label, time) and summarise every cluster's scans."""
+def cluster_runs(labels, x, y, t, extra=()):
+    """Sort the non-noise rows by (label, time, x, y, *extra) and summarise every cluster's scans.
+
+    The sort keys make everything that follows independent of the row
+    order: the detections of a scan are taken in the order of their values
+    (``extra``: further per-row arrays, e.g. Doppler, that break ties of
+    x and y), and clusters starting in the same scan are ordered by their
+    first detection's values, then size (``by_start``), not by their
+    label ids, which follow the rows.
+    """
     clustered = np.flatnonzero(labels >= 0)
-    order = clustered[np.lexsort((t[clustered], labels[clustered]))]
+    keys = [np.asarray(column)[clustered] for column in (*extra[::-1], y, x, t)]
+    order = clustered[np.lexsort((*keys, labels[clustered]))]
     sorted_labels, sorted_t = labels[order], t[order]
     ids, run_start = np.unique(sorted_labels, return_index=True)
     run_end = np.r_[run_start[1:], len(order)].astype(np.int64)
@@ -62,6 +72,9 @@ def cluster_runs(labels, x, y, t):
     scan_cluster = np.searchsorted(ids, sorted_labels[scan_first])
     scan_start = np.searchsorted(scan_cluster, np.arange(len(ids)), side="left")
     scan_end = np.searchsorted(scan_cluster, np.arange(len(ids)), side="right")
+    first = order[run_start]
+    size = run_end - run_start
+    by_start = np.lexsort((size, *[np.asarray(column)[first] for column in (*extra[::-1], y, x, t)]))
     return ClusterRuns(
         ids=ids,
         order=order,
@@ -75,17 +88,17 @@ def cluster_runs(labels, x, y, t):
         scan_y=np.bincount(scan_of_row, y[order]) / count,
         scan_start=scan_start.astype(np.int64),
         scan_end=scan_end.astype(np.int64),
+        by_start=by_start.astype(np.int64),
     )
 
 
 @numba.njit(cache=True, nogil=True)
-def _time_compatible_pairs(start, end, eps_t2):
-    """Pairs (a, b): a starts no later than b (ties: by index) and has a detection after s_b - eps_t2.
+def _time_compatible_pairs(by_start, start, end, eps_t2):
+    """Pairs (a, b): a comes before b in ``by_start`` and has a detection after s_b - eps_t2.
 
     The unpruned enumeration, quadratic in the clusters alive at once: the
     reference of :func:`_candidate_pairs` in the tests.
     """
-    by_start = np.argsort(start, kind="mergesort")
     first_a, second_b = [], []
     for position in range(len(by_start)):
         b = by_start[position]
@@ -249,7 +262,7 @@ def _cluster_boxes(runs):
 
 
 def candidate_pairs(runs, eps_t2, eps_d, mode):
-    """Pairs (a, b) of clusters, a starting no later than b, alive within ``eps_t2`` (s) of b's start, and close.
+    """Pairs (a, b) of clusters, a before b in ``runs.by_start``, alive within ``eps_t2`` (s) of b's start, and close.
 
     The same pairs, in the same order, as the plain time test
     (:func:`_time_compatible_pairs`) minus those the merge criterion of
@@ -276,7 +289,7 @@ def candidate_pairs(runs, eps_t2, eps_d, mode):
     if n < 2:
         return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
     start, end = np.ascontiguousarray(runs.start), np.ascontiguousarray(runs.end)
-    by_start = np.argsort(start, kind="mergesort")
+    by_start = runs.by_start
     lo_x, hi_x, lo_y, hi_y = _cluster_boxes(runs)
     scale = np.maximum.reduce([np.abs(lo_x), np.abs(hi_x), np.abs(lo_y), np.abs(hi_y)])
     with np.errstate(over="ignore", invalid="ignore"):
@@ -292,10 +305,12 @@ def candidate_pairs(runs, eps_t2, eps_d, mode):
 
 
 def time_compatible_pairs(runs, eps_t2):
-    """Pairs (a, b) of clusters, a starting no later than b, alive within ``eps_t2`` (s) of b's start."""
+    """Pairs (a, b) of clusters, a before b in ``runs.by_start``, alive within ``eps_t2`` (s) of b's start."""
     if len(runs.ids) < 2:
         return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
-    return _time_compatible_pairs(np.ascontiguousarray(runs.start), np.ascontiguousarray(runs.end), float(eps_t2))
+    return _time_compatible_pairs(
+        runs.by_start, np.ascontiguousarray(runs.start), np.ascontiguousarray(runs.end), float(eps_t2)
+    )
 
 
 @numba.njit(cache=True, nogil=True, inline="always")

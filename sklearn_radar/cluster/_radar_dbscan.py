@@ -77,7 +77,11 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
 
     * ``"box"`` (Eq. 3): ``|dx| < eps_xy`` and ``|dy| < eps_xy`` and
       ``|dv_r| < eps_vr``, with dx, dy in the car axes of the later detection
-      of the pair (column ``heading``; the sequence axes when it is absent);
+      of the pair (column ``heading``; the sequence axes when it is absent).
+      Two detections of the same time with different headings (which a real
+      scan, one heading per time, cannot have) must pass the box in the
+      axes of each: neither is the later one, and the test stays symmetric,
+      so the labels do not depend on the row order;
     * ``"xy"`` (Eq. 4): ``sqrt(dx^2 + dy^2) < eps_xy`` and ``|dv_r| < eps_vr``;
     * ``"xyv"`` (Eq. 5): ``sqrt(dx^2 + dy^2 + dv_r^2 / vr_scale^2) < eps_xyv``.
 

@@ -34,7 +34,7 @@ class Criterion(NamedTuple):
     Attributes
     ----------
     metric : int
-        ``BOX`` (Eq. 3, in the car axes of the later point of the pair),
+        ``BOX`` (Eq. 3, in the car axes of the later point of the pair; of both at equal times),
         ``XY`` (Eq. 4), ``XYV`` (Eq. 5) or ``BOX_UNROTATED`` (Eq. 3 when every
         heading is 0, so the car axes are the x-y axes).
     eps_xy : float
@@ -90,11 +90,18 @@ def _spatial_neighbor(i, j, points, crit):
     if crit.metric == BOX_UNROTATED:  # every heading is 0: the box axes are the x-y axes
         return abs(dx) < eps_xy and abs(dy) < eps_xy and abs(dv) < eps_vr
     if crit.metric == BOX:
-        # Box axes: the car frame of the later detection of the pair (the newest scan of a sliding window).
-        k = i if points.t[i] >= points.t[j] else j
+        # Box axes: the car frame of the later detection of the pair (the newest scan of a sliding window);
+        # at equal times, both detections' frames (symmetric in i and j; one heading per scan makes them equal).
+        k, other = (i, j) if points.t[i] >= points.t[j] else (j, i)
         along = points.cos_h[k] * dx + points.sin_h[k] * dy
         across = points.cos_h[k] * dy - points.sin_h[k] * dx
-        return abs(along) < eps_xy and abs(across) < eps_xy and abs(dv) < eps_vr
+        if not (abs(along) < eps_xy and abs(across) < eps_xy and abs(dv) < eps_vr):
+            return False
+        if points.t[i] != points.t[j] or (points.cos_h[i] == points.cos_h[j] and points.sin_h[i] == points.sin_h[j]):
+            return True
+        along = points.cos_h[other] * dx + points.sin_h[other] * dy
+        across = points.cos_h[other] * dy - points.sin_h[other] * dx
+        return abs(along) < eps_xy and abs(across) < eps_xy
     if crit.metric == XY:
         return dx * dx + dy * dy < eps_xy * eps_xy and abs(dv) < eps_vr
     return dx * dx + dy * dy + dv * dv / (crit.vr_scale * crit.vr_scale) < crit.eps_xyv * crit.eps_xyv
@@ -110,10 +117,15 @@ def _pair_distance(i, j, points, crit):
     if crit.metric == BOX_UNROTATED:
         return max(abs(dx) / eps_xy, abs(dy) / eps_xy, dv / eps_vr)
     if crit.metric == BOX:
-        k = i if points.t[i] >= points.t[j] else j
+        k, other = (i, j) if points.t[i] >= points.t[j] else (j, i)
         along = abs(points.cos_h[k] * dx + points.sin_h[k] * dy)
         across = abs(points.cos_h[k] * dy - points.sin_h[k] * dx)
-        return max(along / eps_xy, across / eps_xy, dv / eps_vr)
+        distance = max(along / eps_xy, across / eps_xy, dv / eps_vr)
+        if points.t[i] == points.t[j]:  # as _spatial_neighbor: both frames count at equal times
+            along = abs(points.cos_h[other] * dx + points.sin_h[other] * dy)
+            across = abs(points.cos_h[other] * dy - points.sin_h[other] * dx)
+            distance = max(distance, along / eps_xy, across / eps_xy)
+        return distance
     if crit.metric == XY:
         return max(math.sqrt(dx * dx + dy * dy) / eps_xy, dv / eps_vr)
     return math.sqrt(dx * dx + dy * dy + dv * dv / (crit.vr_scale * crit.vr_scale)) / crit.eps_xyv
