@@ -130,3 +130,26 @@ def test_permuting_the_rows_permutes_the_labels(metric, stage, X, seed):
     labels = model.fit_predict(X)
     permutation = np.random.default_rng(seed).permutation(len(X))
     assert _same_partition(labels, _labels_of_permuted(model, X, permutation))
+
+
+@pytest.mark.parametrize("n_scans", [2, 3, 4, 5])
+@pytest.mark.parametrize("dt", [1e-160, 1e-300, 5e-324])
+def test_scans_closer_than_1e_154_s_give_an_unknown_velocity_not_a_crash(n_scans, dt):
+    # Issue 15, item 3: the squared lags underflowed to 0 and the line fit divided by it (ZeroDivisionError).
+    t = np.repeat(np.arange(n_scans) * dt, 3)
+    X = pd.DataFrame({"x": np.tile([0.0, 0.1, 0.2], n_scans), "y": 0.0, "v_r": 5.0, "t": t})
+    X = pd.concat([X, X.assign(x=X["x"] + 0.5, t=X["t"] + 0.05)], ignore_index=True)
+    stage1 = RadarDBSCAN(metric="xy", eps_xy=0.15, min_samples=2, vr_min=-np.inf, eps_t=0.01)
+    for unknown in ("reject", "accept"):
+        labels = ClusterMerger(stage1=stage1, unknown_velocity=unknown).fit_predict(X)
+        assert len(labels) == len(X)
+
+
+def test_track_continuation_of_scans_closer_than_1e_154_s_is_unknown():
+    from sklearn_radar.cluster._merge_kernels import cluster_runs, track_continuation
+
+    t = np.array([0.0, 1e-160, 2e-160])
+    runs = cluster_runs(np.zeros(3, dtype=np.int64), np.array([0.0, 1.0, 2.0]), np.zeros(3), t)
+    _, centre, velocity = track_continuation(runs, 0, 1.0)
+    np.testing.assert_array_equal(centre, [2.0, 0.0])
+    assert not np.isfinite(velocity).all()

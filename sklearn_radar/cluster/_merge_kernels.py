@@ -380,6 +380,9 @@ def _smoothed(values, scan, n):
     return (values[scan - 1] + values[scan] + values[scan + 1]) / 3.0
 
 
+_TINY = float(np.finfo(np.float64).tiny)  # the smallest normal float64; below, precision is lost
+
+
 @numba.njit(cache=True, nogil=True)
 def _continuation(scan_t, scan_x, scan_y, first, n):
     """End time, end centre and end velocity (m/s; nan if unknown) of the first ``n`` scans of a track.
@@ -388,7 +391,8 @@ def _continuation(scan_t, scan_x, scan_y, first, n):
     velocity is the derivative, at the last centre, of the cubic through
     the last four smoothed centres (the end piece of a cubic spline,
     evaluated exactly) or the slope of the line fitted to the last two or
-    three.  A single scan has no velocity.
+    three.  A single scan has no velocity, nor have scans too close in time
+    for the fit (lags whose squares underflow, below about 1e-154 s).
     """
     last = first + n - 1
     end_x, end_y = scan_x[last], scan_y[last]
@@ -408,6 +412,10 @@ def _continuation(scan_t, scan_x, scan_y, first, n):
     if k == 4:
         # Derivative at lag 0 (the last node) of the Lagrange interpolant: sum of w_i * value_i.
         for i in range(4):
+            for m in range(i):
+                if lag[i] - lag[m] == 0.0:  # scans too close for their lags to differ: no velocity
+                    return scan_t[last], end_x, end_y, np.nan, np.nan
+        for i in range(4):
             if i == 3:
                 w = 0.0
                 for m in range(3):
@@ -426,6 +434,8 @@ def _continuation(scan_t, scan_x, scan_y, first, n):
             spread += (lag[i] - mean_lag) ** 2
             vx += (lag[i] - mean_lag) * (sx[i] - mean_x)
             vy += (lag[i] - mean_lag) * (sy[i] - mean_y)
+        if not spread >= _TINY:  # scans closer than ~1e-154 s: the squared lags underflow, no velocity
+            return scan_t[last], end_x, end_y, np.nan, np.nan
         vx /= spread
         vy /= spread
     return scan_t[last], end_x, end_y, vx, vy
