@@ -330,11 +330,6 @@ def test_n_jobs_help_gives_the_default(capsys):
     assert "default" in n_jobs
 
 
-@pytest.mark.xfail(
-    reason="SIGINT while sklearn_radar/__init__.py imports the estimators (about 1.5 s) comes before any code of the "
-    "command line runs; needs lazy imports in sklearn_radar/__init__.py or a light entry point (issue 15, item 8)",
-    strict=False,
-)
 def test_sigint_during_the_start_up_imports_prints_no_traceback(tmp_path):
     process = subprocess.Popen(
         [sys.executable, "-m", "sklearn_radar", "--version"], stdout=subprocess.PIPE, stderr=subprocess.PIPE
