@@ -167,7 +167,7 @@ def test_tables_are_the_papers(number):
 
 
 def test_only_the_expert_setting_and_the_transfers_of_8_are_untuned():
-    # Sec. IV: #1 is the expert setting; #10 and #11 reuse #8's optimum (identical numbers in Table III for
+    # Table III: #1 is the expert setting; #10 and #11 reuse #8's optimum (identical numbers in Table III for
     # #10; #11 its eps values on the box criterion).  Everything else was optimised.
     assert PAPER[10]["params"] == PAPER[8]["params"]
     assert (PAPER[11]["params"]["eps_xy"], PAPER[11]["params"]["eps_vr"]) == (
