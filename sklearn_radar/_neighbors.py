@@ -33,11 +33,23 @@ class GridIndex:
     cell_end: np.ndarray  # one past the last
 
 
+#: Cell coordinates must lie in [-2**31, 2**31): the cell key packs x and y into one int64.
+_MAX_CELLS = 2.0**31
+
+
 def build_grid(x, y, t, cell_size) -> GridIndex:
-    """Index points for radius-``cell_size`` searches (m); ``t`` in s."""
+    """Index points for radius-``cell_size`` searches (m); ``t`` in s.
+
+    Raises
+    ------
+    ValueError
+        Naming the column, when a coordinate lies beyond 2**31 cells from
+        the origin (about 1e9 m for a 0.5 m cell), where the cell key
+        would overflow.
+    """
     x, y, t = (np.ascontiguousarray(a, dtype=np.float64) for a in (x, y, t))
-    cell_x = np.floor(x / cell_size).astype(np.int64)
-    cell_y = np.floor(y / cell_size).astype(np.int64)
+    cell_x = _cell_coordinates(x, cell_size, "x")
+    cell_y = _cell_coordinates(y, cell_size, "y")
     keys = cell_x * _KEY_SHIFT + (cell_y + _KEY_OFFSET)
     order = np.lexsort((t, keys))
     keys = keys[order]
@@ -53,6 +65,19 @@ def build_grid(x, y, t, cell_size) -> GridIndex:
         cell_start=first.astype(np.int64),
         cell_end=np.r_[first[1:], len(keys)].astype(np.int64),
     )
+
+
+def _cell_coordinates(values, cell_size, name):
+    """``floor(values / cell_size)`` as int64; ValueError names the column when it cannot be one."""
+    with np.errstate(over="ignore", invalid="ignore"):
+        cells = np.floor(values / cell_size)
+    if len(cells) and not np.all((cells >= -_MAX_CELLS) & (cells < _MAX_CELLS)):
+        worst = float(np.max(np.abs(values)))
+        raise ValueError(
+            f"column {name!r} holds a coordinate of magnitude {worst:.3g} m, beyond the neighbour grid's reach "
+            f"of {_MAX_CELLS * cell_size:.3g} m (2**31 cells of {cell_size:g} m); shift the data nearer the origin"
+        )
+    return cells.astype(np.int64)
 
 
 def count_neighbors(grid: GridIndex, radius, before, after, cap) -> np.ndarray:
