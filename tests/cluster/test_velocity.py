@@ -266,7 +266,7 @@ def test_thirty_percent_gross_outliers_are_rejected(n, seed):
     theta = rng.uniform(-0.3, 0.3, n)
     v_r = _radial(velocity, theta) + rng.normal(0, 0.05, n)
     outlier = np.zeros(n, dtype=bool)
-    outlier[rng.choice(n, int(round(0.3 * n)), replace=False)] = True
+    outlier[rng.choice(n, round(0.3 * n), replace=False)] = True
     v_r[outlier] += rng.choice([-1.0, 1.0], outlier.sum()) * rng.uniform(1.0, 3.0, outlier.sum())
 
     vx, vy, n_inliers = estimate_velocity(v_r, theta)
@@ -376,10 +376,14 @@ def _monte_carlo(n_sensors, seed):
 def monte_carlo():
     results = {n_sensors: _monte_carlo(n_sensors, seed=100 + n_sensors) for n_sensors in (1, 2)}
     print()
-    print(f"Doppler velocity estimate, car 10-40 m, 5-15 detections, sigma {SIGMA_VR} m/s, "
-          f"{OUTLIER_RATE:.0%} outliers, {MC_TRIALS} trials")
-    print("sensors  unknown  speed err m/s (med / p90)  heading err deg (med / p90)  "
-          "Mahalanobis^2 (med / p90)  exact inlier set")
+    print(
+        f"Doppler velocity estimate, car 10-40 m, 5-15 detections, sigma {SIGMA_VR} m/s, "
+        f"{OUTLIER_RATE:.0%} outliers, {MC_TRIALS} trials"
+    )
+    print(
+        "sensors  unknown  speed err m/s (med / p90)  heading err deg (med / p90)  "
+        "Mahalanobis^2 (med / p90)  exact inlier set"
+    )
     for n_sensors, rows in results.items():
         known = rows[rows[:, 0] == 0]
         print(
@@ -548,5 +552,5 @@ def test_deterministic_with_random_pairs():
     group = np.repeat([3, 1], 20)
     a = estimate_velocities(v_r, theta, group)
     b = estimate_velocities(v_r, theta, group)
-    for x, y in zip(a, b):
+    for x, y in zip(a, b, strict=True):
         np.testing.assert_array_equal(x, y)

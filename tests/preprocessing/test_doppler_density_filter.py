@@ -142,6 +142,8 @@ def test_neighbour_count_equals_brute_force(n, seed, d_xy, dt, causal, cap):
     squared_distance = (x[:, None] - x[None, :]) ** 2 + (y[:, None] - y[None, :]) ** 2
     lag = t[None, :] - t[:, None]
     in_time = (lag <= (0.0 if causal else dt)) & (lag >= -dt)
-    neighbour = (squared_distance <= d_xy**2) & in_time & (sequence[:, None] == sequence[None, :]) & ~np.eye(n, dtype=bool)
+    neighbour = (
+        (squared_distance <= d_xy**2) & in_time & (sequence[:, None] == sequence[None, :]) & ~np.eye(n, dtype=bool)
+    )
     expected = np.minimum(neighbour.sum(axis=1), cap)
     np.testing.assert_array_equal(neighbor_counts(x, y, t, sequence, d_xy, dt, causal=causal, cap=cap), expected)
