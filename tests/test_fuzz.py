@@ -55,6 +55,9 @@ _DTYPES = ["str", "object", "bool", "float32", "int64", "category", "complex", "
 def _corrupt(table, kind, column, row, draw, extreme):
     """``table`` with one corruption applied; ``column`` and ``row`` say where, ``extreme`` the values to use."""
     table = table.copy()
+    numeric = column in table.columns and pd.api.types.is_numeric_dtype(table[column].dtype)
+    if kind in ("nan", "inf", "-inf", "extreme", "dtype") and not numeric:
+        return table  # an earlier corruption already made the column non-numeric (or dropped it)
     if kind in ("nan", "inf", "-inf", "extreme"):
         value = {"nan": np.nan, "inf": np.inf, "-inf": -np.inf}.get(kind)
         if value is None:

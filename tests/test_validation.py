@@ -92,3 +92,10 @@ def test_a_dataframe_without_a_required_column_is_named():
     X = pd.DataFrame({"x": [0.0], "y": [0.0], "v_r": [1.0]})
     with pytest.raises(ValueError, match="'t'"):
         RadarDBSCAN().fit(X)
+
+
+def test_a_raw_value_that_makes_a_working_column_overflow_is_named():
+    raw = np.c_[[10.0, 10.0], [0.1, 0.1], [1.0, 1.0], [0.0, 0.0], [3.6, 3.6], [0.7, 0.7], [0.0, 0.0]]
+    raw = np.c_[raw, np.zeros((2, 4)), [0.1, 1.7e308]]  # ego_yaw_rate: 1.7e308 rad/s times sensor_x overflows v_r
+    with pytest.raises(ValueError, match=r"column 'ego_yaw_rate' holds 1.7e\+308 at row 1.*'v_r' overflow"):
+        FrameTransform().fit_transform(raw)

@@ -120,6 +120,17 @@ class FrameTransform(TransformerMixin, BaseEstimator):
         """
         check_is_fitted(self)
         X, c = read_columns(self, X, FRAME_TRANSFORM_READS, reset=False)
+        with np.errstate(over="ignore", invalid="ignore"):
+            work = self._working_columns(c)
+        _check_finite(work, c)
+        if hasattr(X, "columns"):
+            return write_columns(X, work)
+        sequence = c["sequence"] if c["sequence"] is not None else np.zeros(len(work["x"]))
+        line_of_sight = {"range_sc": c["range_sc"], "azimuth_sc": c["azimuth_sc"], "sensor_yaw": c["sensor_yaw"]}
+        return write_columns(np.empty((len(work["x"]), 0)), {**work, "sequence": sequence, **line_of_sight})
+
+    def _working_columns(self, c):
+        """x, y (m), v_r (m/s), t (s) and heading (rad) from the raw columns ``c``."""
         angle = c["azimuth_sc"] + c["sensor_yaw"]
         cos_a, sin_a = np.cos(angle), np.sin(angle)
         x = c["sensor_x"] + c["range_sc"] * cos_a
@@ -136,13 +147,32 @@ class FrameTransform(TransformerMixin, BaseEstimator):
             "t": c["timestamp"] * 1e-6,
             "heading": c["ego_yaw_seq"] if self.frame == "frame" else np.zeros(len(x)),
         }
-        if hasattr(X, "columns"):
-            return write_columns(X, work)
-        sequence = c["sequence"] if c["sequence"] is not None else np.zeros(len(x))
-        line_of_sight = {"range_sc": c["range_sc"], "azimuth_sc": c["azimuth_sc"], "sensor_yaw": c["sensor_yaw"]}
-        return write_columns(np.empty((len(x), 0)), {**work, "sequence": sequence, **line_of_sight})
+        return work
 
     def __sklearn_tags__(self):
         tags = super().__sklearn_tags__()
         tags.transformer_tags.preserves_dtype = []
         return tags
+
+
+#: The raw columns each working column is computed from, to name them when a result overflows.
+_SOURCES = {
+    "x": ("range_sc", "azimuth_sc", "sensor_x", "sensor_y", "sensor_yaw", "ego_x_seq", "ego_y_seq", "ego_yaw_seq"),
+    "y": ("range_sc", "azimuth_sc", "sensor_x", "sensor_y", "sensor_yaw", "ego_x_seq", "ego_y_seq", "ego_yaw_seq"),
+    "v_r": ("vr", "azimuth_sc", "sensor_yaw", "sensor_x", "sensor_y", "ego_vx", "ego_yaw_rate"),
+    "t": ("timestamp",),
+    "heading": ("ego_yaw_seq",),
+}
+
+
+def _check_finite(work, c):
+    """ValueError naming the largest raw value behind the first working column that overflowed."""
+    for name, values in work.items():
+        bad = np.flatnonzero(~np.isfinite(values))
+        if len(bad):
+            row = int(bad[0])
+            source = max(_SOURCES[name], key=lambda column: abs(c[column][row]))
+            raise ValueError(
+                f"FrameTransform: column {source!r} holds {c[source][row]:.3g} at row {row}, which makes the "
+                f"working column {name!r} overflow; check its unit and magnitude"
+            )
