@@ -233,7 +233,7 @@ def _estimate(v_r, theta, group_id, n_groups, min_detections, min_spread, thresh
 
 
 @validate_params(
-    {"v_r": ["array-like"], "los_angle": ["array-like"], **_SETTINGS_CONSTRAINTS},
+    {"v_r": ["array-like"], "los_angle": ["array-like"]} | _SETTINGS_CONSTRAINTS,
     prefer_skip_nested_validation=True,
 )
 def estimate_velocity(
@@ -332,7 +332,7 @@ def estimate_velocity(
 
 
 @validate_params(
-    {"v_r": ["array-like"], "los_angle": ["array-like"], "groups": ["array-like"], **_SETTINGS_CONSTRAINTS},
+    {"v_r": ["array-like"], "los_angle": ["array-like"], "groups": ["array-like"]} | _SETTINGS_CONSTRAINTS,
     prefer_skip_nested_validation=True,
 )
 def estimate_velocities(

@@ -34,6 +34,7 @@ import pandas as pd
 from sklearn.utils import Bunch
 from sklearn.utils._param_validation import validate_params
 
+from .._files import folder_mode
 from .._schema import (
     CONTEXT_COLUMNS,
     DETECTION_COLUMNS,
@@ -526,7 +527,7 @@ def write_radarscenes(bunch, path, overwrite=False) -> Path:
     prefix = f"{_TEMPORARY_PREFIX}{os.getpid()}-{path.name}."
     staging = Path(tempfile.mkdtemp(prefix=prefix, suffix=".tmp", dir=path.parent))
     try:
-        os.chmod(staging, 0o777 & ~_current_umask())  # mkdtemp creates 0700 whatever the umask
+        os.chmod(staging, folder_mode())  # mkdtemp creates 0700 whatever the umask
         _write_json(staging / "sensors.json", sensors_json)
         _write_json(staging / "sequences.json", sequences_json)
         for sequence in prepared:
@@ -713,20 +714,6 @@ def _same_sensor_neighbours(scan_time: list, scan_sensor: list):
             next_same[j] = scan_time[i]
         last_scan_of[sensor] = i
     return prev_same, next_same
-
-
-def _current_umask() -> int:
-    """The process's umask, read without changing it where Linux's /proc tells it (``os.umask`` is process-wide)."""
-    try:
-        with open("/proc/self/status", encoding="ascii", errors="replace") as status:
-            for line in status:
-                if line.startswith("Umask:"):
-                    return int(line.split()[1], 8)
-    except (OSError, ValueError, IndexError):
-        pass
-    old = os.umask(0o022)
-    os.umask(old)
-    return old
 
 
 def _write_json(file: Path, content) -> None:

@@ -96,18 +96,19 @@ _WINDOW_CONSTRAINTS = {
 }
 
 #: Constraints shared by the grid (Table I) and the settings table (Table II).
-_EVALUATION_CONSTRAINTS = {
-    "X": [pd.DataFrame],
-    "target": ["array-like"],
-    "frame": [StrOptions({"frame", "car"})],
-    "dt": [Interval(Real, 0, None, closed="left")],
-    "causal": ["boolean"],
-    "threshold_ratios": ["array-like"],
-    "min_neighbors": ["array-like"],
-    **_WINDOW_CONSTRAINTS,
-    "n_jobs": [Integral, None],
-    "verbose": ["verbose"],
-}
+_EVALUATION_CONSTRAINTS = (
+    {
+        "X": [pd.DataFrame],
+        "target": ["array-like"],
+        "frame": [StrOptions({"frame", "car"})],
+        "dt": [Interval(Real, 0, None, closed="left")],
+        "causal": ["boolean"],
+        "threshold_ratios": ["array-like"],
+        "min_neighbors": ["array-like"],
+    }
+    | _WINDOW_CONSTRAINTS
+    | {"n_jobs": [Integral, None], "verbose": ["verbose"]}
+)
 
 
 def _check_grid(values, name, allow_zero):
@@ -178,7 +179,7 @@ def _filter_removal_rates(keep, target):
 
 
 @validate_params(
-    {"keep": ["array-like"], "target": ["array-like"], "t": ["array-like"], **_WINDOW_CONSTRAINTS},
+    {"keep": ["array-like"], "target": ["array-like"], "t": ["array-like"]} | _WINDOW_CONSTRAINTS,
     prefer_skip_nested_validation=True,
 )
 def filter_error_windows(keep, target, t, window=0.15, min_kept=0.75) -> pd.DataFrame:
@@ -315,7 +316,7 @@ class _Windows:
 
 
 @validate_params(
-    {"keep": ["array-like"], "target": ["array-like"], "t": ["array-like"], **_WINDOW_CONSTRAINTS},
+    {"keep": ["array-like"], "target": ["array-like"], "t": ["array-like"]} | _WINDOW_CONSTRAINTS,
     prefer_skip_nested_validation=True,
 )
 def filter_errors(keep, target, t, window=0.15, min_kept=0.75) -> int:
@@ -423,7 +424,7 @@ def _check_common(X, target, threshold_ratios, min_neighbors):
 
 
 @validate_params(
-    {"vr_thresholds": ["array-like"], "d_xys": ["array-like"], **_EVALUATION_CONSTRAINTS},
+    {"vr_thresholds": ["array-like"], "d_xys": ["array-like"]} | _EVALUATION_CONSTRAINTS,
     prefer_skip_nested_validation=True,
 )
 def filter_grid(
@@ -552,7 +553,7 @@ def filter_grid(
 
 
 @validate_params(
-    {"settings": [pd.DataFrame, None], **_EVALUATION_CONSTRAINTS},
+    {"settings": [pd.DataFrame, None]} | _EVALUATION_CONSTRAINTS,
     prefer_skip_nested_validation=True,
 )
 def filter_settings_table(

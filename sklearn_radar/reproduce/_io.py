@@ -8,6 +8,8 @@ import shutil
 import tempfile
 from pathlib import Path
 
+from .._files import file_mode
+
 #: Every temporary file or folder written beside an output starts with this, then the writer's process id and "-".
 TEMPORARY_PREFIX = ".sklearn-radar-tmp-"
 _TEMPORARY = re.compile(re.escape(TEMPORARY_PREFIX) + r"(\d+)-")
@@ -114,25 +116,6 @@ def remove_stale_temporaries(folder, legacy=()):
         except OSError:
             pass  # another process removed it, or it cannot be: not worth failing the run for
     return removed
-
-
-def current_umask():
-    """The process's umask, read without changing it where Linux's /proc tells it (``os.umask`` is process-wide)."""
-    try:
-        with open("/proc/self/status", encoding="ascii", errors="replace") as status:
-            for line in status:
-                if line.startswith("Umask:"):
-                    return int(line.split()[1], 8)
-    except (OSError, ValueError, IndexError):
-        pass
-    old = os.umask(0o022)
-    os.umask(old)
-    return old
-
-
-def file_mode():
-    """Permission bits of a new file as ordinary tools create it: ``0o666`` less the umask."""
-    return 0o666 & ~current_umask()
 
 
 def atomic_write_text(path, text):
