@@ -51,23 +51,25 @@ def _strict(parametrize):
     return pytest.mark.parametrize(argnames, strict, **parametrize.kwargs)
 
 
-CHECKS = _strict(parametrize_with_checks(
-    [
-        FrameTransform(),
-        FrameTransform(frame="car"),
-        DopplerDensityFilter(),
-        RadarDBSCAN(),
-        # alpha_r > 0 (Eq. 2) and mode="velocity" (Eq. 6) need range_sc and the line of sight, which the
-        # checks' generic arrays cannot hold: both raise on them by design (tests/test_validation.py).
-        RadarDBSCAN(metric="xyv", vr_scale=2.0, vr_min=-np.inf),
-        RadarDBSCAN(metric="xy", causal=True, vr_min=-np.inf),
-        ClusterMerger(),
-        ClusterMerger(stage1=RadarDBSCAN(metric="xy", vr_min=-np.inf)),
-        WindowedDBSCAN(),
-        WindowedHDBSCAN(),
-    ],
-    expected_failed_checks=_expected_failed_checks,
-))  # fmt: skip
+CHECKS = _strict(
+    parametrize_with_checks(
+        [
+            FrameTransform(),
+            FrameTransform(frame="car"),
+            DopplerDensityFilter(),
+            RadarDBSCAN(),
+            # alpha_r > 0 (Eq. 2) and mode="velocity" (Eq. 6) need range_sc and the line of sight, which the
+            # checks' generic arrays cannot hold: both raise on them by design (tests/test_validation.py).
+            RadarDBSCAN(metric="xyv", vr_scale=2.0, vr_min=-np.inf),
+            RadarDBSCAN(metric="xy", causal=True, vr_min=-np.inf),
+            ClusterMerger(),
+            ClusterMerger(stage1=RadarDBSCAN(metric="xy", vr_min=-np.inf)),
+            WindowedDBSCAN(),
+            WindowedHDBSCAN(),
+        ],
+        expected_failed_checks=_expected_failed_checks,
+    )
+)
 
 
 @CHECKS

@@ -75,8 +75,9 @@ def test_min_samples_of_the_second_dbscan_counts_the_cluster_itself(min_samples,
     # Two stage-1 clusters and one merge edge: each has 1 partner + itself = 2 clusters, so both are core
     # (and merge) for min_samples <= 2; for 3 neither is core and the edge merges nothing.
     X = _split_by_a_gap()
-    model = ClusterMerger(mode="continuation", eps_d=1.0, eps_v=1.0, eps_t2=0.35, min_samples=min_samples,
-                          stage1=STAGE1).fit(X)  # fmt: skip
+    model = ClusterMerger(
+        mode="continuation", eps_d=1.0, eps_v=1.0, eps_t2=0.35, min_samples=min_samples, stage1=STAGE1
+    ).fit(X)
     assert len(model.merges_) == 1
     assert len(set(model.labels_.tolist())) == (1 if merged else 2)
 

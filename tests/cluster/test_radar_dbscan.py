@@ -159,8 +159,9 @@ def test_rotated_box_equals_sklearn_chebyshev_dbscan_in_the_car_frame(seed, head
     car = np.c_[rng.uniform(0, 8, (250, 2)), rng.normal(0, 3, 250)]
     eps, eps_vr, min_samples = 0.8, 2.0, 4
     c, s = np.cos(heading), np.sin(heading)
-    world = _frame(np.c_[5.0 + c * car[:, 0] - s * car[:, 1], -3.0 + s * car[:, 0] + c * car[:, 1], car[:, 2],
-                         np.zeros(250)]).assign(heading=heading)  # fmt: skip
+    world = _frame(
+        np.c_[5.0 + c * car[:, 0] - s * car[:, 1], -3.0 + s * car[:, 0] + c * car[:, 1], car[:, 2], np.zeros(250)]
+    ).assign(heading=heading)
     scaled = car * [1.0, 1.0, eps / eps_vr]
     reference = DBSCAN(eps=eps, min_samples=min_samples, metric="chebyshev").fit(scaled)
     assert len(set(reference.labels_.tolist()) - {-1}) >= 3  # a case with several clusters and noise
@@ -191,8 +192,15 @@ def test_a_border_point_joins_its_closest_core_point(border_x, expected):
     # (eps_xy = 0.6).  The slow middle detection (|v_r| = 0.1 < vr_min) cannot be core; it reaches both cores.
     # At x = 0: 0.4 m to A's core, 0.3 m to B's -> B.  At x = -0.1: 0.3 m to A's, 0.4 m to B's -> A.
     # (Doppler differs by 2.9 m/s, 2.9 / eps_vr = 0.058 of the normalised distance: it does not decide.)
-    X = _frame([(-0.9, 0.0, 3.0, 0.0), (-0.4, 0.0, 3.0, 0.0), (border_x, 0.0, 0.1, 0.0), (0.3, 0.0, 3.0, 0.0),
-                (0.8, 0.0, 3.0, 0.0)])  # fmt: skip
+    X = _frame(
+        [
+            (-0.9, 0.0, 3.0, 0.0),
+            (-0.4, 0.0, 3.0, 0.0),
+            (border_x, 0.0, 0.1, 0.0),
+            (0.3, 0.0, 3.0, 0.0),
+            (0.8, 0.0, 3.0, 0.0),
+        ]
+    )
     model = RadarDBSCAN(metric="xy", eps_xy=0.6, eps_vr=50.0, min_samples=3, vr_min=0.4).fit(X)
     assert model.core_sample_indices_.tolist() == [1, 3]
     assert model.labels_.tolist() == expected

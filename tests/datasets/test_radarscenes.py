@@ -219,9 +219,16 @@ def test_written_layout_and_json_keys(written):
     assert list(scenes) == ["sequence_name", "category", "first_timestamp", "last_timestamp", "scenes"]
     first = scenes["scenes"][str(scenes["first_timestamp"])]
     assert list(first) == [
-        "sensor_id", "prev_timestamp", "next_timestamp", "prev_timestamp_same_sensor",
-        "next_timestamp_same_sensor", "odometry_timestamp", "odometry_index", "image_name", "radar_indices",
-    ]  # fmt: skip
+        "sensor_id",
+        "prev_timestamp",
+        "next_timestamp",
+        "prev_timestamp_same_sensor",
+        "next_timestamp_same_sensor",
+        "odometry_timestamp",
+        "odometry_index",
+        "image_name",
+        "radar_indices",
+    ]
     assert first["prev_timestamp"] is None and first["radar_indices"][0] == 0
     radar_data, odometry = read_h5(root / "sequence_2" / "radar_data.h5")
     assert radar_data.dtype == _radarscenes.RADAR_DATA_H5_DTYPE

@@ -56,12 +56,20 @@ def _latex_rows(table):
 
 #: The paper's symbols as parameter names of RadarDBSCAN (Table III) and ClusterMerger (Table IV).
 SYMBOLS = {
-    r"\epsilon_{xy}": "eps_xy", r"\epsilon_{v_r}": "eps_vr", r"N_{\text{min}}": "min_samples",
-    r"v_{r,\text{min}}": "vr_min", r"\epsilon_{xyv_r}": "eps_xyv", r"\epsilon^{'}_{v_r}": "vr_scale",
-    r"N_\text{min,50}": "min_samples", r"\alpha_r": "alpha_r", r"\epsilon_{d}": "eps_d",
-    r"\epsilon_{\phi}": "eps_phi", r"\epsilon_{v}": "eps_v", r"\epsilon_{t2}": "eps_t2",
+    r"\epsilon_{xy}": "eps_xy",
+    r"\epsilon_{v_r}": "eps_vr",
+    r"N_{\text{min}}": "min_samples",
+    r"v_{r,\text{min}}": "vr_min",
+    r"\epsilon_{xyv_r}": "eps_xyv",
+    r"\epsilon^{'}_{v_r}": "vr_scale",
+    r"N_\text{min,50}": "min_samples",
+    r"\alpha_r": "alpha_r",
+    r"\epsilon_{d}": "eps_d",
+    r"\epsilon_{\phi}": "eps_phi",
+    r"\epsilon_{v}": "eps_v",
+    r"\epsilon_{t2}": "eps_t2",
     r"\epsilon_{\text{pred,min}}": "eps_d",
-}  # fmt: skip
+}
 #: Equation labels of the paper's source and their numbers; the criterion equations name the metric.
 EQUATIONS = {"filter_metric": 1, "min_pts": 2, "step1_1": 3, "step1_2": 4, "step1_3": 5}
 METRICS = {3: "box", 4: "xy", 5: "xyv"}
@@ -91,8 +99,12 @@ def _parse(lines, stage):
             setting.setdefault("alpha_r", 0.0)
         elif int(number) >= 12:
             setting = {"mode": "velocity" if "velocity" in method else "continuation", **setting}
-        rows[int(number)] = {"frame": "car" if "CCS" in cs else "frame", "equations": tuple(numbers),
-                             "v1": _value(v1), "params": setting}  # fmt: skip
+        rows[int(number)] = {
+            "frame": "car" if "CCS" in cs else "frame",
+            "equations": tuple(numbers),
+            "v1": _value(v1),
+            "params": setting,
+        }
     return rows
 
 
@@ -114,11 +126,13 @@ def _hand_built(number):
     stage1 = RadarDBSCAN(**base["params"])
     last = ("cluster", stage1) if number < 12 else ("merge", ClusterMerger(**_in_package_units(number), stage1=stage1))
     filtered = 1 in base["equations"]
-    return Pipeline([
-        ("frame", FrameTransform(frame=base["frame"])),
-        ("filter", DopplerDensityFilter(**CHOSEN_FILTER) if filtered else "passthrough"),
-        last,
-    ])  # fmt: skip
+    return Pipeline(
+        [
+            ("frame", FrameTransform(frame=base["frame"])),
+            ("filter", DopplerDensityFilter(**CHOSEN_FILTER) if filtered else "passthrough"),
+            last,
+        ]
+    )
 
 
 @pytest.fixture(scope="module")

@@ -75,8 +75,20 @@ def test_yaw_rate_with_a_laterally_mounted_sensor_by_hand():
     # Range 10 m: x = 3.0 + 10 * 0.6 = 9.0, y = -0.8 - 10 * 0.8 = -8.8.
     sensor_yaw = -0.5
     azimuth = np.arctan2(-0.8, 0.6) - sensor_yaw
-    X = pd.DataFrame([_detection(range_sc=10.0, azimuth_sc=azimuth, vr=-3.04, sensor_x=3.0, sensor_y=-0.8,
-                                 sensor_yaw=sensor_yaw, ego_vx=10.0, ego_yaw_rate=0.5)])  # fmt: skip
+    X = pd.DataFrame(
+        [
+            _detection(
+                range_sc=10.0,
+                azimuth_sc=azimuth,
+                vr=-3.04,
+                sensor_x=3.0,
+                sensor_y=-0.8,
+                sensor_yaw=sensor_yaw,
+                ego_vx=10.0,
+                ego_yaw_rate=0.5,
+            )
+        ]
+    )
     Xt = FrameTransform(frame="car").fit_transform(X)
     assert Xt["v_r"].iloc[0] == pytest.approx(2.0, abs=1e-12)
     np.testing.assert_allclose(Xt[["x", "y"]].to_numpy(), [[9.0, -8.8]], atol=1e-12)
@@ -138,12 +150,23 @@ def _rigid_body_detections(n, seed):
     sight = target0 - sensor(0.0)
     azimuth = np.mod(np.arctan2(sight[:, 1], sight[:, 0]) - psi0 - sensor_yaw + np.pi, 2 * np.pi) - np.pi
     timestamp = rng.integers(0, 10**9, n)
-    X = pd.DataFrame({
-        "range_sc": distance(0.0), "azimuth_sc": azimuth, "vr": (distance(h) - distance(-h)) / (2 * h),
-        "timestamp": timestamp, "sensor_x": mount[:, 0], "sensor_y": mount[:, 1], "sensor_yaw": sensor_yaw,
-        "ego_x_seq": ego0[:, 0], "ego_y_seq": ego0[:, 1], "ego_yaw_seq": psi0, "ego_vx": speed,
-        "ego_yaw_rate": omega, "sequence": 1,
-    })  # fmt: skip
+    X = pd.DataFrame(
+        {
+            "range_sc": distance(0.0),
+            "azimuth_sc": azimuth,
+            "vr": (distance(h) - distance(-h)) / (2 * h),
+            "timestamp": timestamp,
+            "sensor_x": mount[:, 0],
+            "sensor_y": mount[:, 1],
+            "sensor_yaw": sensor_yaw,
+            "ego_x_seq": ego0[:, 0],
+            "ego_y_seq": ego0[:, 1],
+            "ego_yaw_seq": psi0,
+            "ego_vx": speed,
+            "ego_yaw_rate": omega,
+            "sequence": 1,
+        }
+    )
     relative = target0 - ego0
     c, s = np.cos(psi0), np.sin(psi0)
     car = np.c_[c * relative[:, 0] + s * relative[:, 1], -s * relative[:, 0] + c * relative[:, 1]]
