@@ -21,7 +21,7 @@ from ._merge_kernels import (
     merge_components,
     velocity_frames,
 )
-from ._radar_dbscan import RadarDBSCAN
+from ._radar_dbscan import RadarDBSCAN, _gate_static_clusters
 from ._velocity import _estimate_velocities
 
 
@@ -89,11 +89,23 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
     memory : str, joblib.Memory or None, default=None
         Caches the stage-1 labels, so that tuning the stage-2 parameters
         runs stage 1 once per data set (like ``Pipeline(memory=...)``).
+    cluster_vr_min : float >= 0 or None, default=None
+        Cluster-level Doppler gate on the final, merged clusters, m/s: a
+        merged cluster whose median ``|v_r|`` is at most ``cluster_vr_min``
+        becomes noise and the remaining ids are renumbered consecutively.
+        It is applied after merging, so a merged cluster whose median passes
+        is kept even if one of its stage-1 parts alone would fail.  None
+        (the default) turns it off, as in the paper.  The reason is that of
+        ``RadarDBSCAN.cluster_vr_min``: the paper's V-measure does not
+        penalise clusters of static background, so tuned settings cluster
+        guard rails; the gate removes them without changing which
+        detections may be core.  ``stage1_labels_`` and ``merges_`` are
+        not gated.
 
     Attributes
     ----------
     labels_ : ndarray of shape (n_detections,)
-        Merged cluster per row, -1 for noise; consecutive ids.
+        Merged cluster per row, -1 for noise (including clusters removed by ``cluster_vr_min``); consecutive ids.
     stage1_labels_ : ndarray of shape (n_detections,)
         The stage-1 clusters.
     merges_ : ndarray of shape (n_merges, 3)
@@ -134,6 +146,7 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
         "unknown_velocity": [StrOptions({"reject", "accept"})],
         "stage1": [HasMethods(["fit"]), None],
         "memory": [None, str, HasMethods(["cache"])],
+        "cluster_vr_min": [Interval(Real, 0, None, closed="left"), None],
     }
 
     def __init__(
@@ -147,6 +160,7 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
         unknown_velocity="reject",
         stage1=None,
         memory=None,
+        cluster_vr_min=None,
     ):
         self.mode = mode
         self.eps_d = eps_d
@@ -157,6 +171,7 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
         self.unknown_velocity = unknown_velocity
         self.stage1 = stage1
         self.memory = memory
+        self.cluster_vr_min = cluster_vr_min
 
     @_fit_context(prefer_skip_nested_validation=False)
     def fit(self, X, y=None):
@@ -196,7 +211,7 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
             roots[rows] = sequence_roots
             merges += [(sequence[rows[0]], a, b) for a, b in sequence_merges]
         self.stage1_labels_ = stage1_labels
-        self.labels_ = consecutive_labels(roots)
+        self.labels_ = consecutive_labels(_gate_static_clusters(roots, c["v_r"], self.cluster_vr_min))
         self.merges_ = np.array(merges, dtype=np.float64).reshape(-1, 3)
         return self
 
