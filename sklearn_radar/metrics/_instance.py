@@ -1,0 +1,562 @@
+"""Object-level metrics: panoptic quality, coverage and the share of background-only clusters, per time frame.
+
+A *segment* is a set of detections.  A ground-truth segment is one annotated
+object's detections inside one time frame of one sequence; a predicted
+segment is one cluster's.  Background (``labels_true == -1``) belongs to no
+ground-truth segment, noise (``labels_pred == -1``) to no predicted segment.
+Segments of different frames or sequences are never compared.
+
+Everything is computed once, vectorised, by :func:`_segment_scores`: the
+(sequence, frame, label) triples are encoded as integer segment ids, the
+intersections are the counts of the (ground-truth id, predicted id) pairs of
+the detections that belong to both kinds of segment, and
+``IoU = |g ∩ p| / (|g| + |p| - |g ∩ p|)``.  No Python loop runs over segments.
+"""
+
+from __future__ import annotations
+
+import warnings
+from numbers import Real
+
+import numpy as np
+import pandas as pd
+from sklearn.utils import Bunch
+from sklearn.utils._param_validation import HasMethods, Interval, StrOptions, validate_params
+
+__all__ = [
+    "background_share",
+    "instance_coverage",
+    "instance_scores",
+    "make_instance_scorer",
+    "panoptic_quality",
+    "panoptic_quality_scorer",
+]
+
+#: Keys of :func:`panoptic_quality`, :func:`instance_coverage` and :func:`background_share`; their union is the
+#: Bunch of :func:`instance_scores`.
+_PQ_KEYS = ("pq", "sq", "rq", "precision", "recall", "tp", "fp", "fn")
+_COVERAGE_KEYS = ("mcov", "mwcov")
+_BACKGROUND_KEYS = ("background_segment_share", "background_cluster_share")
+
+#: Scorer metric -> (key of instance_scores, sign).  Searches maximise, so the shares (lower is better) are negated.
+_SCORER_METRICS = {
+    "pq": ("pq", 1.0),
+    "sq": ("sq", 1.0),
+    "rq": ("rq", 1.0),
+    "f1": ("rq", 1.0),
+    "precision": ("precision", 1.0),
+    "recall": ("recall", 1.0),
+    "mcov": ("mcov", 1.0),
+    "mwcov": ("mwcov", 1.0),
+    "neg_background_segment_share": ("background_segment_share", -1.0),
+    "neg_background_cluster_share": ("background_cluster_share", -1.0),
+}
+
+_CONSTRAINTS = {
+    "labels_true": ["array-like"],
+    "labels_pred": ["array-like"],
+    "times": ["array-like", None],
+    "groups": ["array-like", None],
+    "frame": [Interval(Real, 0, None, closed="neither"), None],
+}
+
+
+def _codes(values):
+    """Integer codes 0, 1, ... of the distinct values (hash-based, order of first appearance) and their number."""
+    codes, uniques = pd.factorize(values, use_na_sentinel=False)
+    return codes.astype(np.int64, copy=False), len(uniques)
+
+
+def _joint_codes(a, n_a, b, n_b):
+    """Compact codes of the pairs (a, b), for codes ``0 <= a < n_a`` and ``0 <= b < n_b``."""
+    if n_a * n_b < 2**62:  # Python integers: no overflow in the test itself
+        return _codes(a * np.int64(n_b) + b)
+    _, inverse = np.unique(np.stack([a, b], axis=1), axis=0, return_inverse=True)
+    inverse = inverse.ravel().astype(np.int64)
+    return inverse, int(inverse.max()) + 1
+
+
+def _ratio(numerator, denominator):
+    """``numerator / denominator`` as a float, 0.0 when the denominator is 0."""
+    return float(numerator / denominator) if denominator else 0.0
+
+
+def _segment_scores(labels_true, labels_pred, *, times=None, groups=None, frame=0.5):
+    """Every score of :func:`instance_scores` in one pass, without parameter validation."""
+    labels_true = np.asarray(labels_true)
+    labels_pred = np.asarray(labels_pred)
+    n = labels_true.shape[0] if labels_true.ndim == 1 else -1
+    arrays = {"labels_true": labels_true, "labels_pred": labels_pred}
+    if groups is not None:
+        arrays["groups"] = groups = np.asarray(groups)
+    if times is not None:
+        arrays["times"] = times = np.asarray(times, dtype=np.float64)
+    for array in arrays.values():
+        if array.ndim != 1 or array.shape[0] != n:
+            shapes = {key: value.shape for key, value in arrays.items()}
+            raise ValueError(f"{', '.join(arrays)} must be 1-D of equal length, got shapes {shapes}")
+
+    # Sequence, then (sequence, frame) of every detection.
+    seq, n_seq = _codes(groups) if groups is not None else (np.zeros(n, dtype=np.int64), 1 if n else 0)
+    if times is not None and frame is not None:
+        if not np.isfinite(times).all():
+            raise ValueError("times must be finite")
+        start = np.full(n_seq, np.inf)
+        np.minimum.at(start, seq, times)
+        frame_index, n_frame = _codes(np.floor((times - start[seq]) / frame))
+        cell, n_cell = _joint_codes(seq, n_seq, frame_index, n_frame)
+    else:  # one frame per sequence
+        cell, n_cell = seq, n_seq
+
+    # Segment ids: (sequence, frame, label) -> 0 .. n_segments - 1; -1 for background and noise.
+    is_object = labels_true != -1
+    is_cluster = labels_pred != -1
+    true_seg = np.full(n, -1, dtype=np.int64)
+    pred_seg = np.full(n, -1, dtype=np.int64)
+    true_seg[is_object], n_true = _joint_codes(cell[is_object], n_cell, *_codes(labels_true[is_object]))
+    pred_seg[is_cluster], n_pred = _joint_codes(cell[is_cluster], n_cell, *_codes(labels_pred[is_cluster]))
+    true_size = np.bincount(true_seg[is_object], minlength=n_true)
+    pred_size = np.bincount(pred_seg[is_cluster], minlength=n_pred)
+
+    # Intersections: the distinct (ground-truth segment, predicted segment) pairs and their counts.
+    both = is_object & is_cluster
+    pair_code, n_pairs = _joint_codes(true_seg[both], n_true, pred_seg[both], n_pred)
+    inter = np.bincount(pair_code, minlength=n_pairs)
+    first = np.zeros(n_pairs, dtype=np.int64)
+    first[pair_code[::-1]] = np.flatnonzero(both)[::-1]  # one row of each pair (which one does not matter)
+    pair_true, pair_pred = true_seg[first], pred_seg[first]
+    union = true_size[pair_true] + pred_size[pair_pred] - inter
+    iou = inter / np.maximum(union, 1)
+
+    # Panoptic quality: IoU > 0.5, i.e. 2 |g ∩ p| > |g ∪ p| in integers, makes every match unique.
+    matched = 2 * inter > union
+    tp = int(matched.sum())
+    fp, fn = n_pred - tp, n_true - tp
+    iou_sum = float(iou[matched].sum())
+    sq = _ratio(iou_sum, tp)
+    rq = _ratio(tp, tp + 0.5 * fp + 0.5 * fn)
+
+    # Coverage: best IoU of each ground-truth segment with any predicted segment (0 when none overlaps).
+    cover = np.zeros(n_true)
+    np.maximum.at(cover, pair_true, iou)
+
+    # Background-only predicted segments (per frame) and clusters (per sequence).
+    pred_has_object = np.bincount(pair_pred, minlength=n_pred) > 0
+    cluster, n_clusters = _joint_codes(seq[is_cluster], n_seq, *_codes(labels_pred[is_cluster]))
+    cluster_has_object = np.bincount(cluster[is_object[is_cluster]], minlength=n_clusters) > 0
+
+    return Bunch(
+        pq=sq * rq,
+        sq=sq,
+        rq=rq,
+        precision=_ratio(tp, n_pred),
+        recall=_ratio(tp, n_true),
+        tp=tp,
+        fp=int(fp),
+        fn=int(fn),
+        mcov=_ratio(float(cover.sum()), n_true),
+        mwcov=_ratio(float(true_size @ cover), int(true_size.sum())),
+        background_segment_share=_ratio(int(n_pred - pred_has_object.sum()), n_pred),
+        background_cluster_share=_ratio(int(n_clusters - cluster_has_object.sum()), n_clusters),
+    )
+
+
+@validate_params(_CONSTRAINTS, prefer_skip_nested_validation=True)
+def instance_scores(labels_true, labels_pred, *, times, groups=None, frame=0.5):
+    """Panoptic quality, coverage and background shares at once, from one segmentation of the detections.
+
+    Equal to the union of :func:`panoptic_quality`, :func:`instance_coverage`
+    and :func:`background_share` (see them for the formulas), but segments
+    the detections once: the choice for a report that shows them side by
+    side.
+
+    Parameters
+    ----------
+    labels_true : array-like of shape (n_detections,)
+        Ground-truth instance per detection, -1 for background.
+    labels_pred : array-like of shape (n_detections,)
+        Predicted cluster per detection, -1 for noise.
+    times : array-like of shape (n_detections,) or None
+        Time of each detection in s (e.g. ``timestamp * 1e-6``).  None, or
+        ``frame=None``: every sequence is one frame.
+    groups : array-like of shape (n_detections,), default=None
+        Sequence of each detection: equal labels in different sequences are
+        different segments, and frames start at each sequence's first
+        detection.  None: one sequence.
+    frame : float or None, default=0.5
+        Length of a time frame in s, > 0; detection ``i`` of sequence ``s``
+        lies in frame ``floor((times[i] - min(times of s)) / frame)``.  The
+        default, 500 ms, is the frame of Scheiner et al. (2021).  None: one
+        frame per sequence ("per sequence" evaluation).
+
+    Returns
+    -------
+    scores : Bunch
+        The keys of :func:`panoptic_quality` (``pq``, ``sq``, ``rq``,
+        ``precision``, ``recall``, ``tp``, ``fp``, ``fn``), of
+        :func:`instance_coverage` (``mcov``, ``mwcov``) and of
+        :func:`background_share` (``background_segment_share``,
+        ``background_cluster_share``).
+
+    Raises
+    ------
+    ValueError
+        If the arrays are not 1-D of equal length or a time is not finite.
+
+    Examples
+    --------
+    >>> from sklearn_radar.metrics import instance_scores
+    >>> # Cluster 3 is object 0 exactly; cluster 4, background only, is a false positive: RQ = 1 / (1 + 1/2).
+    >>> scores = instance_scores([0, 0, 0, -1], [3, 3, 3, 4], times=[0.0, 0.1, 0.2, 0.3])
+    >>> round(scores.pq, 6), scores.mcov, scores.background_cluster_share
+    (0.666667, 1.0, 0.5)
+    """
+    return _segment_scores(labels_true, labels_pred, times=times, groups=groups, frame=frame)
+
+
+@validate_params(_CONSTRAINTS, prefer_skip_nested_validation=True)
+def panoptic_quality(labels_true, labels_pred, *, times, groups=None, frame=0.5):
+    """Panoptic quality (Kirillov et al. 2019) of the clusters, one "thing" class, per time frame.
+
+    Within each sequence (``groups``) time is cut into frames of ``frame``
+    seconds.  A ground-truth segment ``g`` is one object's detections inside
+    a frame, a predicted segment ``p`` one cluster's.  Over all frames and
+    sequences:
+
+    * a pair matches when ``IoU(g, p) = |g ∩ p| / |g ∪ p| > 0.5``; with this
+      threshold every segment has at most one match;
+    * TP = matched pairs, FP = unmatched predicted segments (clusters of
+      background only included), FN = unmatched ground-truth segments;
+    * ``SQ = Σ_TP IoU / TP`` (segmentation quality),
+      ``RQ = TP / (TP + FP/2 + FN/2)`` (recognition quality, the F1 score),
+      ``PQ = SQ × RQ``, ``precision = TP / (TP + FP)``,
+      ``recall = TP / (TP + FN)``.
+
+    Unlike the radar V-measure, clustering static background costs here:
+    every background-only cluster is a false positive in each frame it
+    spans.  Degenerate input never raises: a ratio 0/0 (no segment at all,
+    or no match for SQ) is 0.0, never NaN.
+
+    Parameters
+    ----------
+    labels_true : array-like of shape (n_detections,)
+        Ground-truth instance per detection, -1 for background.
+    labels_pred : array-like of shape (n_detections,)
+        Predicted cluster per detection, -1 for noise.
+    times : array-like of shape (n_detections,) or None
+        Time of each detection in s (e.g. ``timestamp * 1e-6``).  None, or
+        ``frame=None``: every sequence is one frame.
+    groups : array-like of shape (n_detections,), default=None
+        Sequence of each detection: equal labels in different sequences are
+        different segments, and frames start at each sequence's first
+        detection.  None: one sequence.
+    frame : float or None, default=0.5
+        Length of a time frame in s, > 0; detection ``i`` of sequence ``s``
+        lies in frame ``floor((times[i] - min(times of s)) / frame)``.  The
+        default, 500 ms, is the frame of Scheiner et al. (2021).  None: one
+        frame per sequence ("per sequence" evaluation).
+
+    Returns
+    -------
+    scores : Bunch
+        ``pq``, ``sq``, ``rq``, ``precision``, ``recall`` (floats in
+        [0, 1]) and the counts ``tp``, ``fp``, ``fn`` (ints).
+
+    Raises
+    ------
+    ValueError
+        If the arrays are not 1-D of equal length or a time is not finite.
+
+    See Also
+    --------
+    instance_scores : all object-level scores at once.
+    panoptic_quality_scorer : PQ as a scorer for parameter searches.
+
+    References
+    ----------
+    .. [1] A. Kirillov, K. He, R. Girshick, C. Rother and P. Dollár,
+       "Panoptic Segmentation", CVPR 2019.
+    .. [2] N. Scheiner, F. Kraus, N. Appenrodt, J. Dickmann and B. Sick,
+       "Object detection for automotive radar point clouds – a comparison",
+       AI Perspectives 3, 2021 (frames of 500 ms).
+
+    Examples
+    --------
+    >>> from sklearn_radar.metrics import panoptic_quality
+    >>> # One object of 4 detections; the cluster takes 3 of them and 1 background detection: IoU = 3/5.
+    >>> scores = panoptic_quality([0, 0, 0, 0, -1], [7, 7, 7, -1, 7], times=[0.0, 0.1, 0.2, 0.3, 0.4])
+    >>> round(scores.pq, 6), scores.tp, scores.fp, scores.fn
+    (0.6, 1, 0, 0)
+    """
+    scores = _segment_scores(labels_true, labels_pred, times=times, groups=groups, frame=frame)
+    return Bunch(**{key: scores[key] for key in _PQ_KEYS})
+
+
+@validate_params(_CONSTRAINTS, prefer_skip_nested_validation=True)
+def instance_coverage(labels_true, labels_pred, *, times, groups=None, frame=0.5):
+    """Mean coverage mCov and weighted mean coverage mWCov of the ground-truth segments, per time frame.
+
+    The coverage of a ground-truth segment ``g`` (one object's detections
+    inside one frame, as in :func:`panoptic_quality`) is its best IoU with a
+    predicted segment of the same frame, 0 when no cluster overlaps it:
+    ``cov(g) = max_p |g ∩ p| / |g ∪ p|``.  Then ``mCov = Σ_g cov(g) / G``
+    over the G ground-truth segments and
+    ``mWCov = Σ_g |g| cov(g) / Σ_g |g|``, which weights each segment by its
+    number of detections, as radar instance-segmentation papers report them
+    (e.g. Liu et al. 2022).  Coverage does not penalise extra clusters
+    (background-only ones included): report it beside
+    :func:`panoptic_quality`, not instead of it.  Without ground-truth
+    segments both are 0.0 (never NaN).
+
+    Parameters
+    ----------
+    labels_true : array-like of shape (n_detections,)
+        Ground-truth instance per detection, -1 for background.
+    labels_pred : array-like of shape (n_detections,)
+        Predicted cluster per detection, -1 for noise.
+    times : array-like of shape (n_detections,) or None
+        Time of each detection in s (e.g. ``timestamp * 1e-6``).  None, or
+        ``frame=None``: every sequence is one frame.
+    groups : array-like of shape (n_detections,), default=None
+        Sequence of each detection: equal labels in different sequences are
+        different segments, and frames start at each sequence's first
+        detection.  None: one sequence.
+    frame : float or None, default=0.5
+        Length of a time frame in s, > 0; detection ``i`` of sequence ``s``
+        lies in frame ``floor((times[i] - min(times of s)) / frame)``.  The
+        default, 500 ms, is the frame of Scheiner et al. (2021).  None: one
+        frame per sequence ("per sequence" evaluation).
+
+    Returns
+    -------
+    scores : Bunch
+        ``mcov`` and ``mwcov``, floats in [0, 1].
+
+    Raises
+    ------
+    ValueError
+        If the arrays are not 1-D of equal length or a time is not finite.
+
+    See Also
+    --------
+    instance_scores : all object-level scores at once.
+
+    References
+    ----------
+    .. [1] J. Liu, W. Xiong, L. Bai, Y. Xia, T. Huang, W. Ouyang and B. Zhu,
+       "Deep instance segmentation with automotive radar detection points",
+       IEEE Transactions on Intelligent Vehicles, 2022.
+
+    Examples
+    --------
+    >>> from sklearn_radar.metrics import instance_coverage
+    >>> # Object 0 (4 detections) split 2 + 2: cov 1/2; object 1 (2 detections) found whole: cov 1.
+    >>> scores = instance_coverage([0, 0, 0, 0, 1, 1], [1, 1, 2, 2, 3, 3], times=None)
+    >>> float(scores.mcov), float(scores.mwcov)
+    (0.75, 0.6666666666666666)
+    """
+    scores = _segment_scores(labels_true, labels_pred, times=times, groups=groups, frame=frame)
+    return Bunch(**{key: scores[key] for key in _COVERAGE_KEYS})
+
+
+@validate_params(_CONSTRAINTS, prefer_skip_nested_validation=True)
+def background_share(labels_true, labels_pred, *, times=None, groups=None, frame=0.5):
+    """Share of the predicted segments (per frame) and of the clusters (per sequence) that hold background only.
+
+    A predicted segment, one cluster's detections inside one frame as in
+    :func:`panoptic_quality`, or a whole cluster of one sequence, is
+    background-only when none of its detections belongs to an annotated
+    object (``labels_true == -1`` for all of them).  The shares make the
+    cost of clustering static background visible, which the radar V-measure
+    ignores by design.  Without clusters both are 0.0 (never NaN).
+
+    Parameters
+    ----------
+    labels_true : array-like of shape (n_detections,)
+        Ground-truth instance per detection, -1 for background.
+    labels_pred : array-like of shape (n_detections,)
+        Predicted cluster per detection, -1 for noise.
+    times : array-like of shape (n_detections,), default=None
+        Time of each detection in s (e.g. ``timestamp * 1e-6``).  None, or
+        ``frame=None``: every sequence is one frame.
+    groups : array-like of shape (n_detections,), default=None
+        Sequence of each detection: equal labels in different sequences are
+        different segments, and frames start at each sequence's first
+        detection.  None: one sequence.
+    frame : float or None, default=0.5
+        Length of a time frame in s, > 0; detection ``i`` of sequence ``s``
+        lies in frame ``floor((times[i] - min(times of s)) / frame)``.  The
+        default, 500 ms, is the frame of Scheiner et al. (2021).  None: one
+        frame per sequence ("per sequence" evaluation).
+
+    Returns
+    -------
+    scores : Bunch
+        ``background_segment_share`` (per frame; equal to the cluster share
+        when ``times`` or ``frame`` is None) and
+        ``background_cluster_share`` (per sequence), floats in [0, 1].
+
+    Raises
+    ------
+    ValueError
+        If the arrays are not 1-D of equal length or a time is not finite.
+
+    See Also
+    --------
+    instance_scores : all object-level scores at once.
+
+    Examples
+    --------
+    >>> from sklearn_radar.metrics import background_share
+    >>> # Cluster 5 holds object 0, cluster 6 only background.
+    >>> scores = background_share([0, 0, -1, -1, -1], [5, 5, 5, 6, 6])
+    >>> scores.background_cluster_share
+    0.5
+    """
+    scores = _segment_scores(labels_true, labels_pred, times=times, groups=groups, frame=frame)
+    return Bunch(**{key: scores[key] for key in _BACKGROUND_KEYS})
+
+
+def _times_and_groups(X, frame):
+    """Times in s and sequences of the detection table X, for the scorers."""
+    columns = getattr(X, "columns", ())
+    groups = X["sequence"].to_numpy() if "sequence" in columns else None
+    if frame is None:
+        return None, groups
+    if "t" in columns:
+        return X["t"].to_numpy(dtype=np.float64), groups
+    if "timestamp" in columns:
+        stamps = X["timestamp"].to_numpy()
+        return (stamps - stamps.min()) * 1e-6 if len(stamps) else stamps.astype(np.float64), groups
+    raise ValueError(
+        "per-frame instance scores need the time of each detection: X must be a DataFrame with a 't' (s) or "
+        "'timestamp' (µs) column, or use frame=None"
+    )
+
+
+def _instance_score(estimator, X, y, metric, frame):
+    """The scorers' body: ``fit_predict`` on X, then one score; the worst value on any failure."""
+    key, sign = _SCORER_METRICS[metric]
+    times, groups = _times_and_groups(X, frame)  # a set-up mistake: raises before any fit
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            labels = estimator.fit_predict(X)
+        score = sign * _segment_scores(np.asarray(y), np.asarray(labels), times=times, groups=groups, frame=frame)[key]
+    except Exception:  # a search must go on; error_score=0 documents the same choice
+        return min(0.0, sign)
+    return float(score) if np.isfinite(score) else min(0.0, sign)
+
+
+class _InstanceScorer:
+    """A scorer ``(estimator, X, y) -> float`` of :func:`make_instance_scorer` (a class, so that it pickles)."""
+
+    def __init__(self, metric, frame):
+        self.metric = metric
+        self.frame = frame
+
+    def __call__(self, estimator, X, y):
+        return _instance_score(estimator, X, y, self.metric, self.frame)
+
+    def __repr__(self):
+        return f"make_instance_scorer(metric={self.metric!r}, frame={self.frame!r})"
+
+
+# Not skipping nested validation: the scorer fits ``estimator``, whose parameters
+# (a search's candidate) must still be validated by its own fit.
+@validate_params(
+    {"estimator": [HasMethods(["fit_predict"])], "X": ["array-like"], "y": ["array-like"]},
+    prefer_skip_nested_validation=False,
+)
+def panoptic_quality_scorer(estimator, X, y):
+    """Scorer for every scikit-learn search: ``fit_predict`` on X, panoptic quality per 0.5 s frame against y.
+
+    Clusterers have no out-of-sample ``predict``, so the estimator is fitted
+    on the data it is scored on, as by
+    :func:`~sklearn_radar.metrics.radar_v_measure_scorer`.  X is the
+    detection table: the times come from its ``t`` column (s) or else from
+    ``timestamp`` (µs), the sequences from ``sequence`` when it has one.
+    Once its arguments are valid and X has the time column it needs, it
+    never raises and never returns NaN: a failing fit scores the worst value
+    (0.0; -1.0 for a negated share), a degenerate labelling what the
+    function gives it (0.0 for a ratio 0/0).
+
+    Parameters
+    ----------
+    estimator : estimator with ``fit_predict``
+        The clusterer (or pipeline ending in one) to score; it is fitted on
+        ``X``.
+    X : DataFrame of shape (n_detections, n_columns)
+        The detections it clusters, with a ``t`` or ``timestamp`` column.
+    y : array-like of shape (n_detections,)
+        Ground-truth instance per detection, -1 for background (e.g.
+        :func:`sklearn_radar.instance_target`).
+
+    Returns
+    -------
+    score : float
+        PQ of :func:`panoptic_quality` with ``frame=0.5``, in [0, 1]; 0.0
+        when the fit fails.
+
+    Raises
+    ------
+    InvalidParameterError
+        If ``estimator`` has no ``fit_predict`` or ``X`` or ``y`` is not
+        array-like.
+    ValueError
+        If X has neither a ``t`` nor a ``timestamp`` column: a mistake in
+        the search set-up rather than a failing candidate.
+
+    See Also
+    --------
+    make_instance_scorer : a scorer for any of the object-level scores and frame lengths.
+    """
+    return _instance_score(estimator, X, y, "pq", 0.5)
+
+
+@validate_params(
+    {"metric": [StrOptions(set(_SCORER_METRICS))], "frame": [Interval(Real, 0, None, closed="neither"), None]},
+    prefer_skip_nested_validation=True,
+)
+def make_instance_scorer(metric="pq", *, frame=0.5):
+    """A scorer ``(estimator, X, y) -> float`` of one object-level score, for every scikit-learn search.
+
+    Clusterers have no out-of-sample ``predict``, so the estimator is fitted
+    on the data it is scored on, as by
+    :func:`~sklearn_radar.metrics.radar_v_measure_scorer`.  X is the
+    detection table: the times come from its ``t`` column (s) or else from
+    ``timestamp`` (µs), the sequences from ``sequence`` when it has one.
+    Once its arguments are valid and X has the time column it needs, it
+    never raises and never returns NaN: a failing fit scores the worst value
+    (0.0; -1.0 for a negated share), a degenerate labelling what the
+    function gives it (0.0 for a ratio 0/0).
+
+    Parameters
+    ----------
+    metric : str, default="pq"
+        The score: ``"pq"``, ``"sq"``, ``"rq"`` (or its name ``"f1"``),
+        ``"precision"``, ``"recall"``, ``"mcov"``, ``"mwcov"`` (the keys of
+        :func:`instance_scores`), or ``"neg_background_segment_share"`` or
+        ``"neg_background_cluster_share"``: searches maximise, so the
+        background shares are negated, in [-1, 0].
+    frame : float or None, default=0.5
+        Length of a time frame in s, > 0; None: one frame per sequence (X
+        then needs no time column).
+
+    Returns
+    -------
+    scorer : callable
+        ``scorer(estimator, X, y)``, fitting ``estimator`` with
+        ``fit_predict`` on X and scoring its clusters against y; it pickles.
+
+    See Also
+    --------
+    panoptic_quality_scorer : the scorer of ``metric="pq", frame=0.5``.
+
+    Examples
+    --------
+    >>> from sklearn_radar.metrics import make_instance_scorer
+    >>> make_instance_scorer("mwcov", frame=None)
+    make_instance_scorer(metric='mwcov', frame=None)
+    """
+    return _InstanceScorer(metric, frame)
