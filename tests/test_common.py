@@ -5,13 +5,18 @@ import pytest
 from sklearn.utils.estimator_checks import parametrize_with_checks
 
 from sklearn_radar import ClusterMerger, DopplerDensityFilter, FrameTransform, RadarDBSCAN
-from sklearn_radar.cluster import WindowedDBSCAN, WindowedHDBSCAN
+from sklearn_radar.cluster import SequenceDBSCAN, SequenceHDBSCAN, WindowedDBSCAN, WindowedHDBSCAN
 
 #: {repr of the estimator below: {check name: reason}}.  Keep every entry justified.
 _BY_DESIGN_NOISE = (
     "RadarDBSCAN's default vr_min = 0.4 m/s (the paper's expert setting) lets only moving detections be "
     "core points; the check's blobs have no Doppler column (v_r = 0), so every point is noise by design. "
     "The same check passes with vr_min=-inf (second RadarDBSCAN instance)."
+)
+_SEQUENCE_GATE_NOISE = (
+    "The per-sequence baselines' default Doppler gate vr_min = 0.4 m/s (as the paper's expert) makes every "
+    "detection with |v_r| <= 0.4 m/s noise; the check's blobs have no Doppler column (v_r = 0), so every point "
+    "is noise by design. The same check passes with vr_min=-inf (second instance of each)."
 )
 EXPECTED_FAILED_CHECKS = {
     "DopplerDensityFilter()": {
@@ -23,6 +28,14 @@ EXPECTED_FAILED_CHECKS = {
     "RadarDBSCAN()": {
         "check_clustering": _BY_DESIGN_NOISE,
         "check_clustering(readonly_memmap=True)": _BY_DESIGN_NOISE,
+    },
+    "SequenceDBSCAN()": {
+        "check_clustering": _SEQUENCE_GATE_NOISE,
+        "check_clustering(readonly_memmap=True)": _SEQUENCE_GATE_NOISE,
+    },
+    "SequenceHDBSCAN()": {
+        "check_clustering": _SEQUENCE_GATE_NOISE,
+        "check_clustering(readonly_memmap=True)": _SEQUENCE_GATE_NOISE,
     },
     "ClusterMerger()": {
         "check_clustering": "Its default stage 1 is RadarDBSCAN() with vr_min = 0.4 m/s: " + _BY_DESIGN_NOISE,
@@ -66,6 +79,10 @@ CHECKS = _strict(
             ClusterMerger(stage1=RadarDBSCAN(metric="xy", vr_min=-np.inf)),
             WindowedDBSCAN(),
             WindowedHDBSCAN(),
+            SequenceDBSCAN(),
+            SequenceDBSCAN(vr_min=-np.inf),
+            SequenceHDBSCAN(),
+            SequenceHDBSCAN(vr_min=-np.inf),
         ],
         expected_failed_checks=_expected_failed_checks,
     )

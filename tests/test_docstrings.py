@@ -172,6 +172,8 @@ FIT = {
     "sklearn_radar.cluster.ClusterMerger": lambda klass: klass().fit(_detections()[1]),
     "sklearn_radar.cluster.WindowedDBSCAN": lambda klass: klass().fit(_detections()[1]),
     "sklearn_radar.cluster.WindowedHDBSCAN": lambda klass: klass().fit(_detections()[1]),
+    "sklearn_radar.cluster.SequenceDBSCAN": lambda klass: klass().fit(_detections()[1]),
+    "sklearn_radar.cluster.SequenceHDBSCAN": lambda klass: klass().fit(_detections()[1]),
     "sklearn_radar.model_selection.ProgressBayesSearchCV": _fit_progress_bayes_search,
 }
 

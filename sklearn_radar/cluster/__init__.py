@@ -3,12 +3,14 @@
 from ._cluster_merger import ClusterMerger
 from ._radar_dbscan import RadarDBSCAN, ScanStream, min_points_at_range
 from ._velocity import estimate_velocities, estimate_velocity
-from ._windowed import WindowedDBSCAN, WindowedHDBSCAN
+from ._windowed import SequenceDBSCAN, SequenceHDBSCAN, WindowedDBSCAN, WindowedHDBSCAN
 
 __all__ = [
     "ClusterMerger",
     "RadarDBSCAN",
     "ScanStream",
+    "SequenceDBSCAN",
+    "SequenceHDBSCAN",
     "WindowedDBSCAN",
     "WindowedHDBSCAN",
     "estimate_velocities",
