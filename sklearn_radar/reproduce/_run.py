@@ -43,7 +43,7 @@ from threadpoolctl import threadpool_limits
 
 from .. import __version__
 from .._skopt import Integer, Real
-from ..cluster import WindowedDBSCAN, WindowedHDBSCAN
+from ..cluster import SequenceDBSCAN, SequenceHDBSCAN, WindowedDBSCAN, WindowedHDBSCAN
 from ..datasets import load_radarscenes, make_scenes
 from ..evaluation import filter_grid, filter_settings_table
 from ..experiments import derived_params, experiment_pipeline, get_experiment, paper_params, search_space
@@ -585,6 +585,27 @@ _BASELINES = {
             "cluster__min_samples": Integer(1, 8, name="cluster__min_samples"),
             # cluster_selection_epsilon stays 0: scikit-learn 1.9.1's epsilon search crashed on this data.
             "cluster__vr_scale": Real(0.3, 20.0, prior="log-uniform", name="cluster__vr_scale"),
+        },
+    ),
+    "sklearn DBSCAN per sequence (x, y, v_r, t) with Doppler gate": (
+        SequenceDBSCAN,
+        {
+            "cluster__eps": Real(0.2, 3.0, name="cluster__eps"),
+            "cluster__min_samples": Integer(2, 8, name="cluster__min_samples"),
+            "cluster__vr_scale": Real(0.3, 20.0, prior="log-uniform", name="cluster__vr_scale"),
+            # t_scale, m/s: how many metres one second counts (4 m/s puts 0.25 s, the paper's eps_t, at 1 m).
+            "cluster__t_scale": Real(0.5, 50.0, prior="log-uniform", name="cluster__t_scale"),
+            "cluster__vr_min": Real(0.0, 1.5, name="cluster__vr_min"),
+        },
+    ),
+    "sklearn HDBSCAN per sequence (x, y, v_r, t) with Doppler gate": (
+        SequenceHDBSCAN,
+        {
+            "cluster__min_cluster_size": Integer(2, 20, name="cluster__min_cluster_size"),
+            "cluster__min_samples": Integer(1, 8, name="cluster__min_samples"),
+            "cluster__vr_scale": Real(0.3, 20.0, prior="log-uniform", name="cluster__vr_scale"),
+            "cluster__t_scale": Real(0.5, 50.0, prior="log-uniform", name="cluster__t_scale"),
+            "cluster__vr_min": Real(0.0, 1.5, name="cluster__vr_min"),
         },
     ),
 }
