@@ -330,6 +330,18 @@ def test_n_jobs_help_gives_the_default(capsys):
     assert "default" in n_jobs
 
 
+def test_an_interrupt_during_the_start_up_imports_is_one_line(monkeypatch, capsys):
+    import sklearn_radar._cli as cli
+
+    def interrupted():
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(cli, "_import_the_estimators", interrupted)
+    assert cli.main(["--version"]) == 130
+    assert capsys.readouterr().err == "sklearn-radar: interrupted\n"
+
+
+@pytest.mark.slow  # timing-dependent: on a loaded machine the signal can land in Python's own start-up
 def test_sigint_during_the_start_up_imports_prints_no_traceback(tmp_path):
     process = subprocess.Popen(
         [sys.executable, "-m", "sklearn_radar", "--version"], stdout=subprocess.PIPE, stderr=subprocess.PIPE

@@ -298,3 +298,81 @@ def test_experiment_numbers_come_from_the_papers_metadata():
     assert (EXPERT, BEST_STAGE1, DERIVED_FROM_BEST, STAGE2) == (1, 8, (10, 11), (12, 13))
     assert STAGE1 == tuple(range(1, 12)) and get_experiment(EXPERT).method == "Expert Setting"
     assert ALL_EXPERIMENTS == ("filter", *(str(n) for n in range(1, 14)), "filter-effect", "baselines")
+
+
+def _brute_force_pq(target, labels, times, groups, frame=0.5):
+    """Per-frame panoptic quality written plainly: segments as sets of row numbers, IoU > 0.5 matches."""
+    segments = {"true": {}, "pred": {}}
+    start = {g: min(t for t, h in zip(times, groups, strict=True) if h == g) for g in set(groups)}
+    for row, (true, pred, t, g) in enumerate(zip(target, labels, times, groups, strict=True)):
+        key = (g, int((t - start[g]) // frame))
+        if true >= 0:
+            segments["true"].setdefault((*key, true), set()).add(row)
+        if pred >= 0:
+            segments["pred"].setdefault((*key, pred), set()).add(row)
+    ious = []
+    for t_key, t_rows in segments["true"].items():
+        for p_key, p_rows in segments["pred"].items():
+            if t_key[:2] == p_key[:2]:
+                iou = len(t_rows & p_rows) / len(t_rows | p_rows)
+                if iou > 0.5:
+                    ious.append(iou)
+    tp, n_true, n_pred = len(ious), len(segments["true"]), len(segments["pred"])
+    if tp == 0:
+        return 0.0
+    return (sum(ious) / tp) * tp / (tp + (n_pred - tp) / 2 + (n_true - tp) / 2)
+
+
+def test_objective_pq_is_searched_reported_and_ranks_the_saved_best(tiny_folder, tmp_path):
+    from sklearn_radar.datasets import load_radarscenes
+    from sklearn_radar.experiments import experiment_pipeline
+    from sklearn_radar.metrics import precluster_target
+
+    out = tmp_path / "pq"
+    argv = ["reproduce", "--data", str(tiny_folder), "--out", str(out), "--n-iter", "2", "--objective", "pq"]
+    assert main([*argv, "--experiments", "1,3,baselines"]) == 0
+    results = json.loads((out / "results.json").read_text())
+    saved = json.loads((out / "params.json").read_text())
+    assert results["meta"]["objective"] == "pq" and saved["objective"] == "pq"
+    pq = {key: setting["pq_test"] for key, setting in saved["experiments"].items()}
+    assert saved["best"] == max(pq, key=pq.get)
+    # The reported PQ of #3 equals a plain per-frame matcher on the saved setting's test labels.
+    scenes = load_radarscenes(tiny_folder)
+    test = np.flatnonzero(np.isin(scenes.groups, results["meta"]["data"]["test_sequences"]))
+    target = precluster_target(scenes.data, scenes.target)[test]
+    labels = (
+        experiment_pipeline(3).set_params(**saved["experiments"]["3"]["params"]).fit_predict(scenes.data.iloc[test])
+    )
+    times = scenes.data["timestamp"].to_numpy()[test] * 1e-6
+    expected = _brute_force_pq(target.tolist(), labels.tolist(), times.tolist(), scenes.groups[test].tolist())
+    assert results["experiments"]["3"]["instance_test"]["pq"] == pytest.approx(expected, abs=1e-12)
+    for record in results["baselines"].values():
+        assert 0.0 <= record["instance_test"]["pq"] <= 1.0
+    assert "## Beyond the paper: object-level scores" in (out / "report.md").read_text()
+
+
+def test_results_without_an_objective_read_back_as_the_papers():
+    from sklearn_radar.reproduce._results import RunMeta
+
+    document = RunMeta(
+        version="0",
+        seed=0,
+        budget=_typed_budget(),
+        data=_typed_data(),
+    ).to_json_dict()
+    document.pop("objective")
+    assert RunMeta.from_json_dict(document).objective == "v1"
+
+
+def _typed_budget():
+    from sklearn_radar.reproduce._results import Budget
+
+    return Budget.default(2)
+
+
+def _typed_data():
+    from sklearn_radar.reproduce._results import DataMeta
+
+    return DataMeta(
+        source="s", n_detections=1, n_sequences=1, n_train=1, n_test=0, train_sequences=[1], test_sequences=[]
+    )

@@ -180,6 +180,9 @@ class RunMeta:
         Whether the run was interrupted.
     wall_time_s : float or None, default=None
         Wall time of the whole run, s; None until it finishes (the key is then absent).
+    objective : {"v1", "pq"}, default="v1"
+        What the searches maximised and ``params.json``'s ``best`` ranks by: the paper's radar
+        V-measure, or the panoptic quality of moving road users per 0.5 s frame.
     """
 
     version: str
@@ -189,6 +192,7 @@ class RunMeta:
     completed: list[str] = field(default_factory=list)
     interrupted: bool = False
     wall_time_s: float | None = None
+    objective: str = "v1"
 
     def to_json_dict(self):
         """The ``meta`` entry of ``results.json``."""
@@ -199,6 +203,7 @@ class RunMeta:
             "data": self.data.to_json_dict(),
             "completed": list(self.completed),
             "interrupted": self.interrupted,
+            "objective": self.objective,
         }
         return _put(document, "wall_time_s", self.wall_time_s)
 
@@ -451,6 +456,54 @@ class SearchRecord:
 
 
 @dataclass(**_RECORD)
+class InstanceScores:
+    """Object-level scores of one labelling of the test half (``instance_test``).
+
+    Attributes
+    ----------
+    frame_s : float
+        Length of the evaluation frames, s.
+    pq, sq, rq : float
+        Panoptic, segmentation and recognition quality (RQ is the F1 score), 0-1.
+    precision, recall : float
+        Of the per-frame segment matches (IoU > 0.5), 0-1.
+    mcov, mwcov : float
+        Mean and size-weighted mean coverage of the ground-truth segments, 0-1.
+    background_segment_share : float
+        Share of the predicted per-frame segments without any object detection, 0-1.
+    background_cluster_share : float
+        Share of the clusters without any object detection, 0-1.
+    """
+
+    frame_s: float
+    pq: float
+    sq: float
+    rq: float
+    precision: float
+    recall: float
+    mcov: float
+    mwcov: float
+    background_segment_share: float
+    background_cluster_share: float
+
+    def to_json_dict(self):
+        """The ``instance_test`` entry of an experiment or baseline."""
+        return _flat(self)
+
+    @classmethod
+    def from_json_dict(cls, document):
+        """Read :meth:`to_json_dict`'s form back."""
+        return cls(**document)
+
+
+def _instance_from_json(rest):
+    """Turn the optional ``instance_test`` entry of a parsed record into :class:`InstanceScores`."""
+    if rest.get("instance_test") is not None:
+        rest["instance_test"] = InstanceScores.from_json_dict(rest["instance_test"])
+    return rest
+
+
+@dataclass(**_RECORD)
 class ExperimentResult:
     """One experiment of Tables III and IV, re-run (``experiments.N``).
 
@@ -478,6 +531,8 @@ class ExperimentResult:
         #10 and #11 only: whether #8's setting was tuned or the paper's.
     search : SearchRecord or None, default=None
         The search, for the tuned experiments.
+    instance_test : InstanceScores or None, default=None
+        Object-level scores on the test half.
     """
 
     number: int
@@ -494,6 +549,7 @@ class ExperimentResult:
     stage1_params: dict[str, Any] | None = None
     derived_from_8: str | None = None
     search: SearchRecord | None = None
+    instance_test: InstanceScores | None = None
 
     def to_json_dict(self):
         """The experiment's record in ``results.json``: the search's keys flat among the others."""
@@ -513,13 +569,15 @@ class ExperimentResult:
         document.update(
             params=self.params, v1_test=self.v1_test, wall_time_s=self.wall_time_s, n_clusters_test=self.n_clusters_test
         )
+        if self.instance_test is not None:
+            document["instance_test"] = self.instance_test.to_json_dict()
         return document
 
     @classmethod
     def from_json_dict(cls, document):
         """Read :meth:`to_json_dict`'s form back."""
         search, rest = SearchRecord.split_json_dict(document)
-        return cls(search=search, **rest)
+        return cls(search=search, **_instance_from_json(rest))
 
 
 @dataclass(**_RECORD)
@@ -534,7 +592,11 @@ class BaselineResult:
     v1_test : float
         Radar V-measure on the test half, 0-1.
     n_clusters_test : int
+        Clusters found on the test half.
     wall_time_s : float
+        Wall time of the search and scoring, s.
+    instance_test : InstanceScores or None, default=None
+        Object-level scores on the test half.
     """
 
     search: SearchRecord
@@ -542,22 +604,26 @@ class BaselineResult:
     v1_test: float
     n_clusters_test: int
     wall_time_s: float
+    instance_test: InstanceScores | None = None
 
     def to_json_dict(self):
         """The baseline's record in ``results.json``: the search's keys first."""
-        return {
+        document = {
             **self.search.to_json_dict(),
             "params": self.params,
             "v1_test": self.v1_test,
             "wall_time_s": self.wall_time_s,
             "n_clusters_test": self.n_clusters_test,
         }
+        if self.instance_test is not None:
+            document["instance_test"] = self.instance_test.to_json_dict()
+        return document
 
     @classmethod
     def from_json_dict(cls, document):
         """Read :meth:`to_json_dict`'s form back."""
         search, rest = SearchRecord.split_json_dict(document)
-        return cls(search=search, **rest)
+        return cls(search=search, **_instance_from_json(rest))
 
 
 # ----------------------------------------------------------------------------- the filter's effect
@@ -809,23 +875,22 @@ class RunResults:
         Returns
         -------
         document : dict or None
-            ``{"best": key, "experiments": {key: {"experiment", "v1_test",
-            "params", "stage1_params"}}}``; ``best`` is the first experiment
-            with the highest test V1.
+            ``{"best": key, "objective": ..., "experiments": {key: {"experiment",
+            "v1_test", ["pq_test",] "params", "stage1_params"}}}``; ``best`` is the
+            first experiment with the highest test score of the run's objective.
         """
-        experiments = {
-            str(number): {
-                "experiment": result.number,
-                "v1_test": result.v1_test,
-                "params": result.params,
-                "stage1_params": result.stage1_params,
-            }
-            for number, result in self.experiments.items()
-        }
+        experiments = {}
+        for number, result in self.experiments.items():
+            entry = {"experiment": result.number, "v1_test": result.v1_test}
+            if result.instance_test is not None:
+                entry["pq_test"] = result.instance_test.pq
+            entry.update(params=result.params, stage1_params=result.stage1_params)
+            experiments[str(number)] = entry
         if not experiments:
             return None
-        best = max(experiments, key=lambda key: experiments[key]["v1_test"])
-        return {"best": best, "experiments": experiments}
+        score = "pq_test" if self.meta.objective == "pq" else "v1_test"
+        best = max(experiments, key=lambda key: experiments[key].get(score, float("-inf")))
+        return {"best": best, "objective": self.meta.objective, "experiments": experiments}
 
 
 __all__ = [

@@ -8,7 +8,7 @@ raw dictionaries.  To add a section (a metric, a data preset, a figure):
 write a module here with its ``SECTION`` and add it to :data:`SECTIONS`.
 """
 
-from . import _baselines, _comparison, _figures, _filter, _filter_effect, _header, _stage1, _stage2
+from . import _baselines, _comparison, _figures, _filter, _filter_effect, _header, _instance, _stage1, _stage2
 from ._base import Section
 
 #: The report's sections, in order.  Figures are drawn in this order too, before any markdown is written.
@@ -19,6 +19,7 @@ SECTIONS: tuple[Section, ...] = (
     _stage2.SECTION,
     _filter_effect.SECTION,
     _baselines.SECTION,
+    _instance.SECTION,
     _figures.SECTION,
     _comparison.SECTION,
 )
