@@ -376,3 +376,12 @@ def _typed_data():
     return DataMeta(
         source="s", n_detections=1, n_sequences=1, n_train=1, n_test=0, train_sequences=[1], test_sequences=[]
     )
+
+
+def test_the_cluster_gate_is_searched_only_for_pq():
+    from sklearn_radar.experiments import search_space
+    from sklearn_radar.reproduce._run import _with_cluster_gate
+
+    assert _with_cluster_gate(search_space(8), 1, "v1") == search_space(8)
+    assert set(_with_cluster_gate(search_space(8), 1, "pq")) - set(search_space(8)) == {"cluster__cluster_vr_min"}
+    assert set(_with_cluster_gate(search_space(13), 2, "pq")) - set(search_space(13)) == {"merge__cluster_vr_min"}
