@@ -41,7 +41,12 @@ def test_reproduce_writes_report_results_params_and_figures(tiny_report):
     assert results["meta"]["completed"] == ["filter", "1", "2", "8", "10", "11", "13", "filter-effect", "baselines"]
     assert list(results["experiments"]) == ["1", "2", "8", "10", "11", "13"]
     assert len(results["experiments"]["2"]["convergence"]) == 2
-    assert set(results["baselines"]) == {"sklearn DBSCAN per 0.25 s window", "sklearn HDBSCAN per 0.25 s window"}
+    assert set(results["baselines"]) == {
+        "sklearn DBSCAN per 0.25 s window",
+        "sklearn HDBSCAN per 0.25 s window",
+        "sklearn DBSCAN per sequence (x, y, v_r, t) with Doppler gate",
+        "sklearn HDBSCAN per sequence (x, y, v_r, t) with Doppler gate",
+    }
     report = (tiny_report / "report.md").read_text()
     for heading in (
         "Table I",
