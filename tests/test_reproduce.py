@@ -390,3 +390,12 @@ def test_the_cluster_gate_is_searched_only_for_pq():
     assert _with_cluster_gate(search_space(8), 1, "v1") == search_space(8)
     assert set(_with_cluster_gate(search_space(8), 1, "pq")) - set(search_space(8)) == {"cluster__cluster_vr_min"}
     assert set(_with_cluster_gate(search_space(13), 2, "pq")) - set(search_space(13)) == {"merge__cluster_vr_min"}
+
+
+def test_the_scene_figure_marks_exactly_the_clusters_without_an_object_detection():
+    from sklearn_radar.reproduce._sections._figures import _background_only
+
+    labels = np.array([0, 0, 1, 1, 2, -1, 3])
+    target = np.array([5, -1, -1, -1, 7, 5, -1])
+    # cluster 0 holds an object detection, 1 and 3 do not, 2 does; noise is never marked
+    np.testing.assert_array_equal(_background_only(labels, target), [False, False, True, True, False, False, True])
