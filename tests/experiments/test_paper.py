@@ -38,20 +38,15 @@ OPTIMISED = {
 }
 
 
-#: The rows of Tables II-IV exactly as they stand in the paper's LaTeX source (copied, not retyped).  The
+#: Folder of the rows of Tables II-IV exactly as they stand in the paper's LaTeX source (copied, not retyped).  The
 #: tests parse them, so every cell of sklearn_radar.experiments is checked against the paper itself.
-PAPER_TABLES = Path(__file__).resolve().parents[1] / "data" / "scheiner2019_tables.tex"
+PAPER_TABLES = Path(__file__).resolve().parents[1] / "data"
 
 
 def _latex_rows(table):
-    """The rows of ``table`` ("II", "III" or "IV") in PAPER_TABLES."""
-    rows, current = {}, None
-    for line in PAPER_TABLES.read_text(encoding="utf-8").splitlines():
-        if line.startswith("% Table "):
-            current = line.removeprefix("% Table ").strip()
-        elif line.strip() and not line.startswith("%"):
-            rows.setdefault(current, []).append(line)
-    return rows[table]
+    """The rows of Table ``table`` ("II", "III" or "IV"): the lines of its verbatim copy that are not comments."""
+    text = (PAPER_TABLES / f"scheiner2019_table_{table.lower()}.tex").read_text(encoding="utf-8")
+    return [line for line in text.splitlines() if line.strip() and not line.startswith("%")]
 
 
 #: The paper's symbols as parameter names of RadarDBSCAN (Table III) and ClusterMerger (Table IV).
