@@ -1,8 +1,13 @@
-"""Permission bits of the files and folders the package writes: what the umask allows, as ordinary tools do."""
+"""Files and folders the package writes: permission bits as the umask allows, and the temporaries of killed writers."""
 
 from __future__ import annotations
 
 import os
+import shutil
+from pathlib import Path
+
+#: Every temporary file or folder written beside an output starts with this, then the writer's process id and "-".
+TEMPORARY_PREFIX = ".sklearn-radar-tmp-"
 
 
 def current_umask() -> int:
@@ -27,3 +32,33 @@ def file_mode() -> int:
 def folder_mode() -> int:
     """Permission bits of a new folder as ordinary tools create it: ``0o777`` less the umask."""
     return 0o777 & ~current_umask()
+
+
+def process_alive(pid: int) -> bool:
+    """Whether process ``pid`` may still be writing: True unless it is known to have ended.
+
+    The own process, another user's process and every process on Windows
+    (where ``os.kill`` would end it) count as alive, so that their
+    temporaries are never taken for stale.
+    """
+    if pid == os.getpid() or os.name == "nt":
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except OSError:  # e.g. another user's process
+        return True
+    return True
+
+
+def remove_entry(entry: Path) -> bool:
+    """Delete a file or a folder tree (a symlink itself, never its target); False if it could not be."""
+    try:
+        if entry.is_dir() and not entry.is_symlink():
+            shutil.rmtree(entry)
+        else:
+            entry.unlink()
+    except OSError:  # removed meanwhile by another process, or not ours to remove
+        return False
+    return True

@@ -34,7 +34,7 @@ import pandas as pd
 from sklearn.utils import Bunch
 from sklearn.utils._param_validation import validate_params
 
-from .._files import folder_mode
+from .._files import TEMPORARY_PREFIX, folder_mode, process_alive, remove_entry
 from .._schema import (
     CONTEXT_COLUMNS,
     DETECTION_COLUMNS,
@@ -524,7 +524,7 @@ def write_radarscenes(bunch, path, overwrite=False) -> Path:
     sequences_json = {"sequences": {p.name: p.summary for p in prepared}}
     path.parent.mkdir(parents=True, exist_ok=True)
     _remove_stale_temporaries(path)
-    prefix = f"{_TEMPORARY_PREFIX}{os.getpid()}-{path.name}."
+    prefix = f"{TEMPORARY_PREFIX}{os.getpid()}-{path.name}."
     staging = Path(tempfile.mkdtemp(prefix=prefix, suffix=".tmp", dir=path.parent))
     try:
         os.chmod(staging, folder_mode())  # mkdtemp creates 0700 whatever the umask
@@ -737,10 +737,6 @@ def _refuse_occupied(path: Path, overwrite: bool) -> None:
         raise FileExistsError(f"{path} {what}; pass overwrite=True to replace it")
 
 
-#: Temporary folders beside the written one: this prefix, the writer's process id, "-", the folder's name.
-_TEMPORARY_PREFIX = ".sklearn-radar-tmp-"
-
-
 def _remove_stale_temporaries(path: Path) -> None:
     """Delete what a killed writer of ``path`` left beside it.
 
@@ -750,7 +746,7 @@ def _remove_stale_temporaries(path: Path) -> None:
     may otherwise be the only copy of the data.
     """
     name = re.escape(path.name)
-    pattern = re.compile(rf"(?:{re.escape(_TEMPORARY_PREFIX)}(?P<pid>\d+)-{name}|\.{name})\.[^/]+\.(?P<kind>tmp|old)")
+    pattern = re.compile(rf"(?:{re.escape(TEMPORARY_PREFIX)}(?P<pid>\d+)-{name}|\.{name})\.[^/]+\.(?P<kind>tmp|old)")
     try:
         entries = list(path.parent.iterdir())
     except OSError:
@@ -759,27 +755,9 @@ def _remove_stale_temporaries(path: Path) -> None:
         match = pattern.fullmatch(entry.name)
         if match is None or (match["kind"] == "old" and not path.exists()):
             continue
-        if match["pid"] is not None and _process_alive(int(match["pid"])):
+        if match["pid"] is not None and process_alive(int(match["pid"])):
             continue
-        try:
-            if entry.is_dir() and not entry.is_symlink():
-                shutil.rmtree(entry)
-            else:
-                entry.unlink()
-        except OSError:
-            pass  # removed meanwhile, or not ours to remove: the write goes on
-
-
-def _process_alive(pid: int) -> bool:
-    if pid == os.getpid() or os.name == "nt":  # on Windows, os.kill would end the process
-        return True
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except OSError:
-        return True
-    return True
+        remove_entry(entry)  # one removed meanwhile, or not ours to remove: the write goes on
 
 
 def _move_into_place(staging: Path, path: Path, overwrite: bool) -> None:
@@ -790,7 +768,7 @@ def _move_into_place(staging: Path, path: Path, overwrite: bool) -> None:
         os.rename(staging, path)
         return
     _refuse_occupied(path, overwrite)
-    aside = path.with_name(f"{_TEMPORARY_PREFIX}{os.getpid()}-{path.name}.{uuid_module.uuid4().hex}.old")
+    aside = path.with_name(f"{TEMPORARY_PREFIX}{os.getpid()}-{path.name}.{uuid_module.uuid4().hex}.old")
     os.rename(path, aside)
     try:
         os.rename(staging, path)

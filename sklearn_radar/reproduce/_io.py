@@ -4,14 +4,11 @@ from __future__ import annotations
 
 import os
 import re
-import shutil
 import tempfile
 from pathlib import Path
 
-from .._files import file_mode
+from .._files import TEMPORARY_PREFIX, file_mode, process_alive, remove_entry
 
-#: Every temporary file or folder written beside an output starts with this, then the writer's process id and "-".
-TEMPORARY_PREFIX = ".sklearn-radar-tmp-"
 _TEMPORARY = re.compile(re.escape(TEMPORARY_PREFIX) + r"(\d+)-")
 
 
@@ -66,20 +63,6 @@ def remove_empty_folders(folders):
             return
 
 
-def _alive(pid):
-    if pid == os.getpid():
-        return True
-    if os.name == "nt":  # os.kill would terminate it: never take another process's files for stale
-        return True
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except OSError:  # e.g. another user's process
-        return True
-    return True
-
-
 def remove_stale_temporaries(folder, legacy=()):
     """Delete the temporary files and folders that killed processes left in ``folder``.
 
@@ -102,19 +85,11 @@ def remove_stale_temporaries(folder, legacy=()):
         return removed
     for entry in entries:
         match = _TEMPORARY.match(entry.name)
-        stale = (match is not None and not _alive(int(match.group(1)))) or (
+        stale = (match is not None and not process_alive(int(match.group(1)))) or (
             entry.name.startswith(legacy) and entry.name.endswith(".tmp")
         )
-        if not stale:
-            continue
-        try:
-            if entry.is_dir() and not entry.is_symlink():
-                shutil.rmtree(entry)
-            else:
-                entry.unlink()
+        if stale and remove_entry(entry):  # one that cannot be removed is not worth failing the run for
             removed.append(entry.name)
-        except OSError:
-            pass  # another process removed it, or it cannot be: not worth failing the run for
     return removed
 
 
