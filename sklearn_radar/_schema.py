@@ -158,19 +158,6 @@ EGO_FIELDS = (
 MOUNTING_FIELDS = (("x", "sensor_x"), ("y", "sensor_y"), ("yaw", "sensor_yaw"))
 
 
-#: Working columns written by FrameTransform and read by the later stages:
-#: x and y (m, car or frame coordinates), v_r (ego-motion-compensated radial
-#: velocity, m/s), t (s) and heading (rad, the car's yaw in the x-y axes).
-WORK_COLUMNS = (
-    Column("x", "float64", "m", "x in the working frame (car frame or the sequence frame)"),
-    Column("y", "float64", "m", "y in the working frame"),
-    Column("v_r", "float64", "m/s", "ego-motion-compensated radial velocity, negative = approaching"),
-    Column("t", "float64", "s", "scan time, timestamp * 1e-6"),
-    Column("heading", "float64", "rad", "yaw of the car's x axis in the working x-y axes (0 in the car frame)"),
-    Column("keep", "bool", "-", "False where DopplerDensityFilter (Eq. 1) removes the detection"),
-)
-
-
 @dataclass(frozen=True)
 class ArrayLayout:
     """The positions of the columns in plain-array input, and which may be absent.
