@@ -30,7 +30,12 @@ def markdown(results: RunResults) -> list[str]:
         "mean IoU; every unmatched cluster segment is a false positive, background-only ones included. mCov and "
         "mWCov are the mean and size-weighted mean best IoU of each ground-truth segment (they ignore extra "
         "clusters). 'bg segments' and 'bg clusters' are the shares of predicted segments and of clusters that hold "
-        "no detection of a moving road user.",
+        "no detection of a moving road user."
+        + (
+            " `sklearn-radar reproduce --objective pq` tunes every setting for PQ instead."
+            if results.meta.objective == "v1"
+            else ""
+        ),
         "",
         "| setting | V1 | PQ | SQ | F1 (RQ) | precision | recall | mCov | mWCov | bg segments | bg clusters |",
         "|---|---|---|---|---|---|---|---|---|---|---|",
