@@ -399,3 +399,82 @@ def test_the_scene_figure_marks_exactly_the_clusters_without_an_object_detection
     target = np.array([5, -1, -1, -1, 7, 5, -1])
     # cluster 0 holds an object detection, 1 and 3 do not, 2 does; noise is never marked
     np.testing.assert_array_equal(_background_only(labels, target), [False, False, True, True, False, False, True])
+
+
+def test_table_iii_marks_where_each_setting_comes_from_and_shows_the_cv_score(tiny_report):
+    from sklearn_radar.reproduce._constants import SOURCE_PAPER
+
+    results = json.loads((tiny_report / "results.json").read_text())
+    report = (tiny_report / "report.md").read_text()
+    rows = {line.split(" | ")[0].strip("| "): line for line in report.splitlines() if line.startswith("| ")}
+    for key, record in results["experiments"].items():
+        cells = [cell.strip() for cell in rows[key].strip("|").split("|")]
+        v1, cv, setting = cells[4], cells[6], cells[7]
+        assert v1 == f"{100 * record['v1_test']:.2f} %"
+        if "best_source" in record:  # tuned: the CV score of the kept setting beside the test score
+            assert cv == f"{100 * record['cv_best']:.2f} %"
+            assert setting == ("paper's \u2020" if record["best_source"] == SOURCE_PAPER else "search")
+        else:
+            assert cv == "-" and setting in ("fixed", "#8's")
+    assert "\u2020` the paper's setting, scored beside the search" in report  # the legend of the mark
+    for name, record in results["baselines"].items():
+        assert f"| {name} | {100 * record['v1_test']:.2f} % | {100 * record['cv_best']:.2f} % |" in report
+
+
+def test_stage2_records_its_merges_and_says_when_it_merged_nothing(tiny_report, tiny_folder):
+    from sklearn_radar.datasets import load_radarscenes
+    from sklearn_radar.experiments import experiment_pipeline
+
+    results = json.loads((tiny_report / "results.json").read_text())
+    record = results["experiments"]["13"]
+    # Recount on the test half with the saved setting, as `sklearn-radar cluster` builds the pipeline.
+    scenes = load_radarscenes(tiny_folder)
+    test = np.flatnonzero(np.isin(scenes.groups, results["meta"]["data"]["test_sequences"]))
+    pipeline = experiment_pipeline(13, stage1_params=record["stage1_params"]).set_params(**record["params"])
+    pipeline.fit(scenes.data.iloc[test])
+    merger = pipeline[-1]
+    assert record["n_merges_test"] == len(merger.merges_)
+    assert record["n_stage1_clusters_test"] == len(np.unique(merger.stage1_labels_[merger.stage1_labels_ >= 0]))
+    report = (tiny_report / "report.md").read_text()
+    if record["n_merges_test"] == 0:
+        assert "#13 merged no pair of stage-1 clusters on the test half" in report
+    else:
+        assert f"#13 merged {record['n_merges_test']:,} pairs" in report
+    assert "| stage-1 clusters | merges |" in report
+
+
+def test_the_report_holds_the_data_statistics_and_explains_the_filter_errors(tiny_report, tiny_folder):
+    from sklearn_radar.datasets import format_statistics, load_radarscenes, scene_statistics
+
+    report = (tiny_report / "report.md").read_text()
+    assert format_statistics(*scene_statistics(load_radarscenes(tiny_folder))) in report
+    results = json.loads((tiny_report / "results.json").read_text())
+    windows = results["filter"]["windows"]
+    # Two code paths count the errors at the chosen setting: Table II's row and the window listing.
+    row = next(
+        r
+        for r in results["filter"]["table_ii"]
+        if r["frame"] == "frame" and r["vr_threshold"] == 0.1 and r["d_xy"] == 1.4
+    )
+    assert windows["n_errors"] == row["errors"] and windows["n_windows"] > windows["n_errors"]
+    assert f"{windows['n_errors']:,} of {windows['n_windows']:,} (object, 150 ms) windows are errors" in report
+    assert "*objects removed (ours)*:" in report and "the asterisk (*) marks the paper's chosen setting" in report
+    assert "the chosen filter setting (FCS, eta_1 = 0.10 m/s, d_xy = 1.4 m) loses no object window" in report
+
+
+def test_results_of_an_older_version_without_the_new_fields_still_load(tiny_report):
+    from sklearn_radar.reproduce._report import report_markdown
+    from sklearn_radar.reproduce._results import RunResults
+
+    document = json.loads((tiny_report / "results.json").read_text())
+    document.pop("statistics")
+    document["filter"].pop("windows")
+    for record in document["experiments"].values():
+        record.pop("n_merges_test", None)
+        record.pop("n_stage1_clusters_test", None)
+    results = RunResults.from_json_dict(document)
+    assert (
+        results.statistics is None and results.filter.windows is None and results.experiments[13].n_merges_test is None
+    )
+    text = report_markdown(results)
+    assert "## The data" not in text and "## Cluster merging (Table IV)" in text

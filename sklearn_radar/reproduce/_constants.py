@@ -46,6 +46,9 @@ BASELINES = "baselines"
 #: Every step key, in the order they run.
 ALL_EXPERIMENTS = (FILTER, *(str(n) for n in NUMBERS), FILTER_EFFECT, BASELINES)
 
+#: The paper's chosen filter setting (eta_1 in m/s, d_xy in m): the defaults of DopplerDensityFilter.
+PAPER_FILTER_SETTING = (0.10, 1.4)
+
 #: The coordinate systems of Table I: the ``frame`` argument of the filter evaluation, and their names.
 FRAMES = ("frame", "car")
 FRAME_NAMES = {"frame": "FCS", "car": "CCS"}
@@ -67,6 +70,7 @@ __all__ = [
     "FRAMES",
     "FRAME_NAMES",
     "NUMBERS",
+    "PAPER_FILTER_SETTING",
     "PAPER_N_ITER",
     "SOURCE_PAPER",
     "SOURCE_SEARCH",

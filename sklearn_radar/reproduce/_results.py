@@ -216,6 +216,33 @@ class RunMeta:
         return cls(budget=budget, data=data, **document)
 
 
+@dataclass(**_RECORD)
+class DataStatistics:
+    """Statistics of the run's data, to judge how close to real radar data it is (``statistics``).
+
+    Attributes
+    ----------
+    summary : dict
+        The summary figures of :func:`~sklearn_radar.datasets.scene_statistics`
+        (detections, sequences, static share, ...), JSON numbers.
+    text : str
+        :func:`~sklearn_radar.datasets.format_statistics` of them, as printed
+        by ``sklearn-radar simulate``.
+    """
+
+    summary: dict[str, Any]
+    text: str
+
+    def to_json_dict(self):
+        """The ``statistics`` entry of ``results.json``."""
+        return _flat(self)
+
+    @classmethod
+    def from_json_dict(cls, document):
+        """Read :meth:`to_json_dict`'s form back (None stays None)."""
+        return None if document is None else cls(**document)
+
+
 # ----------------------------------------------------------------------------- the filter (Tables I and II)
 
 
@@ -355,6 +382,61 @@ class BestRemoval:
 
 
 @dataclass(**_RECORD)
+class FilterWindows:
+    """The (object, window) cases behind the error counts, at one filter setting (``filter.windows``).
+
+    An object's window is an *error* when the filter keeps less than
+    ``min_kept`` of its detections in it
+    (:func:`~sklearn_radar.evaluation.filter_error_windows`).  A window of
+    ``n`` detections fails as soon as ``ceil((1 - min_kept) n)`` of them
+    go, one for ``n <= 3`` at 75 %: the sparser the objects, the more errors.
+
+    Attributes
+    ----------
+    frame : {"car", "frame"}
+        Coordinate system.
+    vr_threshold : float
+        eta_1, m/s.
+    d_xy : float
+        m.
+    window_s : float
+        Window length, s (the paper: 0.15).
+    min_kept : float
+        Smallest kept share of a window that is not an error, 0-1 (the paper: 0.75).
+    n_windows : int
+        Complete windows holding a detection of their object.
+    n_errors : int
+        Error windows among them.
+    mean_detections : float
+        Mean detections per window.
+    mean_detections_error : float or None
+        Mean detections per error window; None without errors.
+    n_errors_sparse : int
+        Error windows with at most 3 detections (one removed detection fails them).
+    """
+
+    frame: str
+    vr_threshold: float
+    d_xy: float
+    window_s: float
+    min_kept: float
+    n_windows: int
+    n_errors: int
+    mean_detections: float
+    mean_detections_error: float | None
+    n_errors_sparse: int
+
+    def to_json_dict(self):
+        """The ``filter.windows`` entry of ``results.json``."""
+        return _flat(self)
+
+    @classmethod
+    def from_json_dict(cls, document):
+        """Read :meth:`to_json_dict`'s form back (None stays None)."""
+        return None if document is None else cls(**document)
+
+
+@dataclass(**_RECORD)
 class FilterResult:
     """The filter evaluation: Tables I and II (``filter``).
 
@@ -366,16 +448,20 @@ class FilterResult:
     best_removal_with_zero_errors : dict of str to BestRemoval or None
         Per coordinate system; None where no grid cell has 0 errors.
     wall_time_s : float
+    windows : FilterWindows or None, default=None
+        The error windows at the paper's chosen setting; None in results of
+        older versions.
     """
 
     table_i: dict[str, FilterGridResult]
     table_ii: list[FilterSettingRow]
     best_removal_with_zero_errors: dict[str, BestRemoval | None]
     wall_time_s: float
+    windows: FilterWindows | None = None
 
     def to_json_dict(self):
         """The ``filter`` entry of ``results.json``."""
-        return {
+        document = {
             "table_i": {frame: grid.to_json_dict() for frame, grid in self.table_i.items()},
             "table_ii": [row.to_json_dict() for row in self.table_ii],
             "best_removal_with_zero_errors": {
@@ -384,16 +470,18 @@ class FilterResult:
             },
             "wall_time_s": self.wall_time_s,
         }
+        return _put(document, "windows", None if self.windows is None else self.windows.to_json_dict())
 
     @classmethod
     def from_json_dict(cls, document):
         """Read :meth:`to_json_dict`'s form back."""
         document = dict(document)
+        windows = FilterWindows.from_json_dict(document.pop("windows", None))
         table_i = {frame: FilterGridResult.from_json_dict(grid) for frame, grid in document.pop("table_i").items()}
         table_ii = [FilterSettingRow.from_json_dict(row) for row in document.pop("table_ii")]
         best = document.pop("best_removal_with_zero_errors")
         best = {frame: BestRemoval.from_json_dict(removal) for frame, removal in best.items()}
-        return cls(table_i=table_i, table_ii=table_ii, best_removal_with_zero_errors=best, **document)
+        return cls(table_i=table_i, table_ii=table_ii, best_removal_with_zero_errors=best, windows=windows, **document)
 
 
 # ----------------------------------------------------------------------------- experiments and baselines
@@ -533,6 +621,12 @@ class ExperimentResult:
         The search, for the tuned experiments.
     instance_test : InstanceScores or None, default=None
         Object-level scores on the test half.
+    n_merges_test : int or None, default=None
+        Stage 2 only: pairs of stage-1 clusters that met the merge criterion
+        on the test half (``ClusterMerger.merges_``); 0 means the experiment
+        returned its stage-1 clustering unchanged.
+    n_stage1_clusters_test : int or None, default=None
+        Stage 2 only: stage-1 clusters on the test half, before merging.
     """
 
     number: int
@@ -550,6 +644,8 @@ class ExperimentResult:
     derived_from_8: str | None = None
     search: SearchRecord | None = None
     instance_test: InstanceScores | None = None
+    n_merges_test: int | None = None
+    n_stage1_clusters_test: int | None = None
 
     def to_json_dict(self):
         """The experiment's record in ``results.json``: the search's keys flat among the others."""
@@ -569,6 +665,8 @@ class ExperimentResult:
         document.update(
             params=self.params, v1_test=self.v1_test, wall_time_s=self.wall_time_s, n_clusters_test=self.n_clusters_test
         )
+        _put(document, "n_stage1_clusters_test", self.n_stage1_clusters_test)
+        _put(document, "n_merges_test", self.n_merges_test)
         if self.instance_test is not None:
             document["instance_test"] = self.instance_test.to_json_dict()
         return document
@@ -784,6 +882,8 @@ class RunResults:
         By clusterer name.
     figures : FigureRecord, default=FigureRecord()
         Figures drawn; written to ``results.json`` only on request.
+    statistics : DataStatistics or None, default=None
+        Statistics of the data; None in results of older versions.
     """
 
     meta: RunMeta
@@ -792,6 +892,7 @@ class RunResults:
     filter_effect: FilterEffectResult | None = None
     baselines: dict[str, BaselineResult] | None = None
     figures: FigureRecord = field(default_factory=FigureRecord)
+    statistics: DataStatistics | None = None
 
     def v1_test(self):
         """Test V1 by experiment number, for the experiments that ran.
@@ -814,13 +915,12 @@ class RunResults:
         Returns
         -------
         document : dict
-            ``meta``, ``experiments`` (keyed by the number as a string), then
+            ``meta``, ``statistics`` (when measured), ``experiments`` (keyed by the number as a string), then
             ``filter``, ``filter_effect`` and ``baselines`` where they ran.
         """
-        document = {
-            "meta": self.meta.to_json_dict(),
-            "experiments": {str(number): result.to_json_dict() for number, result in self.experiments.items()},
-        }
+        document = {"meta": self.meta.to_json_dict()}
+        _put(document, "statistics", None if self.statistics is None else self.statistics.to_json_dict())
+        document["experiments"] = {str(number): result.to_json_dict() for number, result in self.experiments.items()}
         _put(document, "filter", None if self.filter is None else self.filter.to_json_dict())
         _put(document, "filter_effect", None if self.filter_effect is None else self.filter_effect.to_json_dict())
         if self.baselines is not None:
@@ -848,6 +948,7 @@ class RunResults:
         """
         document = dict(document)
         meta = RunMeta.from_json_dict(document.pop("meta"))
+        statistics = DataStatistics.from_json_dict(document.pop("statistics", None))
         experiments = {}
         for key, record in document.pop("experiments", {}).items():
             result = ExperimentResult.from_json_dict(record)
@@ -866,6 +967,7 @@ class RunResults:
             filter_effect=None if effect is None else FilterEffectResult.from_json_dict(effect),
             baselines=baselines,
             figures=FigureRecord.from_json_dict(document.pop("figures", None)),
+            statistics=statistics,
             **document,
         )
 
@@ -900,6 +1002,7 @@ __all__ = [
     "Budget",
     "ClusteringCost",
     "DataMeta",
+    "DataStatistics",
     "ExperimentResult",
     "FigureRecord",
     "FilterEffectFigures",
@@ -907,6 +1010,7 @@ __all__ = [
     "FilterGridResult",
     "FilterResult",
     "FilterSettingRow",
+    "FilterWindows",
     "GridTable",
     "RunMeta",
     "RunResults",

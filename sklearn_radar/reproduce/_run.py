@@ -44,8 +44,8 @@ from threadpoolctl import threadpool_limits
 from .. import __version__
 from .._skopt import Integer, Real
 from ..cluster import SequenceDBSCAN, SequenceHDBSCAN, WindowedDBSCAN, WindowedHDBSCAN
-from ..datasets import load_radarscenes, make_scenes
-from ..evaluation import filter_grid, filter_settings_table
+from ..datasets import format_statistics, load_radarscenes, make_scenes, scene_statistics
+from ..evaluation import filter_error_windows, filter_grid, filter_settings_table
 from ..experiments import derived_params, experiment_pipeline, get_experiment, paper_params, search_space
 from ..metrics import (
     instance_scores,
@@ -55,6 +55,7 @@ from ..metrics import (
     radar_v_measure_scorer,
 )
 from ..model_selection import ProgressPrinter, make_bayes_search, sequence_train_test_split
+from ..preprocessing import DopplerDensityFilter, FrameTransform
 from ._constants import (
     ALL_EXPERIMENTS,
     BASELINES,
@@ -65,6 +66,7 @@ from ._constants import (
     FILTER_EFFECT,
     FRAMES,
     NUMBERS,
+    PAPER_FILTER_SETTING,
     SOURCE_PAPER,
     SOURCE_SEARCH,
 )
@@ -83,12 +85,14 @@ from ._results import (
     Budget,
     ClusteringCost,
     DataMeta,
+    DataStatistics,
     ExperimentResult,
     FilterEffectFigures,
     FilterEffectResult,
     FilterGridResult,
     FilterResult,
     FilterSettingRow,
+    FilterWindows,
     GridTable,
     InstanceScores,
     RunMeta,
@@ -272,7 +276,7 @@ def reproduce(
             test_sequences=sorted(int(s) for s in np.unique(scenes.groups[test])),
         ),
     )
-    results = RunResults(meta=meta)
+    results = RunResults(meta=meta, statistics=_statistics(scenes))
     run = Run(out=out, budget=budget, seed=seed, n_jobs=n_jobs, stream=stream, results=results, started=started)
     _start_folder(run)
     _say(
@@ -445,7 +449,38 @@ def _run_filter(run, context, key):
         },
         table_ii=[FilterSettingRow(**row) for row in table_ii.to_dict(orient="records")],
         best_removal_with_zero_errors={frame: _best_removal(g, 0) for frame, g in grids.items()},
+        windows=_error_windows(scenes),
         wall_time_s=time.perf_counter() - start,
+    )
+
+
+def _statistics(scenes):
+    """The data's statistics (:func:`scene_statistics`) as JSON numbers and as text."""
+    summary, table = scene_statistics(scenes)
+    return DataStatistics(summary=_native(summary), text=format_statistics(summary, table))
+
+
+def _error_windows(scenes, window=0.15, min_kept=0.75):
+    """The (object, window) cases at the paper's chosen filter setting (FCS, eta_1 = 0.10 m/s, d_xy = 1.4 m)."""
+    frame = "frame"
+    vr_threshold, d_xy = PAPER_FILTER_SETTING
+    setting = DopplerDensityFilter(vr_threshold=vr_threshold, d_xy=d_xy)
+    prepared = setting.fit_transform(FrameTransform(frame=frame).fit_transform(scenes.data))
+    windows = filter_error_windows(
+        prepared["keep"].to_numpy(dtype=bool), scenes.target, prepared["t"].to_numpy(), window, min_kept
+    )
+    errors = windows[windows["error"]]
+    return FilterWindows(
+        frame=frame,
+        vr_threshold=float(setting.vr_threshold),
+        d_xy=float(setting.d_xy),
+        window_s=window,
+        min_kept=min_kept,
+        n_windows=len(windows),
+        n_errors=len(errors),
+        mean_detections=float(windows["n"].mean()) if len(windows) else float("nan"),
+        mean_detections_error=float(errors["n"].mean()) if len(errors) else None,
+        n_errors_sparse=int((errors["n"] <= 3).sum()),
     )
 
 
@@ -558,6 +593,11 @@ def _run_experiment(run, context, key):
         derived = f"tuned #{BEST_STAGE1}" if best else f"paper's #{BEST_STAGE1} (experiment {BEST_STAGE1} not run)"
     pipeline.set_params(**params)
     v1, labels, instance = _score(context, pipeline)
+    n_merges = n_stage1 = None
+    if experiment.stage == 2:
+        merger = pipeline[-1]
+        n_merges = len(merger.merges_)
+        n_stage1 = len(np.unique(merger.stage1_labels_[merger.stage1_labels_ >= 0]))
     result = ExperimentResult(
         number=number,
         method=experiment.method,
@@ -574,6 +614,8 @@ def _run_experiment(run, context, key):
         derived_from_8=derived,
         instance_test=instance,
         search=search,
+        n_merges_test=n_merges,
+        n_stage1_clusters_test=n_stage1,
     )
     context.labels[number] = labels
     if number == BEST_STAGE1:

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .._constants import FRAME_NAMES
+from .._constants import BEST_STAGE1, FRAME_NAMES, SOURCE_PAPER
 from .._context import RunContext
 from .._io import atomic_write
 from .._results import ExperimentResult, GridTable, RunResults
@@ -95,44 +95,157 @@ def grid_markdown(table: GridTable):
     return "\n".join([header, rule, *rows])
 
 
-def experiment_table(title, rows: list[ExperimentResult]):
-    """A heading and the table of Tables III and IV, one row per experiment, by number.
+#: The "setting" column: where an experiment's parameters come from, and the legend of each mark.
+SETTING_SEARCH = "search"
+SETTING_PAPER = "paper's \u2020"
+SETTING_FIXED = "fixed"
+SETTING_DERIVED = f"#{BEST_STAGE1}'s"
+
+#: A cross-validated score this far above the test score (0-1) is pointed out as overfitting.
+OVERFIT_GAP = 0.05
+
+
+def setting_source(e: ExperimentResult):
+    """Where the experiment's parameters come from: one of the ``SETTING_*`` marks."""
+    if e.search is not None:
+        return SETTING_PAPER if e.search.best_source == SOURCE_PAPER else SETTING_SEARCH
+    return SETTING_DERIVED if e.derived_from_8 is not None else SETTING_FIXED
+
+
+def objective_name(results: RunResults):
+    """``"V1"`` or ``"PQ"``: the score the searches maximised."""
+    return "PQ" if results.meta.objective == "pq" else "V1"
+
+
+def test_score(result, results: RunResults):
+    """The test score of an experiment or baseline in the run's objective (V1, or PQ when tuned for PQ)."""
+    if results.meta.objective == "pq" and result.instance_test is not None:
+        return result.instance_test.pq
+    return result.v1_test
+
+
+def format_score(value, results: RunResults):
+    """A score of the run's objective: V1 in percent, PQ with 3 decimals; ``"-"`` for None."""
+    if value is None:
+        return "-"
+    return f"{value:.3f}" if results.meta.objective == "pq" else percent(value)
+
+
+def cv_cell(result, results: RunResults):
+    """The mean cross-validated score of a search's kept setting; ``"-"`` without a search."""
+    return format_score(None if result.search is None else result.search.cv_best, results)
+
+
+def overfit_lines(named, results: RunResults):
+    """A sentence naming the settings whose CV score is more than :data:`OVERFIT_GAP` above their test score.
+
+    Parameters
+    ----------
+    named : list of (str, ExperimentResult or BaselineResult)
+    results : RunResults
+
+    Returns
+    -------
+    lines : list of str
+        Empty when there is none.
+    """
+    over = [
+        f"{name} (CV {format_score(r.search.cv_best, results)}, test {format_score(test_score(r, results), results)})"
+        for name, r in named
+        if r.search is not None and r.search.cv_best - test_score(r, results) > OVERFIT_GAP
+    ]
+    if not over:
+        return []
+    gap = f"{100 * OVERFIT_GAP:g} points" if results.meta.objective == "v1" else f"{OVERFIT_GAP:g}"
+    return [
+        "",
+        f"CV above test by more than {gap}: {'; '.join(over)}. The search chose these settings on the training "
+        "sequences, and they do not carry over as well to the test sequences (overfitting to few sequences).",
+    ]
+
+
+def experiment_table(title, rows: list[ExperimentResult], results: RunResults, stage2=False):
+    """A heading, the table of Table III or IV (one row per experiment, by number) and its legend.
 
     Parameters
     ----------
     title : str
         The heading's text.
     rows : list of ExperimentResult
+    results : RunResults
+        The run (objective, budget).
+    stage2 : bool, default=False
+        Add the stage-1 clusters and the merges (Table IV).
 
     Returns
     -------
     lines : list of str
     """
+    score = objective_name(results)
+    extra = " stage-1 clusters | merges |" if stage2 else ""
     lines = [
         "",
         f"## {title}",
         "",
-        "| # | method | CS | filtered | V1 (ours) | V1 (paper) | our parameters | paper's parameters |",
-        "|---|---|---|---|---|---|---|---|",
+        f"| # | method | CS | filtered | V1 (ours) | V1 (paper) | CV {score} (train) | setting |{extra} "
+        "our parameters | paper's parameters |",
+        "|---|---|---|---|---|---|---|---|" + ("---|---|" if stage2 else "") + "---|---|",
     ]
-    for e in sorted(rows, key=lambda e: e.number):
-        lines.append(experiment_row(e))
+    rows = sorted(rows, key=lambda e: e.number)
+    lines += [experiment_row(e, results, stage2) for e in rows]
+    lines += [
+        "",
+        *column_legend(results, stage2, short=stage2 and any(e.stage == 1 for e in results.experiments.values())),
+    ]
+    lines += overfit_lines([(f"#{e.number}", e) for e in rows], results)
     return lines
 
 
-def experiment_row(e: ExperimentResult):
+def column_legend(results: RunResults, stage2=False, short=False):
+    """What each column of Tables III and IV means (one paragraph); ``short``: only the columns Table III lacks."""
+    score = objective_name(results)
+    folds = results.meta.budget.cv_folds
+    merges = (
+        " *stage-1 clusters*: clusters of the stage-1 setting on the test half, before merging; *merges*: pairs of "
+        "them that met the merge criterion (0: the experiment returned its stage-1 clustering unchanged)."
+        if stage2
+        else ""
+    )
+    if short:
+        return ["Columns as in Table III;" + merges]
+    return [
+        "Columns: *V1 (ours)*: radar V-measure of our setting on the test half; *V1 (paper)*: the paper's; "
+        f"*CV {score} (train)*: mean {score} of our setting over the {folds} cross-validation folds of the training "
+        "half, the score the search maximised (a CV well above the test score means the setting fits the training "
+        f"sequences better than new ones); *setting*: where our parameters come from: `{SETTING_SEARCH}` the "
+        f"Bayesian search's best, `{SETTING_PAPER}` the paper's setting, scored beside the search on the same folds "
+        "and kept because the search found nothing better (results.json `best_source`), "
+        f"`{SETTING_FIXED}` the paper's fixed expert setting (not tuned), `{SETTING_DERIVED}` "
+        f"#{BEST_STAGE1}'s setting transferred (not tuned); *CS*: coordinate system (FCS: frame/world, "
+        "CCS: car); *filtered*: whether the Doppler-density filter ran first." + merges
+    ]
+
+
+def experiment_row(e: ExperimentResult, results: RunResults, stage2=False):
     """One experiment's row of Table III or IV."""
-    cells = (
+    cells = [
         e.number,
         e.method,
         frame_name(e.frame),
         "yes" if e.filtered else "no",
         percent(e.v1_test),
         f"{e.paper_v1_percent:.2f} %",
-        format_params(e.params),
-        format_params(e.paper_params),
-    )
+        cv_cell(e, results),
+        setting_source(e),
+    ]
+    if stage2:
+        cells += [_count(e.n_stage1_clusters_test), _count(e.n_merges_test)]
+    cells += [format_params(e.params), format_params(e.paper_params)]
     return "| " + " | ".join(str(cell) for cell in cells) + " |"
+
+
+def _count(value):
+    return "-" if value is None else f"{value:,}"
 
 
 def save_figure(fig, path):
@@ -147,14 +260,26 @@ def save_figure(fig, path):
 
 
 __all__ = [
+    "OVERFIT_GAP",
+    "SETTING_DERIVED",
+    "SETTING_FIXED",
+    "SETTING_PAPER",
+    "SETTING_SEARCH",
     "Figures",
     "Markdown",
     "Section",
+    "column_legend",
+    "cv_cell",
     "experiment_row",
     "experiment_table",
     "format_params",
+    "format_score",
     "frame_name",
     "grid_markdown",
+    "objective_name",
+    "overfit_lines",
     "percent",
     "save_figure",
+    "setting_source",
+    "test_score",
 ]

@@ -9,7 +9,7 @@ from ._base import Section, experiment_table
 def markdown(results: RunResults) -> list[str]:
     """Table III, for the stage-1 experiments that ran."""
     rows = [e for e in results.experiments.values() if e.stage == 1]
-    return experiment_table("Point clustering (Table III)", rows) if rows else []
+    return experiment_table("Point clustering (Table III)", rows, results) if rows else []
 
 
 SECTION = Section("stage-1", markdown)
