@@ -72,6 +72,7 @@ class StaticScatterers:
     s: np.ndarray  # m, road arclength (for culling)
     p_detect: np.ndarray  # detection probability at close range
     rcs_mean: np.ndarray  # dBsm
+    walls: tuple = ()  # lateral offsets d (m) of the wall or guard-rail lines: the multipath mirrors
 
 
 #: Road-user classes: RadarScenes label, size (length, width) ranges in m,
@@ -105,6 +106,7 @@ class RoadUser:
     absences: tuple = ()  # (start, end) intervals, s, without any detection
     gait_hz: float = 0.0
     centres: np.ndarray | None = None  # (K, 4): scattering centres (along, across) and outward normals, m
+    path: tuple | None = None  # (arclength, x, y) of a world-frame path driven at ``speed`` from ``s0`` (m)
 
     @property
     def params(self):
@@ -113,6 +115,10 @@ class RoadUser:
     def position(self, t):
         """World position of the object centre at times ``t`` (s), in m."""
         t = np.asarray(t, dtype=float)
+        if self.path is not None:
+            along, px, py = self.path
+            s = self.s0 + self.speed * t
+            return np.interp(s, along, px), np.interp(s, along, py)
         if self.follow_ego is not None:
             return self.road.to_world(self._leader_s(t), np.zeros_like(t))
         if self.crossing:
@@ -143,7 +149,9 @@ class RoadUser:
         x1, y1 = self.position(t + h)
         x0, y0 = self.position(t - h)
         moving = np.hypot(x1 - x0, y1 - y0) > 0.2 * 2 * h  # faster than 0.2 m/s
-        if self.follow_ego is not None:
+        if self.path is not None:
+            rest = np.zeros_like(t)  # a path is driven at a constant speed > 0.2 m/s
+        elif self.follow_ego is not None:
             rest = self.road.heading_at(self._leader_s(t))
         elif self.crossing:
             rest = self.road.heading_at(np.full_like(t, self.s0)) + np.pi / 2 * np.sign(self.speed)
@@ -231,9 +239,10 @@ def make_static_world(road: Road, s_min, s_max, rng, density=1.0) -> StaticScatt
 
     ``density`` scales the number of scatterers (1.0 is an urban street).
     """
-    parts = []
+    parts, walls = [], []
     for side, base in ((-1, -9.0), (1, 13.0)):
         offset = base + side * rng.uniform(0.0, 3.0)
+        walls.append(offset)
         parts.append(_line_feature(road, s_min, s_max, offset, 0.4, rng, 0.18, 0.0, gaps=0.3))
         parts.append(
             _line_feature(road, s_min, s_max, offset + side * rng.uniform(8, 20), 1.5, rng, 0.10, 3.0, gaps=0.5)
@@ -247,7 +256,7 @@ def make_static_world(road: Road, s_min, s_max, rng, density=1.0) -> StaticScatt
         p = p * max(density, 1.0)
         x, y, s, p, rcs = x[keep], y[keep], s[keep], p[keep], rcs[keep]
     order = np.argsort(s, kind="stable")
-    return StaticScatterers(x[order], y[order], s[order], np.clip(p[order], 0, 0.95), rcs[order])
+    return StaticScatterers(x[order], y[order], s[order], np.clip(p[order], 0, 0.95), rcs[order], tuple(walls))
 
 
 def _line_feature(road, s_min, s_max, d, spacing, rng, p, rcs, gaps=0.0):
@@ -415,3 +424,131 @@ def _absences(duration, rng):
         start = rng.uniform(0, duration)
         out.append((start, start + rng.uniform(0.3, 1.5)))
     return tuple(out)
+
+
+# ----------------------------------------------------------------------------
+# Dense traffic (the "realistic" difficulty): close situations, turns, occlusions
+# ----------------------------------------------------------------------------
+#: Situations of dense urban traffic and their relative frequencies.
+DENSE_SITUATIONS = {"turning": 0.3, "convoy": 0.2, "group_and_walker": 0.2, "kerb_walker": 0.15, "kerb_cyclist": 0.15}
+PARKED_CARS_LANE = -4.5  # m, centre line of the parked cars of :func:`make_static_world`
+TURN_APPROACH = 40.0  # m of straight lane before the turn
+
+
+def make_dense_traffic(ego: EgoMotion, road: Road, duration, rate, rng) -> list[RoadUser]:
+    """Road users in the close situations of dense urban traffic, ``rate`` situations per minute on average.
+
+    * ``turning``: a car, truck, bus or cyclist turns off the road or into it
+      (radius 6-12 m, 3-7 m/s); its yaw rate makes the Doppler vary across
+      the body.
+    * ``convoy``: two vehicles in one lane, 1.5-4 m bumper to bumper.
+    * ``group_and_walker``: a pedestrian group and a pedestrian walking
+      1.0-1.8 m beside it at the same pace (two instances, RadarScenes labels
+      the group as one instance of its own class).
+    * ``kerb_walker``: a pedestrian between the parked cars and the kerb,
+      0.3-0.7 m from their bodies.
+    * ``kerb_cyclist``: a cyclist passing the parked cars 0.3-0.7 m from them.
+    """
+    kinds = list(DENSE_SITUATIONS)
+    weights = np.array(list(DENSE_SITUATIONS.values()))
+    users = []
+    for _ in range(rng.poisson(rate * duration / 60.0)):
+        kind = kinds[rng.choice(len(kinds), p=weights / weights.sum())]
+        users.extend(_dense_situation(kind, ego, road, duration, rng))
+    return users
+
+
+def _new_user(cls, road, duration, rng, **trajectory) -> RoadUser:
+    params = ROAD_USER_CLASSES[cls]
+    length, width = rng.uniform(*params["length"]), rng.uniform(*params["width"])
+    return RoadUser(
+        kind=cls,
+        length=length,
+        width=width,
+        centres=scattering_centres(length, width, rng),
+        road=road,
+        absences=_absences(duration, rng),
+        gait_hz=rng.uniform(1.5, 2.2) if params["micro"] > 0 else 0.0,
+        **trajectory,
+    )
+
+
+def _dense_situation(kind, ego, road, duration, rng):
+    t_meet = rng.uniform(0.1, 0.9) * duration
+    s_meet = np.interp(t_meet, ego.t, ego.s)
+    if kind == "turning":
+        cls = str(rng.choice(["car", "car", "car", "truck", "bus", "bicycle"]))
+        speed = rng.uniform(3.0, 5.0) if cls == "bicycle" else rng.uniform(3.5, 7.0)
+        radius = rng.uniform(6.0, 12.0)
+        # (lane, side of the turn, reversed): out of the overtaking lane to the left, in from the left into the
+        # oncoming lane, out of the ego lane to the right.
+        lane, side, backwards = [(OVERTAKING_LANE, 1.0, False), (ONCOMING_LANE, 1.0, True), (0.0, -1.0, False)][
+            rng.integers(3)
+        ]
+        s_turn = s_meet + rng.uniform(12.0, 40.0)
+        path, arc_start = _turn_path(road, s_turn, lane, side, radius, TURN_APPROACH + speed * duration, backwards)
+        # The turn starts at t_meet.
+        return [_new_user(cls, road, duration, rng, s0=arc_start - speed * t_meet, speed=speed, d0=0.0, path=path)]
+    if kind == "convoy":
+        oncoming = rng.random() < 0.5
+        speed = -rng.uniform(7.0, 13.0) if oncoming else max(np.mean(ego.vx) + rng.uniform(-3.0, 3.0), 4.0)
+        lane = ONCOMING_LANE if oncoming else OVERTAKING_LANE
+        s0 = s_meet + rng.uniform(0, 20) - speed * t_meet
+        first = _new_user(str(rng.choice(["car", "car", "truck"])), road, duration, rng, s0=s0, speed=speed, d0=lane)
+        second = _new_user("car", road, duration, rng, s0=0.0, speed=speed, d0=lane + rng.normal(0, 0.2))
+        gap = (first.length + second.length) / 2 + rng.uniform(1.5, 4.0)
+        second.s0 = s0 - np.sign(speed) * gap
+        return [first, second]
+    if kind == "group_and_walker":
+        speed = rng.choice([-1.0, 1.0]) * rng.uniform(0.8, 1.5)
+        side = RIGHT_SIDEWALK if rng.random() < 0.5 else LEFT_SIDEWALK
+        s0 = s_meet + rng.uniform(5, 35) - speed * t_meet
+        group = _new_user("pedestrian_group", road, duration, rng, s0=s0, speed=speed, d0=side)
+        walker = _new_user(
+            "pedestrian",
+            road,
+            duration,
+            rng,
+            s0=s0 + rng.normal(0.0, 0.8),
+            speed=speed + rng.normal(0.0, 0.1),
+            d0=side + rng.choice([-1.0, 1.0]) * (group.width / 2 + rng.uniform(1.0, 1.8) - 0.3),
+        )
+        return [group, walker]
+    # kerb_walker, kerb_cyclist: beside the parked cars (their bodies are 1.7-1.9 m wide)
+    cls = "pedestrian" if kind == "kerb_walker" else "bicycle"
+    speed = rng.choice([-1.0, 1.0]) * (rng.uniform(0.8, 1.6) if cls == "pedestrian" else rng.uniform(3.0, 6.0))
+    clearance = 0.9 + rng.uniform(0.3, 0.7) + ROAD_USER_CLASSES[cls]["width"][1] / 2
+    d0 = PARKED_CARS_LANE + (-clearance if cls == "pedestrian" else clearance)
+    return [_new_user(cls, road, duration, rng, s0=s_meet + rng.uniform(0, 30) - speed * t_meet, speed=speed, d0=d0)]
+
+
+def _turn_path(road, s_turn, lane, side, radius, straight, backwards):
+    """A lane, a quarter circle of ``radius`` (m) to the left (side=1) or right (-1) and a side street.
+
+    Returns the path (arclength, x, y) in the world frame, starting on the lane (in the side street when
+    ``backwards``), and the arclength (m) at which the arc starts.
+    """
+    u_lane = np.linspace(-straight, 0.0, max(int(straight / 2.0), 2))
+    phi = np.linspace(0.0, np.pi / 2, 24)[1:]
+    u_arc, w_arc = radius * np.sin(phi), lane + side * radius * (1 - np.cos(phi))
+    w_street = lane + side * (radius + np.linspace(0.0, straight, max(int(straight / 2.0), 2))[1:])
+    u = np.concatenate([u_lane, u_arc, np.full(len(w_street), radius)])
+    w = np.concatenate([np.full(len(u_lane), lane), w_arc, w_street])
+    first_arc = len(u_lane) - 1
+    if backwards:
+        u, w = u[::-1], w[::-1]
+        first_arc = len(w_street)
+    x, y = road.to_world(s_turn + u, w)
+    along = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(x), np.diff(y)))])
+    return (along, x, y), float(along[first_arc])
+
+
+def add_occlusions(users, duration, rate, rng):
+    """Give each road user ``Poisson(rate)`` extra intervals of 1-4 s without detections (occluded)."""
+    for user in users:
+        extra = []
+        for _ in range(rng.poisson(rate)):
+            start = rng.uniform(0, duration)
+            extra.append((start, start + rng.uniform(1.0, 4.0)))
+        user.absences = tuple(user.absences) + tuple(extra)
+    return users

@@ -13,8 +13,9 @@ import numbers
 
 import numpy as np
 import pandas as pd
+from scipy.spatial import cKDTree
 from sklearn.utils import Bunch, check_random_state
-from sklearn.utils._param_validation import Interval, validate_params
+from sklearn.utils._param_validation import Interval, StrOptions, validate_params
 
 from .._schema import (
     ODOMETRY_COLUMNS,
@@ -26,7 +27,15 @@ from .._schema import (
     make_frame,
     nearest_odometry_index,
 )
-from ._scenario import ROAD_USER_CLASSES, make_road, make_road_users, make_static_world, simulate_ego
+from ._scenario import (
+    ROAD_USER_CLASSES,
+    add_occlusions,
+    make_dense_traffic,
+    make_road,
+    make_road_users,
+    make_static_world,
+    simulate_ego,
+)
 
 # Sensor model (RadarScenes sensors: 0.15 m range resolution, 0.1 km/h
 # Doppler resolution, 0.5 deg azimuth resolution at boresight, 2 deg at the edge).
@@ -40,11 +49,57 @@ DOPPLER_NOISE = 0.04  # m/s
 DOPPLER_OUTLIER_RATE = 0.02
 AZIMUTH_NOISE_BORESIGHT = np.deg2rad(0.15)  # rad, about 0.3 x the resolution
 AZIMUTH_NOISE_EDGE = np.deg2rad(0.6)  # rad
+AZIMUTH_NOISE_GROWTH = 2.5  # at most this factor more azimuth noise at range: 8 dB less SNR, the detection threshold
 CLUTTER_PER_SCAN = 6.0  # false alarms per scan
 GHOST_RATE = 0.04  # multipath ghosts per object detection
 DIFFUSE_SHARE = 0.3  # object detections spread over the outline rather than from a scattering centre
 NEW_TRACK_GAP = 0.5  # s, RadarScenes: a new track id after longer absence
 SCAN_BLOCK = 48  # scans processed together for the static world
+VEHICLE_LABELS = (0, 1, 2, 3)  # car, large vehicle, truck, bus: the road users that throw up spray
+STRONG_RCS = 10.0  # dBsm: detections this strong show sidelobes and multipath mirrors
+
+#: The knobs of the simulator's phenomena and their values in the two ``difficulty`` presets.  "easy" turns
+#: every phenomenon off and is the simulator of sklearn-radar 0.x; "realistic" sets each to a physically argued
+#: value (see :func:`make_scenes` and the user guide's "Simulated data" page for the arguments and the
+#: calibration against published figures).
+DIFFICULTY_PRESETS = {
+    "easy": {
+        "odometry_speed_scale": 0.0,
+        "odometry_speed_noise": 0.0,
+        "odometry_yaw_rate_bias": 0.0,
+        "odometry_yaw_rate_noise": 0.0,
+        "mounting_error": 0.0,
+        "time_offset": 0.0,
+        "multipath": 0.0,
+        "second_bounce": 0.0,
+        "rain": 0.0,
+        "spray": 0.0,
+        "sidelobes": 0.0,
+        "traffic": 0.0,
+        "occlusion": 0.0,
+        "detection_range": np.inf,
+        "angular_noise_range": np.inf,
+        "rcs_fluctuation": False,
+    },
+    "realistic": {
+        "odometry_speed_scale": 0.005,
+        "odometry_speed_noise": 0.04,
+        "odometry_yaw_rate_bias": 0.002,
+        "odometry_yaw_rate_noise": 0.003,
+        "mounting_error": float(np.deg2rad(0.5)),
+        "time_offset": 0.005,
+        "multipath": 0.05,
+        "second_bounce": 0.02,
+        "rain": 1.0,
+        "spray": 0.05,
+        "sidelobes": 0.2,
+        "traffic": 12.0,
+        "occlusion": 0.3,
+        "detection_range": 100.0,
+        "angular_noise_range": 40.0,
+        "rcs_fluctuation": True,
+    },
+}
 
 
 @validate_params(
@@ -55,6 +110,8 @@ SCAN_BLOCK = 48  # scans processed together for the static world
         "n_objects": [tuple],
         "static_density": [Interval(numbers.Real, 0, None, closed="neither")],
         "first_sequence": [Interval(numbers.Integral, 1, None, closed="left")],
+        "difficulty": [StrOptions(set(DIFFICULTY_PRESETS))],
+        "knobs": [dict, None],
     },
     prefer_skip_nested_validation=True,
 )
@@ -66,6 +123,8 @@ def make_scenes(
     n_objects=(3, 12),
     static_density=1.0,
     first_sequence=1,
+    difficulty="easy",
+    knobs=None,
 ):
     """Simulate radar recordings of an urban drive, in the RadarScenes layout.
 
@@ -99,6 +158,64 @@ def make_scenes(
         street), > 0.
     first_sequence : int, default=1
         Number N >= 1 of the first sequence (folder ``sequence_N``).
+    difficulty : {"easy", "realistic"}, default="easy"
+        Preset of the phenomena that make real radar data hard.  "easy" turns
+        them all off (the simulator described above); "realistic" turns each
+        on at a physically argued value
+        (``sklearn_radar.datasets._simulator.DIFFICULTY_PRESETS``).  Equal
+        seeds give the same drive, road, static world and base road users
+        in both presets.
+    knobs : dict, default=None
+        Values that override single knobs of the preset (all seedable
+        through ``random_state``):
+
+        * ``odometry_speed_scale``: standard deviation of the relative
+          wheel-speed scale error, one draw per sequence (realistic 0.005:
+          tyre circumference within +-1 %).
+        * ``odometry_speed_noise``: m/s, white noise of the 50 Hz odometry
+          speed (0.04: wheel-tick quantisation).
+        * ``odometry_yaw_rate_bias``: rad/s, standard deviation of the gyro
+          bias per sequence (0.002: about 0.1 deg/s after offset learning).
+        * ``odometry_yaw_rate_noise``: rad/s, white noise of the yaw rate
+          (0.003).
+          The reported pose is dead-reckoned from the erroneous speed and
+          yaw rate; ``vr_compensated`` uses them, so static Doppler spreads.
+        * ``mounting_error``: rad, standard deviation of each sensor's yaw
+          error per sequence (0.5 deg: alignment tolerance of series
+          radars); it smears static structure between sensors in FCS.
+        * ``time_offset``: s, standard deviation of each sensor's time-stamp
+          offset per sequence (0.005: CAN latency of unsynchronised sensors).
+        * ``multipath``: ghosts per object detection and per strong static
+          detection (>= 10 dBsm) mirrored at the wall or guard rail nearer to
+          the reflector (0.05); a moving object's ghost moves and carries the
+          mirrored Doppler.
+        * ``second_bounce``: ghosts per object detection at twice the range
+          and twice the radial velocity (the path sensor-object-car-object,
+          0.02).
+        * ``rain``: rain and spray clutter per scan, mostly at short range,
+          with a radial velocity of its own (1.0; s.d. 0.8 m/s of wind).
+        * ``spray``: spray detections per vehicle detection, behind the rear
+          wheels, moving with 30-90 % of the vehicle's velocity (0.05).
+        * ``sidelobes``: sidelobe detections per detection of >= 10 dBsm,
+          2-6 deg beside it at its range and Doppler, 15-25 dB weaker (0.2).
+        * ``traffic``: close situations of dense traffic per minute (12):
+          turning vehicles (their Doppler varies across the body), convoys
+          1.5-4 m apart, a pedestrian beside a pedestrian group, pedestrians
+          and cyclists passing parked cars 0.3-0.7 m away.
+        * ``occlusion``: mean number of 1-4 s occlusions per road user (0.3).
+        * ``detection_range``: m, range at which a 10 dBsm Swerling-1 target
+          is detected with probability 0.5 (100, the sensors' specified
+          range; a 5 dBsm car: 84 m, a -8 dBsm pedestrian: 36 m); object detections are
+          thinned by ``exp(-ln 2 (r / r_50)^4)`` with ``r_50`` scaled by the
+          class RCS as ``10^((rcs - 10) / 40)`` (radar equation), which
+          leaves lone detections at range.  ``inf``: no thinning.
+        * ``angular_noise_range``: m, beyond it the azimuth noise grows with
+          the square of the range (SNR falls with r^4), up to 2.5 times its
+          value near the detection threshold (40).  ``inf``: no growth.
+        * ``rcs_fluctuation``: bool, Swerling-1 fluctuation (exponential
+          power, 5.6 dB spread) on top of the aspect noise of the RCS (True).
+
+        Unknown names raise a ValueError.
 
     Returns
     -------
@@ -116,12 +233,22 @@ def make_scenes(
     True
     """
     low, high = _check_n_objects(n_objects)
+    knobs = _check_knobs(difficulty, knobs)
     rng = check_random_state(random_state)
     seeds = rng.randint(0, 2**31 - 1, size=n_sequences)
     data, odometry = [], []
     for i, seed in enumerate(seeds):
         number = first_sequence + i
-        det, odo = _simulate_sequence(number, duration, (low, high), static_density, np.random.default_rng(seed))
+        # The phenomena draw from a stream of their own, so that both presets share the world of a seed.
+        det, odo = _simulate_sequence(
+            number,
+            duration,
+            (low, high),
+            static_density,
+            np.random.default_rng(seed),
+            knobs,
+            np.random.default_rng([int(seed), 13]),
+        )
         data.append(det)
         odometry.append(odo)
     data = pd.concat(data, ignore_index=True)
@@ -141,7 +268,9 @@ def make_scenes(
             }
         ),
         DESCR=f"Simulated RadarScenes-layout data: {n_sequences} sequence(s) of {duration:g} s "
-        f"(sklearn_radar.datasets.make_scenes, random_state={random_state!r}).",
+        f"(sklearn_radar.datasets.make_scenes, random_state={random_state!r}, difficulty={difficulty!r}"
+        + (f", knobs={dict(sorted(_overrides(difficulty, knobs).items()))!r}" if _overrides(difficulty, knobs) else "")
+        + ").",
     )
 
 
@@ -165,26 +294,70 @@ def _check_n_objects(n_objects):
     return int(n_objects[0]), int(n_objects[1])
 
 
-def _simulate_sequence(number, duration, n_objects, density, rng):
-    """Detection table and odometry of one sequence."""
+def _check_knobs(difficulty, knobs):
+    """The preset's knob values with ``knobs`` applied; ValueError names an unknown or invalid knob."""
+    values = dict(DIFFICULTY_PRESETS[difficulty])
+    for name, value in (knobs or {}).items():
+        if name not in values:
+            raise ValueError(f"knobs: unknown knob {name!r}; the knobs are {', '.join(sorted(values))}")
+        if name == "rcs_fluctuation":
+            if not isinstance(value, (bool, np.bool_)):
+                raise ValueError(f"knobs: rcs_fluctuation must be a bool, got {value!r}")
+        elif (
+            not isinstance(value, numbers.Real)
+            or isinstance(value, (bool, np.bool_))
+            or np.isnan(value)
+            or value < 0
+            or (name in ("detection_range", "angular_noise_range") and value == 0)
+            or (np.isinf(value) and name not in ("detection_range", "angular_noise_range"))
+        ):
+            rule = "> 0 (inf: off)" if name in ("detection_range", "angular_noise_range") else "finite and >= 0"
+            raise ValueError(f"knobs: {name} must be a real number {rule}, got {value!r}")
+        values[name] = value
+    return values
+
+
+def _overrides(difficulty, knobs):
+    preset = DIFFICULTY_PRESETS[difficulty]
+    return {k: v for k, v in (knobs or {}).items() if v != preset[k]}
+
+
+def _simulate_sequence(number, duration, n_objects, density, rng, knobs=None, extra=None):
+    """Detection table and odometry of one sequence.
+
+    ``rng`` draws the world and the easy simulator's measurements; ``extra``
+    draws everything the realistic phenomena (``knobs``) add, and nothing
+    else, so that with every knob off the data are those of the easy preset.
+    """
+    knobs = DIFFICULTY_PRESETS["easy"] if knobs is None else knobs
     t0_us = 156_000_000_000 + 1_000_000_000 * number
     ego = simulate_ego(duration, rng)
     road = make_road(ego)
     odometry = _odometry(ego, duration, t0_us, rng)
+    odometry = _odometry_errors(odometry, knobs, extra)
     scans = _scan_schedule(duration, t0_us, rng)
-    sensor = _sensor_states(ego, scans)
+    sensor = _sensor_states(ego, scans, _sensor_errors(knobs, extra))
 
     static = make_static_world(
         road, sensor["s"].min() - MAX_RANGE - 10, sensor["s"].max() + MAX_RANGE + 10, rng, density
     )
     users = make_road_users(ego, road, duration, rng.integers(n_objects[0], n_objects[1] + 1), rng)
-    parts = [_static_detections(static, sensor, rng), _clutter(sensor, density, rng)]
-    objects = _object_detections(users, sensor, rng)
+    if knobs["traffic"] > 0:
+        users += make_dense_traffic(ego, road, duration, knobs["traffic"], extra)
+    if knobs["occlusion"] > 0:
+        add_occlusions(users, duration, knobs["occlusion"], extra)
+    static_part = _static_detections(static, sensor, rng)
+    parts = [static_part, _clutter(sensor, density, rng)]
+    objects, world = _object_detections(users, sensor, rng, knobs, extra)
     parts += [objects, _ghosts(objects, rng)]
+    parts += _phenomena(static_part, objects, world, static, road, sensor, knobs, extra)
     truth = {key: np.concatenate([p[key] for p in parts]) for key in parts[0]}
+    if knobs["rcs_fluctuation"]:
+        # Swerling 1: exponentially distributed power, 10 log10 of it (5.6 dB spread), mean power kept.
+        truth["rcs"] = truth["rcs"] + 10 * np.log10(extra.exponential(1.0, len(truth["rcs"])))
 
     scans["odometry_index"] = nearest_odometry_index(scans["timestamp"], odometry["timestamp"].to_numpy())
-    measured = _measure(truth, scans, odometry, rng)
+    measured = _measure(truth, scans, odometry, rng, angular_noise_range=knobs["angular_noise_range"])
     track_id = _track_ids(truth["object"], scans["t"][truth["scan"]], number)
     order = np.lexsort((measured["range_sc"], truth["scan"]))
     radar = {key: value[order] for key, value in measured.items()}
@@ -218,6 +391,53 @@ def _odometry(ego, duration, t0_us, rng) -> pd.DataFrame:
     )
 
 
+def _odometry_errors(odometry, knobs, rng):
+    """Odometry as the car reports it: speed scale error and noise, gyro bias and noise, dead-reckoned pose.
+
+    Returns ``odometry`` itself when every odometry knob is 0 (no draw).
+    """
+    names = ("odometry_speed_scale", "odometry_speed_noise", "odometry_yaw_rate_bias", "odometry_yaw_rate_noise")
+    if not any(knobs[name] > 0 for name in names):
+        return odometry
+    n = len(odometry)
+    vx = odometry["vx"].to_numpy(dtype=float)
+    yaw_rate = odometry["yaw_rate"].to_numpy(dtype=float)
+    scale = 1.0 + rng.normal(0.0, 1.0) * knobs["odometry_speed_scale"]
+    # A standing wheel gives no ticks: the speed noise vanishes at standstill.
+    vx = np.where(vx > 0.01, vx * scale + rng.normal(0.0, 1.0, n) * knobs["odometry_speed_noise"], vx)
+    yaw_rate = (
+        yaw_rate
+        + rng.normal(0.0, 1.0) * knobs["odometry_yaw_rate_bias"]
+        + rng.normal(0.0, 1.0, n) * knobs["odometry_yaw_rate_noise"]
+    )
+    t = (odometry["timestamp"].to_numpy() - odometry["timestamp"].iloc[0]) * 1e-6
+    dt = np.diff(t)
+    yaw = float(odometry["yaw_seq"].iloc[0]) + np.concatenate(
+        [[0.0], np.cumsum(0.5 * (yaw_rate[1:] + yaw_rate[:-1]) * dt)]
+    )
+    heading = 0.5 * (yaw[1:] + yaw[:-1])
+    step = 0.5 * (vx[1:] + vx[:-1]) * dt
+    x = float(odometry["x_seq"].iloc[0]) + np.concatenate([[0.0], np.cumsum(step * np.cos(heading))])
+    y = float(odometry["y_seq"].iloc[0]) + np.concatenate([[0.0], np.cumsum(step * np.sin(heading))])
+    return odometry.assign(
+        x_seq=x.astype(np.float32),
+        y_seq=y.astype(np.float32),
+        yaw_seq=(np.mod(yaw + np.pi, 2 * np.pi) - np.pi).astype(np.float32),
+        vx=vx.astype(np.float32),
+        yaw_rate=yaw_rate.astype(np.float32),
+    )
+
+
+def _sensor_errors(knobs, rng):
+    """Per-sensor yaw error (rad) and time-stamp offset (s) of one sequence; None when both knobs are 0."""
+    if not (knobs["mounting_error"] > 0 or knobs["time_offset"] > 0):
+        return None
+    ids = sorted(RADARSCENES_MOUNTING)
+    yaw = rng.normal(0.0, 1.0, len(ids)) * knobs["mounting_error"]
+    offset = rng.normal(0.0, 1.0, len(ids)) * knobs["time_offset"]
+    return {"yaw": dict(zip(ids, yaw, strict=True)), "offset": dict(zip(ids, offset, strict=True))}
+
+
 def _scan_schedule(duration, t0_us, rng):
     """Unsynchronised scans of the four sensors, sorted by unique µs timestamps."""
     times, sensors = [], []
@@ -239,11 +459,20 @@ def _scan_schedule(duration, t0_us, rng):
     return {"timestamp": timestamp, "sensor_id": sensor_id, "t": (timestamp - t0_us) * 1e-6}
 
 
-def _sensor_states(ego, scans):
-    """True pose and velocity over ground of the scanning sensor, per scan."""
-    x, y, yaw, vx, yaw_rate, s = ego.at(scans["t"])
+def _sensor_states(ego, scans, errors=None):
+    """True pose and velocity over ground of the scanning sensor, per scan.
+
+    ``errors`` (:func:`_sensor_errors`) turns each sensor by its yaw error
+    and measures at its time stamp minus its offset: ``t`` is then the true
+    time of the measurement, which the time stamp no longer is.
+    """
+    t = scans["t"]
     mount = np.array([[RADARSCENES_MOUNTING[k][f] for f in ("x", "y", "yaw")] for k in scans["sensor_id"]])
     mx, my, myaw = mount.T
+    if errors is not None:
+        t = t - np.array([errors["offset"][k] for k in scans["sensor_id"]])
+        myaw = myaw + np.array([errors["yaw"][k] for k in scans["sensor_id"]])
+    x, y, yaw, vx, yaw_rate, s = ego.at(t)
     c, si = np.cos(yaw), np.sin(yaw)
     vsx_car, vsy_car = vx - yaw_rate * my, yaw_rate * mx
     return {
@@ -253,7 +482,7 @@ def _sensor_states(ego, scans):
         "vx": c * vsx_car - si * vsy_car,
         "vy": si * vsx_car + c * vsy_car,
         "s": s,
-        "t": scans["t"],
+        "t": t,
     }
 
 
@@ -324,14 +553,33 @@ def _clutter(sensor, density, rng):
     return _truth(scan, r, azimuth, vr, rcs, np.full(len(scan), STATIC_LABEL), np.full(len(scan), -1))
 
 
-def _object_detections(users, sensor, rng):
-    """Detections on the visible outline of each road user."""
-    parts = [_one_object(i, user, sensor, rng) for i, user in enumerate(users)]
-    parts.append(_truth(*(np.zeros(0, dtype=dt) for dt in (int, float, float, float, float, int, int))))
-    return {key: np.concatenate([p[key] for p in parts]) for key in parts[0]}
+def _object_detections(users, sensor, rng, knobs=None, extra=None):
+    """Detections on the visible outline of each road user, and their world-frame geometry.
+
+    Returns the truth dict and ``world``: per detection the reflecting
+    point's position and velocity (``x``, ``y``, ``vx``, ``vy``, m and m/s)
+    and the object's centre velocity, heading, length and width, which the
+    realistic phenomena (ghosts, spray) start from.
+    """
+    knobs = DIFFICULTY_PRESETS["easy"] if knobs is None else knobs
+    parts = [_one_object(i, user, sensor, rng, knobs, extra) for i, user in enumerate(users)]
+    empty = np.zeros(0)
+    parts.append(
+        (
+            _truth(*(np.zeros(0, dtype=dt) for dt in (int, float, float, float, float, int, int))),
+            {key: empty for key in _WORLD_KEYS},
+        )
+    )
+    truth = {key: np.concatenate([p[0][key] for p in parts]) for key in parts[0][0]}
+    world = {key: np.concatenate([p[1][key] for p in parts]) for key in _WORLD_KEYS}
+    return truth, world
 
 
-def _one_object(index, user, sensor, rng):
+_WORLD_KEYS = ("x", "y", "vx", "vy", "cx", "cy", "cvx", "cvy", "heading", "length", "width")
+
+
+def _one_object(index, user, sensor, rng, knobs=None, extra=None):
+    knobs = DIFFICULTY_PRESETS["easy"] if knobs is None else knobs
     params = ROAD_USER_CLASSES[user.kind]
     t = sensor["t"]
     cx, cy, vx, vy, heading, yaw_rate = user.kinematics(t)
@@ -356,8 +604,27 @@ def _one_object(index, user, sensor, rng):
     vr = (pvx - sensor["vx"][scan]) * np.cos(angle) + (pvy - sensor["vy"][scan]) * np.sin(angle)
     rcs = params["rcs"] + rng.normal(0.0, 4.0, len(scan))
     keep = _visibility(r, azimuth) > 0
+    if np.isfinite(knobs["detection_range"]):
+        # Radar equation with a Swerling-1 target: P_d = exp(-ln 2 (r / r_50)^4), r_50 growing as RCS^(1/4).
+        r_50 = knobs["detection_range"] * 10 ** ((params["rcs"] - 10.0) / 40.0)
+        keep &= extra.random(len(scan)) < np.exp(-np.log(2.0) * (r / r_50) ** 4)
     label = np.full(len(scan), params["label"])
-    return _truth(scan[keep], r[keep], azimuth[keep], vr[keep], rcs[keep], label[keep], np.full(keep.sum(), index))
+    truth = _truth(scan[keep], r[keep], azimuth[keep], vr[keep], rcs[keep], label[keep], np.full(keep.sum(), index))
+    n = int(keep.sum())
+    world = {
+        "x": px[keep],
+        "y": py[keep],
+        "vx": pvx[keep],
+        "vy": pvy[keep],
+        "cx": cx[scan][keep],
+        "cy": cy[scan][keep],
+        "cvx": vx[scan][keep],
+        "cvy": vy[scan][keep],
+        "heading": heading[scan][keep],
+        "length": np.full(n, user.length),
+        "width": np.full(n, user.width),
+    }
+    return truth, world
 
 
 def _outline_points(user, sensor, scan, cx, cy, heading, rng):
@@ -410,12 +677,161 @@ def _ghosts(objects, rng):
     )
 
 
-def _measure(truth, scans, odometry, rng):
-    """Noisy measurements and the derived RadarScenes fields, as float32."""
+def _phenomena(static_part, objects, world, static, road, sensor, knobs, rng):
+    """The background detections of the realistic phenomena: mirrored and second-bounce ghosts, rain, spray and
+    sidelobes.  Each is a truth dict (label static, no object); none is drawn for a knob of 0."""
+    parts = []
+    if knobs["multipath"] > 0:
+        parts.append(_mirror_ghosts(static_part, objects, world, static, road, sensor, knobs["multipath"], rng))
+    if knobs["second_bounce"] > 0:
+        parts.append(_second_bounce(objects, knobs["second_bounce"], rng))
+    if knobs["rain"] > 0:
+        parts.append(_rain(sensor, knobs["rain"], rng))
+    if knobs["spray"] > 0:
+        parts.append(_spray(objects, world, sensor, knobs["spray"], rng))
+    if knobs["sidelobes"] > 0:
+        parts.append(_sidelobes([static_part, objects, *parts], knobs["sidelobes"], rng))
+    return parts
+
+
+def _background(scan, r, azimuth, vr, rcs):
+    n = len(scan)
+    return _truth(scan, r, azimuth, vr, rcs, np.full(n, STATIC_LABEL), np.full(n, -1))
+
+
+def _seen(sensor, scan, x, y, vx, vy, rcs):
+    """Background detections of world points with velocities, where the sensor sees them."""
+    r, azimuth = _polar(sensor, scan, x, y)
+    angle = azimuth + sensor["boresight"][scan]
+    vr = (vx - sensor["vx"][scan]) * np.cos(angle) + (vy - sensor["vy"][scan]) * np.sin(angle)
+    keep = _visibility(r, azimuth) > 0
+    return _background(scan[keep], r[keep], azimuth[keep], vr[keep], rcs[keep])
+
+
+def _mirror_ghosts(static_part, objects, world, static, road, sensor, rate, rng):
+    """Multipath: the reflector seen in the mirror of the wall or guard rail nearer to it.
+
+    The path sensor-wall-reflector is as long as the line from the sensor to
+    the mirror image, and its length changes as the mirror image moves: a
+    ghost sits at the image's position with the image's (mirrored) velocity.
+    """
+    walls = np.sort(np.asarray(static.walls, dtype=float))
+    pick = np.flatnonzero(rng.random(len(objects["scan"])) < rate)
+    scan, x, y = objects["scan"][pick], world["x"][pick], world["y"][pick]
+    vx, vy, rcs = world["vx"][pick], world["vy"][pick], objects["rcs"][pick]
+    strong = np.flatnonzero(static_part["rcs"] >= STRONG_RCS)
+    strong = strong[rng.random(len(strong)) < rate]
+    s_scan = static_part["scan"][strong]
+    angle = static_part["azimuth"][strong] + sensor["boresight"][s_scan]
+    s_x = sensor["x"][s_scan] + static_part["range"][strong] * np.cos(angle)
+    s_y = sensor["y"][s_scan] + static_part["range"][strong] * np.sin(angle)
+    scan, x, y = np.concatenate([scan, s_scan]), np.concatenate([x, s_x]), np.concatenate([y, s_y])
+    vx, vy = np.concatenate([vx, np.zeros(len(strong))]), np.concatenate([vy, np.zeros(len(strong))])
+    rcs = np.concatenate([rcs, static_part["rcs"][strong]])
+    if len(walls) < 2 or len(scan) == 0:
+        return _background(*(np.zeros(0, dtype=dt) for dt in (int, float, float, float, float)))
+    # Road coordinates of the reflector: the nearest point of the road polyline, its normal to the left.
+    _, nearest = cKDTree(np.c_[road.x, road.y]).query(np.c_[x, y])
+    nx, ny = -np.sin(road.heading[nearest]), np.cos(road.heading[nearest])
+    d = (x - road.x[nearest]) * nx + (y - road.y[nearest]) * ny
+    inside = (d > walls[0]) & (d < walls[-1])
+    wall = np.where(d - walls[0] < walls[-1] - d, walls[0], walls[-1])
+    shift = 2 * (wall - d)
+    v_normal = vx * nx + vy * ny
+    ghost = _seen(
+        sensor,
+        scan[inside],
+        (x + shift * nx)[inside],
+        (y + shift * ny)[inside],
+        (vx - 2 * v_normal * nx)[inside],
+        (vy - 2 * v_normal * ny)[inside],
+        rcs[inside] - rng.uniform(6.0, 12.0, int(inside.sum())),
+    )
+    return ghost
+
+
+def _second_bounce(objects, rate, rng):
+    """Ghosts of the path sensor-object-car-object-sensor: twice the range and twice the radial velocity."""
+    pick = rng.random(len(objects["scan"])) < rate
+    r = 2 * objects["range"][pick]
+    seen = r < MAX_RANGE
+    n = int(seen.sum())
+    return _background(
+        objects["scan"][pick][seen],
+        r[seen] + rng.normal(0.0, 0.1, n),
+        objects["azimuth"][pick][seen],
+        2 * objects["vr"][pick][seen],
+        objects["rcs"][pick][seen] - rng.uniform(10.0, 15.0, n),
+    )
+
+
+def _rain(sensor, rate, rng):
+    """Rain and road-spray clutter: mostly within 10 m, radial velocity of wind-blown drops (s.d. 0.8 m/s)."""
+    n_scans = len(sensor["s"])
+    scan = np.repeat(np.arange(n_scans), rng.poisson(rate, n_scans))
+    r = 1.0 + rng.exponential(8.0, len(scan))
+    keep = r < MAX_RANGE
+    scan, r = scan[keep], r[keep]
+    azimuth = rng.uniform(-FOV, FOV, len(scan))
+    vr = _static_vr(sensor, scan, azimuth) + rng.normal(0.0, 0.8, len(scan))
+    return _background(scan, r, azimuth, vr, rng.normal(-25.0, 3.0, len(scan)))
+
+
+def _spray(objects, world, sensor, rate, rng):
+    """Spray thrown up behind the rear wheels of vehicles, moving with 30-90 % of the vehicle's velocity."""
+    vehicle = np.isin(objects["label"], VEHICLE_LABELS)
+    pick = np.flatnonzero(vehicle & (rng.random(len(vehicle)) < rate))
+    n = len(pick)
+    along = -world["length"][pick] / 2 - rng.uniform(0.0, 1.5, n)
+    across = rng.choice([-1.0, 1.0], n) * (world["width"][pick] / 2 - 0.2) + rng.normal(0.0, 0.3, n)
+    c, s = np.cos(world["heading"][pick]), np.sin(world["heading"][pick])
+    x = world["cx"][pick] + c * along - s * across
+    y = world["cy"][pick] + s * along + c * across
+    share = rng.uniform(0.3, 0.9, n)
+    return _seen(
+        sensor,
+        objects["scan"][pick],
+        x,
+        y,
+        world["cvx"][pick] * share,
+        world["cvy"][pick] * share,
+        rng.normal(-20.0, 4.0, n),
+    )
+
+
+def _sidelobes(parts, rate, rng):
+    """Sidelobes of strong detections: 2-6 deg beside them, at their range and radial velocity, 15-25 dB weaker."""
+    scan, r, azimuth, vr, rcs = (
+        np.concatenate([p[key] for p in parts]) for key in ("scan", "range", "azimuth", "vr", "rcs")
+    )
+    pick = (rcs >= STRONG_RCS) & (rng.random(len(rcs)) < rate)
+    n = int(pick.sum())
+    side = azimuth[pick] + rng.choice([-1.0, 1.0], n) * np.deg2rad(rng.uniform(2.0, 6.0, n))
+    keep = np.abs(side) < FOV
+    return _background(
+        scan[pick][keep],
+        r[pick][keep] + rng.normal(0.0, 0.05, int(keep.sum())),
+        side[keep],
+        vr[pick][keep],
+        rcs[pick][keep] - rng.uniform(15.0, 25.0, int(keep.sum())),
+    )
+
+
+def _measure(truth, scans, odometry, rng, angular_noise_range=np.inf):
+    """Noisy measurements and the derived RadarScenes fields, as float32.
+
+    Beyond ``angular_noise_range`` (m) the azimuth noise grows with the
+    square of the range (its variance with 1/SNR, SNR with r^-4), up to
+    :data:`AZIMUTH_NOISE_GROWTH` times its value: the SNR of a detection
+    cannot fall below the detection threshold.
+    """
     n = len(truth["scan"])
     scan = truth["scan"]
     edge = (np.abs(truth["azimuth"]) / FOV) ** 2
     az_sigma = AZIMUTH_NOISE_BORESIGHT + (AZIMUTH_NOISE_EDGE - AZIMUTH_NOISE_BORESIGHT) * edge
+    if np.isfinite(angular_noise_range):
+        growth = np.clip(truth["range"] / angular_noise_range, 1.0, np.sqrt(AZIMUTH_NOISE_GROWTH)) ** 2
+        az_sigma = az_sigma * growth
     r = np.maximum(truth["range"] + rng.normal(0.0, RANGE_NOISE, n), 0.2).astype(np.float32)
     azimuth = (truth["azimuth"] + rng.normal(0.0, 1.0, n) * az_sigma).astype(np.float32)
     vr = truth["vr"] + rng.normal(0.0, DOPPLER_NOISE, n)
