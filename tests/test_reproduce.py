@@ -1,6 +1,9 @@
 """End-to-end tests of 'sklearn-radar reproduce' and 'sklearn-radar cluster' on a tiny data set."""
 
+import contextlib
+import io
 import json
+import re
 
 import numpy as np
 import pytest
@@ -21,8 +24,13 @@ def tiny_folder(tmp_path_factory):
 def tiny_report(tiny_folder, tmp_path_factory):
     out = tmp_path_factory.mktemp("report") / "out"
     steps = "filter,1,2,8,10,11,13,filter-effect,baselines"
-    code = main(["reproduce", "--data", str(tiny_folder), "--out", str(out), "--n-iter", "2", "--experiments", steps])
+    printed = io.StringIO()  # the progress output, as a file would receive it
+    with contextlib.redirect_stdout(printed):
+        code = main(
+            ["reproduce", "--data", str(tiny_folder), "--out", str(out), "--n-iter", "2", "--experiments", steps]
+        )
     assert code == 0
+    (out.parent / "stdout.txt").write_text(printed.getvalue())
     return out
 
 
@@ -33,6 +41,8 @@ def test_reproduce_writes_report_results_params_and_figures(tiny_report):
         "results.json",
         "params.json",
         "table1_heatmap.png",
+        "filter_scene.png",
+        "v1_ours_vs_paper.png",
         "fig6_scene.png",
         "convergence.png",
     } <= names
@@ -204,7 +214,13 @@ def _typed(report_folder):
     from sklearn_radar.reproduce._results import RunResults
 
     results = RunResults.from_json_dict(json.loads((report_folder / "results.json").read_text()))
-    names = {"table1_heatmap": "table1_heatmap.png", "scene": "fig6_scene.png", "convergence": "convergence.png"}
+    names = {
+        "table1_heatmap": "table1_heatmap.png",
+        "filter_scene": "filter_scene.png",
+        "v1_bars": "v1_ours_vs_paper.png",
+        "scene": "fig6_scene.png",
+        "convergence": "convergence.png",
+    }
     results.figures.drawn.update({name: file for name, file in names.items() if (report_folder / file).exists()})
     return results
 
@@ -239,6 +255,8 @@ def test_results_json_round_trips_through_the_typed_results_byte_for_byte(tiny_r
     document = typed.to_json_dict(figures=True)
     assert document["figures"] == {
         "table1_heatmap": "table1_heatmap.png",
+        "filter_scene": "filter_scene.png",
+        "v1_bars": "v1_ours_vs_paper.png",
         "scene": "fig6_scene.png",
         "convergence": "convergence.png",
     }
@@ -478,3 +496,22 @@ def test_results_of_an_older_version_without_the_new_fields_still_load(tiny_repo
     )
     text = report_markdown(results)
     assert "## The data" not in text and "## Cluster merging (Table IV)" in text
+
+
+def test_the_report_shows_every_figure_it_drew_with_a_caption(tiny_report):
+    report = (tiny_report / "report.md").read_text()
+    shown = re.findall(r"!\[[^\]]*\]\(([^)]+)\)", report)
+    drawn = sorted(p.name for p in tiny_report.glob("*.png"))
+    assert sorted(shown) == drawn and len(drawn) == 5
+    for name in shown:  # a caption (a paragraph of text) right above each figure
+        before = report[: report.index(f"]({name})")].rstrip().rsplit("\n\n", 2)[-2]
+        assert len(before) > 40 and not before.startswith(("|", "!")), name
+    assert "background-only" in report and "black crosses" in report
+
+
+def test_convergence_curves_never_share_a_colour_and_line_style():
+    from sklearn_radar.reproduce._sections._figures import curve_styles
+
+    for n in (1, 14, 20, 40):
+        styles = curve_styles(n)
+        assert len(set(styles)) == n

@@ -99,13 +99,13 @@ from ._results import (
     RunResults,
     SearchRecord,
 )
-from ._sections._figures import CONVERGENCE, SCENE
-from ._sections._filter import HEATMAP
+from ._sections._figures import CONVERGENCE, SCENE, V1_BARS
+from ._sections._filter import FILTER_SCENE, HEATMAP
 
 #: The run marker: which run the folder holds and whether it is complete.
 RUN_MARKER = "run.json"
 #: Every file a run may write besides the marker (a previous run's are removed when a new one starts).
-RUN_FILES = ("report.md", "results.json", "params.json", HEATMAP, SCENE, CONVERGENCE)
+RUN_FILES = ("report.md", "results.json", "params.json", HEATMAP, FILTER_SCENE, V1_BARS, SCENE, CONVERGENCE)
 
 
 @dataclass
