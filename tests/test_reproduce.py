@@ -515,3 +515,36 @@ def test_convergence_curves_never_share_a_colour_and_line_style():
     for n in (1, 14, 20, 40):
         styles = curve_styles(n)
         assert len(set(styles)) == n
+
+
+def test_progress_estimates_the_run_and_shows_overall_progress_in_plain_lines(tiny_report):
+    text = (tiny_report.parent / "stdout.txt").read_text()
+    assert "\r" not in text and "\x1b" not in text  # readable in a file: no carriage returns, no escapes
+    lines = text.splitlines()
+    assert re.match(r"estimated run time: about \d+ (s|min|h)\b.*--full .* takes about \d", lines[1])
+    status = re.compile(r"\| run (\d+) %, (\d+:)?\d+:\d\d elapsed, about (\d+:)?\d+:\d\d left$")
+    done = [line for line in lines if re.match(r"\[\d+/9\] .* done in ", line)]
+    iterations = [line for line in lines if " iteration " in line]
+    assert len(done) == 9 and iterations
+    shares = [int(status.search(line).group(1)) for line in done]
+    assert all(status.search(line) for line in iterations)
+    assert shares == sorted(shares) and shares[0] < shares[-1] < 100  # the report itself is the rest
+    assert re.match(r"report written after \d+:\d\d in all \(estimated at the start: about ", lines[-2])
+
+
+def test_progress_durations_and_the_estimate_grow_with_the_budget():
+    from sklearn_radar.reproduce._progress import RunProgress, duration, step_cost
+    from sklearn_radar.reproduce._results import Budget
+
+    assert (duration(0), duration(75), duration(4000)) == ("0:00", "1:15", "1:06:40")
+    sizes = {"n_train": 90_000, "n_test": 85_000, "n_detections": 175_000}
+    for key in ("8", "13", "baselines"):
+        small = step_cost(key, Budget.default(), tuned=True, **sizes)
+        assert step_cost(key, Budget.full(), tuned=True, **sizes) > 5 * small > 0
+        bigger = {name: 6 * value for name, value in sizes.items()}
+        assert step_cost(key, Budget.default(), tuned=True, **bigger) > small
+    progress = RunProgress({"a": 1.0, "b": 3.0}, started=0.0)
+    progress.start("a")
+    progress.finish("a")
+    progress.start("b")
+    assert progress.status(0.5).startswith("run 62 %")  # (1 + 1.5) / 4

@@ -27,7 +27,8 @@ class ProgressPrinter:
         [stage 1] iteration  12/100  score 0.8123  best 0.8456  elapsed 34.2 s
 
     With ``n_points > 1`` skopt calls back once per batch; one line is still
-    printed per candidate.
+    printed per candidate.  Lines are plain (no carriage returns), so the
+    output reads the same piped to a file.
 
     Parameters
     ----------
@@ -38,6 +39,10 @@ class ProgressPrinter:
     stream : file-like or None, default=None
         Where to write; None means :data:`sys.stdout` at the time of printing
         (so that redirections made after construction are honoured).
+    status : callable or None, default=None
+        ``status(i, n) -> str`` after iteration ``i`` of ``n``, appended to
+        the line after ``" | "``: e.g. the overall progress of a longer run
+        that holds this search.
 
     Attributes
     ----------
@@ -47,10 +52,11 @@ class ProgressPrinter:
         Best score so far (-inf before the first candidate).
     """
 
-    def __init__(self, n_iter, label="", stream=None):
+    def __init__(self, n_iter, label="", stream=None, status=None):
         self.n_iter = n_iter
         self.label = label
         self.stream = stream
+        self.status = status
         self.scores = []
         self.best_score = -np.inf
         self._start = time.perf_counter()
@@ -82,9 +88,10 @@ class ProgressPrinter:
         for score in new:
             self.scores.append(float(score))
             self.best_score = max(self.best_score, float(score))
+            extra = "" if self.status is None else f" | {self.status(len(self.scores), self.n_iter)}"
             stream.write(
                 f"{prefix}iteration {len(self.scores):>{width}}/{self.n_iter}  score {score:.4f}  "
-                f"best {self.best_score:.4f}  elapsed {time.perf_counter() - self._start:.1f} s\n"
+                f"best {self.best_score:.4f}  elapsed {time.perf_counter() - self._start:.1f} s{extra}\n"
             )
         stream.flush()
 

@@ -78,6 +78,7 @@ from ._io import (
     remove_stale_temporaries,
     temporary_prefix,
 )
+from ._progress import REPORT_S, RunProgress, duration, rough, step_cost
 from ._report import write_report
 from ._results import (
     BaselineResult,
@@ -125,6 +126,8 @@ class Run:
     results : RunResults
     started : float
         ``time.perf_counter()`` at the start.
+    progress : RunProgress or None
+        The overall progress, shown on the progress lines.
     """
 
     out: Path
@@ -136,6 +139,7 @@ class Run:
     started: float = field(default_factory=time.perf_counter)
     run_id: str = field(default_factory=lambda: uuid.uuid4().hex)
     started_utc: str = field(default_factory=lambda: _utc_now())
+    progress: RunProgress | None = None
 
 
 #: The search objectives: name -> scorer(estimator, X, y) on the raw detection table.
@@ -284,6 +288,7 @@ def reproduce(
         f"data: {source}, {len(scenes.data):,} detections in {meta.data.n_sequences} sequences; "
         f"train {len(train):,} / test {len(test):,}; budget: {budget.label}, {budget.n_iter} iterations",
     )
+    run.progress = _estimate(run, keys, full=full, simulated=data is None)
     target = precluster_target(scenes.data, scenes.target)
     # The estimators' input: the measured columns only (no labels, no strings: cheap to hash for caching).
     X = scenes.data[[c for c in scenes.data.columns if c not in ("uuid", "track_id", "label_id")]]
@@ -295,11 +300,17 @@ def reproduce(
             context.cache = cache
             try:
                 for position, key in enumerate(keys, start=1):
-                    _say(run, f"[{position}/{len(keys)}] {_title(key)}")
+                    _say(run, f"[{position}/{len(keys)}] {_title(key)} | {run.progress.status()}")
                     start = time.perf_counter()
+                    run.progress.start(key)
                     _RUNNERS[_runner_of(key)](run, context, key)
+                    run.progress.finish(key)
                     meta.completed.append(key)
-                    _say(run, f"[{position}/{len(keys)}] {_title(key)} done in {time.perf_counter() - start:.1f} s")
+                    _say(
+                        run,
+                        f"[{position}/{len(keys)}] {_title(key)} done in {time.perf_counter() - start:.1f} s"
+                        f" | {run.progress.status()}",
+                    )
                     _save(run)
             except KeyboardInterrupt:
                 meta.interrupted = True
@@ -315,10 +326,52 @@ def reproduce(
     return run.results.to_json_dict(figures=True)
 
 
+def _estimate(run, keys, *, full, simulated):
+    """The run's cost model (:class:`RunProgress`), and a line saying how long this run and ``--full`` take."""
+    data = run.results.meta.data
+
+    def costs(budget, scale):
+        sizes = {
+            "n_train": data.n_train * scale,
+            "n_test": data.n_test * scale,
+            "n_detections": data.n_detections * scale,
+        }
+        steps = {key: step_cost(key, budget, tuned=_tuned(key), **sizes) for key in keys}
+        return {**steps, REPORT: REPORT_S}
+
+    progress = RunProgress(costs(run.budget, 1.0), run.started)
+    text = f"estimated run time: {rough(progress.total)} on an idle 2-core machine"
+    if not full:
+        # --full simulates the paper's data size; on a data folder it keeps the data and raises the budget.
+        default, paper = Budget.default(), Budget.full()
+        scale = (paper.n_sequences * paper.duration) / (default.n_sequences * default.duration) if simulated else 1.0
+        text += f"; --full (the paper's budget) takes {rough(sum(costs(paper, scale).values()))}"
+    _say(run, text + "; the progress lines below re-estimate the time left as the run goes")
+    return progress
+
+
+#: The last step of every run, for the progress: the figures and the report.
+REPORT = "report"
+
+
+def _tuned(key):
+    return key.isdigit() and get_experiment(int(key)).tuned
+
+
 def _finish(run, context, status):
     """Figures and report.md first, then results.json with the wall time, then the marker: readers see the end last."""
     run.results.meta.wall_time_s = time.perf_counter() - run.started
+    if run.progress is not None:
+        run.progress.start(REPORT)
+        _say(run, f"run {status}; drawing the figures and writing the report | {run.progress.status()}")
     write_report(run.out, run.results, context)
+    if run.progress is not None:
+        run.progress.finish(REPORT)
+        _say(
+            run,
+            f"report written after {duration(time.perf_counter() - run.started)} in all "
+            f"(estimated at the start: {rough(run.progress.total)})",
+        )
     _save(run)
     _write_marker(run, status)
 
@@ -505,8 +558,10 @@ def _score(context, pipeline):
     return v1, labels, instance
 
 
-def _tune(run, context, estimator, space, label, start_from=None):
+def _tune(run, context, estimator, space, label, start_from=None, part=0, parts=1):
     """Bayesian optimisation on the training half with grouped CV; returns (best params, SearchRecord).
+
+    ``part`` of ``parts`` says which of the step's searches this is, for the overall progress.
 
     ``start_from`` (e.g. the paper's optimum) is scored on the same folds as
     one more candidate and wins when the search found nothing better: a
@@ -534,7 +589,8 @@ def _tune(run, context, estimator, space, label, start_from=None):
         n_jobs=run.n_jobs,
         random_state=run.seed,
     )
-    printer = ProgressPrinter(budget.n_iter, label=label, stream=run.stream)
+    status = None if run.progress is None else run.progress.search_status(part, parts)
+    printer = ProgressPrinter(budget.n_iter, label=label, stream=run.stream, status=status)
     start = time.perf_counter()
     X, target = context.X.iloc[train], context.target[train]
     # The Gaussian process works on tiny matrices, where multi-threaded BLAS was 20x slower (measured).
@@ -707,11 +763,11 @@ _BASELINES = {
 def _run_baselines(run, context, key):
     """The clusterers a user would otherwise pick, on the same FCS + filter input, same budget and split."""
     baselines = run.results.baselines = {}
-    for name, (clusterer, space) in _BASELINES.items():
+    for part, (name, (clusterer, space)) in enumerate(_BASELINES.items()):
         start = time.perf_counter()
         pipeline = experiment_pipeline(FCS_BASELINE, memory=context.cache)
         pipeline.steps[-1] = ("cluster", clusterer())
-        params, search = _tune(run, context, pipeline, space, name)
+        params, search = _tune(run, context, pipeline, space, name, part=part, parts=len(_BASELINES))
         pipeline.set_params(**params)
         v1, labels, instance = _score(context, pipeline)
         baselines[name] = BaselineResult(

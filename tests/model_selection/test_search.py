@@ -97,6 +97,15 @@ def test_progress_printer_prints_one_line_per_candidate_of_a_batch():
     assert printer.scores == [0.5, 0.7, 0.6, 0.9] and printer.best_score == 0.9
 
 
+def test_progress_printer_appends_the_status_of_each_iteration():
+    stream = io.StringIO()
+    printer = ProgressPrinter(3, label="x", stream=stream, status=lambda i, n: f"run {i} of {n}")
+    printer(create_result([[0.1], [0.2]], [-0.5, -0.7]))
+    lines = stream.getvalue().splitlines()
+    assert [line.rsplit(" | ", 1)[1] for line in lines] == ["run 1 of 3", "run 2 of 3"]
+    assert "\r" not in stream.getvalue()
+
+
 def test_silent_by_default_and_callbacks_are_kept(scenes, capsys):
     seen = []
     search = make_bayes_search(

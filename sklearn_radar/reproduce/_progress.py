@@ -1,0 +1,141 @@
+"""The overall progress of a reproduce run: an estimate of its length at the start, elapsed time and ETA.
+
+Plain lines only (no carriage returns, no terminal control), so the output
+reads the same in a terminal and piped to a file.  The estimate is a cost
+model per step, calibrated on the default run and ``--full`` on an idle
+2-core machine; as steps finish, the remaining time is rescaled by how fast
+this machine actually went.
+"""
+
+from __future__ import annotations
+
+import time
+
+from ._constants import BASELINES, FILTER, FILTER_EFFECT, STAGE2
+from ._results import Budget
+
+#: Seconds per iteration of one search on about 90,000 training detections (:data:`REFERENCE_TRAIN`), by kind of
+#: step, measured on the default run on an idle 2-core machine (the four baselines together).
+PER_ITERATION = {"stage 1": 0.35, "stage 2": 1.1, BASELINES: 4.6}
+#: The training detections of that measurement.
+REFERENCE_TRAIN = 90_000
+#: How an iteration's time grows with the training detections: fitted to the default run (about 2 min) and
+#: ``--full`` (100 iterations on 6.4 times the data, about 1.5 h) on the same machine.
+SIZE_EXPONENT = 0.9
+#: Shortest time of one iteration (the optimiser's and the scoring's fixed costs), s, by kind of step.
+MIN_PER_ITERATION = {"stage 1": 0.25, "stage 2": 0.25, BASELINES: 1.2}
+#: Each search also scores the paper's setting and the kept one on the test half: about two iterations more.
+EXTRA_ITERATIONS = 2
+#: Seconds per detection of the steps without a search.
+PER_DETECTION = {FILTER: 1.2e-5, FILTER_EFFECT: 5e-6, "fixed": 2e-6}
+#: Seconds to draw the figures and write the report.
+REPORT_S = 6.0
+
+
+def step_cost(key, budget: Budget, n_train, n_test, n_detections, tuned):
+    """Estimated seconds of one step on an idle 2-core machine.
+
+    Parameters
+    ----------
+    key : str
+        Step key (``"filter"``, ``"8"``, ``"baselines"``, ...).
+    budget : Budget
+    n_train, n_test, n_detections : float
+        Detections of the training half, the test half and all of the data.
+    tuned : bool
+        Whether the step is an experiment with a search.
+
+    Returns
+    -------
+    seconds : float
+    """
+    if key == FILTER:
+        return PER_DETECTION[FILTER] * n_detections
+    if key == FILTER_EFFECT:
+        return PER_DETECTION[FILTER_EFFECT] * n_test
+    if key != BASELINES and not tuned:
+        return PER_DETECTION["fixed"] * n_test
+    kind = BASELINES if key == BASELINES else ("stage 2" if int(key) in STAGE2 else "stage 1")
+    scale = (max(n_train, 1) / REFERENCE_TRAIN) ** SIZE_EXPONENT
+    per_iteration = max(MIN_PER_ITERATION[kind], PER_ITERATION[kind] * scale)
+    return (budget.n_iter + EXTRA_ITERATIONS) * per_iteration
+
+
+def duration(seconds):
+    """``75`` -> ``"1:15"``, ``4000`` -> ``"1:06:40"``: a duration as [h:]mm:ss."""
+    seconds = max(0, round(seconds))
+    hours, rest = divmod(seconds, 3600)
+    minutes, seconds = divmod(rest, 60)
+    return f"{hours}:{minutes:02d}:{seconds:02d}" if hours else f"{minutes}:{seconds:02d}"
+
+
+def rough(seconds):
+    """A duration in words for the estimate: ``"about 2 min"``, ``"about 1.5 h"``."""
+    if seconds < 90:
+        return f"about {max(1, round(seconds / 10) * 10)} s"
+    if seconds < 3600:
+        return f"about {round(seconds / 60)} min"
+    return f"about {seconds / 3600:.1f} h"
+
+
+class RunProgress:
+    """Where a run stands: the share of its estimated work done, the time elapsed and the time left.
+
+    Parameters
+    ----------
+    costs : dict of str to float
+        Estimated seconds of each step, in run order (:func:`step_cost`).
+    started : float
+        ``time.perf_counter()`` at the start of the run.
+
+    Attributes
+    ----------
+    done : float
+        Estimated seconds of the work finished so far.
+    """
+
+    def __init__(self, costs, started):
+        self.costs = dict(costs)
+        self.total = sum(self.costs.values()) or 1.0
+        self.started = started
+        self.done = 0.0
+        self._current = None
+
+    def start(self, key):
+        """A step begins."""
+        self._current = key
+
+    def advance(self, fraction):
+        """The current step is ``fraction`` (0-1) done."""
+        return self._done_with(min(max(fraction, 0.0), 1.0))
+
+    def finish(self, key):
+        """A step ended."""
+        self.done += self.costs.get(key, 0.0)
+        self._current = None
+
+    def _done_with(self, fraction):
+        return self.done + (self.costs.get(self._current, 0.0) * fraction if self._current else 0.0)
+
+    def status(self, fraction=0.0):
+        """``"run 42 %, 0:53 elapsed, about 1:13 left"``, with ``fraction`` of the current step done."""
+        done = self._done_with(min(max(fraction, 0.0), 1.0))
+        elapsed = time.perf_counter() - self.started
+        share = done / self.total
+        # The machine's speed relative to the estimate, once a few percent of the work tells it.
+        speed = elapsed / done if share >= 0.03 and done > 0 else 1.0
+        left = (self.total - done) * speed
+        return f"run {100 * share:.0f} %, {duration(elapsed)} elapsed, about {duration(left)} left"
+
+    def search_status(self, part=0, parts=1):
+        """A ``status`` for :class:`~sklearn_radar.model_selection.ProgressPrinter` of search ``part`` of ``parts``.
+
+        Returns
+        -------
+        status : callable
+            ``status(i, n) -> str`` after iteration ``i`` of ``n``.
+        """
+        return lambda i, n: self.status((part + i / max(n, 1)) / parts)
+
+
+__all__ = ["REPORT_S", "RunProgress", "duration", "rough", "step_cost"]
