@@ -240,7 +240,10 @@ def reproduce(
     seed : int, default=0
         Random seed of the simulated data, the split and the searches.
     stream : file-like, default=None
-        Progress output; None: standard output.
+        Progress output; None: standard output.  Plain lines (no carriage
+        returns): first an estimate of the run's length (and of ``full``'s),
+        then one line per step and per search iteration with the overall
+        progress, the time elapsed and the time left.
     objective : {"v1", "pq"}, default="v1"
         What every search maximises on the training half, and what ranks
         ``params.json``'s ``best``: ``"v1"`` the paper's radar V-measure,
