@@ -4,14 +4,49 @@ scikit-optimize is archived upstream; its last release, 0.10.2, comes from a
 community fork and is pinned in ``pyproject.toml``.  Everything in
 sklearn-radar that needs Bayesian optimisation imports it from here, so the
 backend can be swapped (for example for a maintained fork) in one place.
+
+:class:`BayesSearchCV` here is skopt's with one saving: when a step asks for
+a single candidate, the optimiser returns the point that its last ``tell``
+already chose (skopt's ask-and-tell protocol, as ``gp_minimize`` uses it)
+instead of refitting the Gaussian process on a copy and then once more on a
+discarded "constant liar" point.  A guided step fits one Gaussian process
+instead of three (measured: about 3x less time in skopt per guided step);
+the candidates are chosen by the same model and acquisition, from different
+random draws.  Batches of ``n_points > 1`` keep skopt's constant-liar strategy.
 """
 
 try:
-    from skopt import BayesSearchCV
+    from skopt import BayesSearchCV as _SkoptBayesSearchCV
+    from skopt import Optimizer as _SkoptOptimizer
     from skopt.space import Categorical, Integer, Real
+    from skopt.utils import dimensions_aslist
 except ImportError as error:  # pragma: no cover - exercised only on a broken install
     raise ImportError(
         "sklearn-radar needs scikit-optimize==0.10.2 for Bayesian optimisation: pip install 'scikit-optimize==0.10.2'"
     ) from error
 
-__all__ = ["BayesSearchCV", "Categorical", "Integer", "Real"]
+
+class Optimizer(_SkoptOptimizer):
+    """skopt's Optimizer; ``ask(n_points=1)`` returns the point of the last ``tell`` (no refit on a copy)."""
+
+    def ask(self, n_points=None, strategy="cl_min"):
+        if n_points == 1:
+            return [self._ask()]
+        return super().ask(n_points=n_points, strategy=strategy)
+
+
+class BayesSearchCV(_SkoptBayesSearchCV):
+    """skopt's BayesSearchCV whose optimisers are :class:`Optimizer` (one GP fit per single-candidate step)."""
+
+    def _make_optimizer(self, params_space):
+        kwargs = self.optimizer_kwargs_.copy()
+        kwargs["dimensions"] = dimensions_aslist(params_space)
+        optimizer = Optimizer(**kwargs)
+        names = sorted(params_space.keys())
+        for i, dimension in enumerate(optimizer.space.dimensions):
+            if dimension.name is None:
+                dimension.name = names[i]
+        return optimizer
+
+
+__all__ = ["BayesSearchCV", "Categorical", "Integer", "Optimizer", "Real"]

@@ -548,3 +548,26 @@ def test_progress_durations_and_the_estimate_grow_with_the_budget():
     progress.finish("a")
     progress.start("b")
     assert progress.status(0.5).startswith("run 62 %")  # (1 + 1.5) / 4
+
+
+@pytest.mark.parametrize("number", [3, 8, 13])
+def test_a_fold_scored_as_fitted_scores_as_a_fresh_fit(number):
+    # reproduce's folds train and test on the same rows, so the scorer takes the labels of the search's fit
+    # instead of fitting again: the score must be exactly that of the plain scorer on a fresh fit.
+    from sklearn.base import clone
+
+    from sklearn_radar.experiments import experiment_pipeline
+    from sklearn_radar.metrics import panoptic_quality_scorer, precluster_target, radar_v_measure_scorer
+    from sklearn_radar.reproduce._run import _scored_as_fitted
+
+    scenes = make_scenes(n_sequences=2, duration=4.0, random_state=3)
+    X = scenes.data[[c for c in scenes.data.columns if c not in ("uuid", "track_id", "label_id")]]
+    y = precluster_target(scenes.data, scenes.target)
+    pipeline = experiment_pipeline(number)
+    for scorer in (radar_v_measure_scorer, panoptic_quality_scorer):
+        fresh = scorer(clone(pipeline), X, y)
+        fitted = clone(pipeline).fit(X, y)
+        assert _scored_as_fitted(scorer)(fitted, X, y) == fresh
+        assert 0.0 < fresh <= 1.0
+    # Fitted on other rows: scored as a failed fit, never as the labels of other rows.
+    assert _scored_as_fitted(radar_v_measure_scorer)(clone(pipeline).fit(X.iloc[:100]), X, y) == 0.0

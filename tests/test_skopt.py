@@ -39,3 +39,35 @@ def test_bayes_search_tunes_a_clusterer_with_grouped_cv():
         assert 0.05 <= params["eps"] <= 3.0 and 2 <= params["min_samples"] <= 10
     assert search.best_score_ == max(results["mean_test_score"])
     assert search.best_params_ == results["params"][int(np.argmax(results["mean_test_score"]))]
+
+
+def test_a_single_candidate_step_fits_one_gaussian_process(monkeypatch):
+    # skopt's own ask(n_points=1) refits the GP on a copy and once more on a discarded "lie": 3 fits per guided
+    # step.  The shim's optimiser proposes the point its last tell chose, so the search fits one GP per tell
+    # from the end of the random phase on: n_iter - n_initial_points + 1 fits.
+    from skopt.learning import GaussianProcessRegressor
+
+    fits = []
+    original = GaussianProcessRegressor.fit
+
+    def counting_fit(self, X, y):
+        fits.append(len(X))
+        return original(self, X, y)
+
+    monkeypatch.setattr(GaussianProcessRegressor, "fit", counting_fit)
+    X, y = make_blobs(n_samples=120, centers=3, cluster_std=0.5, random_state=0)
+    search = BayesSearchCV(
+        DBSCAN(),
+        {"eps": Real(0.05, 3.0), "min_samples": Integer(2, 10)},
+        n_iter=8,
+        cv=GroupKFold(n_splits=2),
+        scoring=_fit_predict_v_measure,
+        optimizer_kwargs={"n_initial_points": 4},
+        error_score=0.0,
+        random_state=0,
+    )
+    search.fit(X, y, groups=np.arange(len(X)) % 2)
+    assert fits == [4, 5, 6, 7, 8]
+    # Each guided candidate is the point the previous tell chose, so none is evaluated twice.
+    points = [tuple(p.values()) for p in search.cv_results_["params"]]
+    assert len(set(points)) == len(points)

@@ -585,7 +585,7 @@ def _tune(run, context, estimator, space, label, start_from=None, part=0, parts=
     search = make_bayes_search(
         estimator,
         space,
-        scoring=scorer,
+        scoring=_scored_as_fitted(scorer),  # each fold is its own training side: score the labels of its fit
         n_iter=budget.n_iter,
         n_initial_points=budget.n_initial_points,
         cv=cv,
@@ -615,6 +615,36 @@ def _tune(run, context, estimator, space, label, start_from=None, part=0, parts=
         search_wall_time_s=time.perf_counter() - start,
     )
     return best, record
+
+
+class _FittedLabels:
+    """An estimator just fitted on the rows it is scored on: ``fit_predict`` returns the labels of that fit."""
+
+    def __init__(self, estimator):
+        self.estimator = estimator
+
+    def fit_predict(self, X, y=None):
+        clusterer = self.estimator[-1] if hasattr(self.estimator, "steps") else self.estimator
+        labels = clusterer.labels_
+        if len(labels) != len(X):  # not fitted on these rows: a misuse, which the scorer scores as a failed fit
+            raise ValueError(f"labels of {len(labels)} rows for {len(X)} scored rows")
+        return labels
+
+
+def _scored_as_fitted(scorer):
+    """``scorer`` for folds whose training rows are their test rows: the search's fit is not repeated.
+
+    scikit-learn fits each candidate on the training side of a fold, then
+    calls the scorer, which fits it again on the test side (a clusterer has
+    no out-of-sample predict).  With equal sides the second fit computes the
+    same labels as the first (the clusterers are deterministic), so the
+    scorer gets them from the first: half the clustering work, same scores.
+    """
+
+    def score(estimator, X, y):
+        return scorer(_FittedLabels(estimator), X, y)
+
+    return score
 
 
 def _with_cluster_gate(space, stage, objective):
