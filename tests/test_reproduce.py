@@ -571,3 +571,52 @@ def test_a_fold_scored_as_fitted_scores_as_a_fresh_fit(number):
         assert 0.0 < fresh <= 1.0
     # Fitted on other rows: scored as a failed fit, never as the labels of other rows.
     assert _scored_as_fitted(radar_v_measure_scorer)(clone(pipeline).fit(X.iloc[:100]), X, y) == 0.0
+
+
+@pytest.mark.parametrize("number", [3, 13, "baseline"])
+def test_tune_searches_exactly_as_the_plain_pipeline_search(number):
+    # _tune runs stage 0 once and the search on the last step alone, scoring each fold with the labels of
+    # its own fit: the candidates and scores must be those of the plain search of the whole pipeline
+    # (every fit repeated, stage 0 per fold) with the same seed.
+    import io
+    from types import SimpleNamespace
+
+    from sklearn.model_selection import GroupKFold
+
+    from sklearn_radar.cluster import WindowedDBSCAN
+    from sklearn_radar.experiments import experiment_pipeline, search_space
+    from sklearn_radar.metrics import precluster_target, radar_v_measure_scorer
+    from sklearn_radar.model_selection import make_bayes_search
+    from sklearn_radar.reproduce._results import Budget
+    from sklearn_radar.reproduce._run import _BASELINES, _tune
+
+    scenes = make_scenes(n_sequences=4, duration=3.0, random_state=5)
+    X = scenes.data[[c for c in scenes.data.columns if c not in ("uuid", "track_id", "label_id")]]
+    target = precluster_target(scenes.data, scenes.target)
+    train = np.flatnonzero(np.isin(scenes.groups, np.unique(scenes.groups)[:3]))
+    if number == "baseline":
+        pipeline = experiment_pipeline(3)
+        pipeline.steps[-1] = ("cluster", WindowedDBSCAN())
+        space = _BASELINES["sklearn DBSCAN per 0.25 s window"][1]
+    else:
+        pipeline, space = experiment_pipeline(number), search_space(number)
+    budget = Budget(label="test", n_iter=5, n_initial_points=2, cv_folds=2)
+    run = SimpleNamespace(
+        budget=budget,
+        seed=1,
+        n_jobs=None,
+        progress=None,
+        stream=io.StringIO(),
+        results=SimpleNamespace(meta=SimpleNamespace(objective="v1")),
+    )
+    context = SimpleNamespace(X=X, target=target, train=train, scenes=scenes)
+    best, record = _tune(run, context, pipeline, space, "test")
+
+    groups = scenes.groups[train]
+    cv = [(rows, rows) for _, rows in GroupKFold(n_splits=2).split(train, groups=groups)]
+    plain = make_bayes_search(
+        pipeline, space, scoring=radar_v_measure_scorer, n_iter=5, n_initial_points=2, cv=cv, random_state=1
+    ).fit(X.iloc[train], target[train], groups=groups)
+    assert record.convergence == [float(s) for s in plain.cv_results_["mean_test_score"]]
+    assert best == {key: (v.item() if hasattr(v, "item") else v) for key, v in plain.best_params_.items()}
+    assert record.cv_best == plain.best_score_

@@ -582,9 +582,19 @@ def _tune(run, context, estimator, space, label, start_from=None, part=0, parts=
     else:
         cv = [(rows, rows) for _, rows in GroupKFold(n_splits=n_folds).split(train, groups=groups)]
     scorer = OBJECTIVES[run.results.meta.objective]
+    start = time.perf_counter()
+    X, target = context.X.iloc[train], context.target[train]
+    searched, searched_space, X_searched, prefix = estimator, space, X, ""
+    fixed = _fixed_stage0(estimator, space)
+    if fixed is not None:
+        # Stage 0 once for every candidate and fold: it works per sequence and a fold holds whole sequences,
+        # so the fold's rows of the transformed half are the transformed fold (tested).
+        stage0, searched, prefix = fixed
+        X_searched = stage0.fit_transform(X)
+        searched_space = {key[len(prefix) :]: dimension for key, dimension in space.items()}
     search = make_bayes_search(
-        estimator,
-        space,
+        searched,
+        searched_space,
         scoring=_scored_as_fitted(scorer),  # each fold is its own training side: score the labels of its fit
         n_iter=budget.n_iter,
         n_initial_points=budget.n_initial_points,
@@ -592,15 +602,15 @@ def _tune(run, context, estimator, space, label, start_from=None, part=0, parts=
         n_jobs=run.n_jobs,
         random_state=run.seed,
     )
+    search.set_params(refit=False)  # only the best parameters are used, never a refitted estimator
     status = None if run.progress is None else run.progress.search_status(part, parts)
     printer = ProgressPrinter(budget.n_iter, label=label, stream=run.stream, status=status)
-    start = time.perf_counter()
-    X, target = context.X.iloc[train], context.target[train]
     # The Gaussian process works on tiny matrices, where multi-threaded BLAS was 20x slower (measured).
     with threadpool_limits(limits=1, user_api="blas"):
-        search.fit(X, target, groups=groups, callback=printer)
+        search.fit(X_searched, target, groups=groups, callback=printer)
     convergence = [float(s) for s in search.cv_results_["mean_test_score"]]
-    best, cv_best, source, known = _native(search.best_params_), float(search.best_score_), SOURCE_SEARCH, None
+    best = {prefix + key: value for key, value in _native(search.best_params_).items()}
+    cv_best, source, known = float(search.best_score_), SOURCE_SEARCH, None
     if start_from:
         candidate = clone(estimator).set_params(**start_from)
         known = float(np.mean([scorer(clone(candidate), X.iloc[rows], target[rows]) for _, rows in cv]))
@@ -615,6 +625,23 @@ def _tune(run, context, estimator, space, label, start_from=None, part=0, parts=
         search_wall_time_s=time.perf_counter() - start,
     )
     return best, record
+
+
+def _fixed_stage0(estimator, space):
+    """(stage 0, last step, its parameter prefix) of a pipeline whose search tunes only the last step, else None.
+
+    Stage 0 (frame transform, filter) then computes the same for every
+    candidate, so the search can run on its output once, with the last step
+    alone as the estimator.
+    """
+    steps = getattr(estimator, "steps", None)
+    if not steps or len(steps) < 2:
+        return None
+    name, last = steps[-1]
+    prefix = f"{name}__"
+    if not all(key.startswith(prefix) for key in space):
+        return None
+    return clone(estimator[:-1]).set_params(memory=None), clone(last), prefix
 
 
 class _FittedLabels:
