@@ -131,6 +131,44 @@ def _pair_distance(i, j, points, crit):
     return math.sqrt(dx * dx + dy * dy + dv * dv / (crit.vr_scale * crit.vr_scale)) / crit.eps_xyv
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _advance(times, position, end, bound, inclusive):
+    """First position from ``position`` on whose time exceeds ``bound`` (``>=`` it unless ``inclusive``).
+
+    Walks a few steps (the usual case: the window moved by one scan), then
+    falls back to a binary search over the rest of the run.
+    """
+    for _ in range(8):
+        if position >= end:
+            return position
+        if times[position] > bound or (not inclusive and times[position] == bound):
+            return position
+        position += 1
+    side_right = inclusive
+    if side_right:
+        return position + np.searchsorted(times[position:end], bound, side="right")
+    return position + np.searchsorted(times[position:end], bound, side="left")
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _window(times, start, end, lo, hi, fresh, t_low, t_high):
+    """Positions [lo, hi) of a time-sorted run within [t_low, t_high].
+
+    ``fresh``: the first query of this run for the current cell (two binary
+    searches); otherwise ``lo`` and ``hi`` are the previous answer for an
+    earlier or equal time and only move forward.
+    """
+    if fresh:
+        return time_range(times, start, end, t_low, t_high)
+    lo = _advance(times, lo, end, t_low, False)
+    hi = _advance(times, max(hi, lo), end, t_high, True)
+    return lo, hi
+
+
+#: Order in which pass 1 visits the 3 x 3 neighbour cells: its own cell (slot 4) first, where neighbours are likeliest.
+_OWN_FIRST = np.array([4, 0, 1, 2, 3, 5, 6, 7, 8], dtype=np.int64)
+
+
 @numba.njit(cache=True, nogil=True)
 def _dbscan_sorted(points, min_points, can_be_core, cell_x, cell_y, cell_keys, cell_start, cell_end, crit):
     """DBSCAN on grid-sorted points; returns (root per point or -1, core flags).
@@ -141,26 +179,40 @@ def _dbscan_sorted(points, min_points, can_be_core, cell_x, cell_y, cell_keys, c
     a non-core point joins the cluster of its closest core neighbour.
     Passes 2 and 3 visit core points only, so static clutter that cannot be
     core costs one capped count, however dense it is.
+
+    Each pass visits the points cell by cell in time order, so the time
+    window within each neighbour cell only moves forward: it is found by a
+    binary search at the first point of a cell and then by a few steps.
     """
     t, eps_t = points.t, crit.eps_t
     n = len(t)
     n_cells = len(cell_keys)
     cells = neighbor_cells(cell_keys, cell_start, cell_x, cell_y)
     point_cell = point_cells(cell_start, cell_end, n)
+    lo = np.zeros(9, dtype=np.int64)
+    hi = np.zeros(9, dtype=np.int64)
+    owner = np.full(9, -1, dtype=np.int64)  # the cell whose points the window of each slot was last found for
 
-    # Pass 1: core points, counting neighbours up to the number needed.
+    # Pass 1: core points, counting neighbours up to the number needed (own cell first).
     core = np.zeros(n, dtype=np.bool_)
     for i in range(n):
         if not can_be_core[i]:
             continue
         need = max(math.ceil(min_points[i]) - 1, 0)
         count = 0
-        for k in range(9):
-            c = cells[point_cell[i], k]
-            if c < 0 or count >= need:
+        own = point_cell[i]
+        for kk in range(9):
+            if count >= need:
+                break
+            k = _OWN_FIRST[kk]
+            c = cells[own, k]
+            if c < 0:
                 continue
-            lo, hi = time_range(t, cell_start[c], cell_end[c], t[i] - eps_t, t[i] + eps_t)
-            for j in range(lo, hi):
+            lo[k], hi[k] = _window(
+                t, cell_start[c], cell_end[c], lo[k], hi[k], owner[k] != own, t[i] - eps_t, t[i] + eps_t
+            )
+            owner[k] = own
+            for j in range(lo[k], hi[k]):
                 if j == i:
                     continue
                 if _spatial_neighbor(i, j, points, crit):
@@ -182,14 +234,18 @@ def _dbscan_sorted(points, min_points, can_be_core, cell_x, cell_y, cell_keys, c
 
     # Pass 2: join neighbouring core points; each pair is visited once, from its lower cell.
     parent = np.arange(n)
+    owner[:] = -1
     for i in core_position:
         own = point_cell[i]
         for k in range(9):
             c = cells[own, k]
             if c < own or core_end[c] == core_start[c]:
                 continue
-            lo, hi = time_range(core_t, core_start[c], core_end[c], t[i] - eps_t, t[i] + eps_t)
-            for m in range(lo, hi):
+            lo[k], hi[k] = _window(
+                core_t, core_start[c], core_end[c], lo[k], hi[k], owner[k] != own, t[i] - eps_t, t[i] + eps_t
+            )
+            owner[k] = own
+            for m in range(lo[k], hi[k]):
                 j = core_position[m]
                 if c == own and j <= i:
                     continue
@@ -198,17 +254,22 @@ def _dbscan_sorted(points, min_points, can_be_core, cell_x, cell_y, cell_keys, c
 
     # Pass 3: roots; a non-core point takes its closest core neighbour's.
     roots = np.full(n, -1, dtype=np.int64)
+    owner[:] = -1
     for i in range(n):
         if core[i]:
             roots[i] = find(parent, i)
             continue
+        own = point_cell[i]
         closest, closest_distance = -1, np.inf
         for k in range(9):
-            c = cells[point_cell[i], k]
+            c = cells[own, k]
             if c < 0 or core_end[c] == core_start[c]:
                 continue
-            lo, hi = time_range(core_t, core_start[c], core_end[c], t[i] - eps_t, t[i] + eps_t)
-            for m in range(lo, hi):
+            lo[k], hi[k] = _window(
+                core_t, core_start[c], core_end[c], lo[k], hi[k], owner[k] != own, t[i] - eps_t, t[i] + eps_t
+            )
+            owner[k] = own
+            for m in range(lo[k], hi[k]):
                 j = core_position[m]
                 if _spatial_neighbor(i, j, points, crit):
                     d = _pair_distance(i, j, points, crit)
