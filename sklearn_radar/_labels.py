@@ -10,6 +10,7 @@
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 
 
@@ -49,9 +50,28 @@ def consecutive_labels(roots) -> np.ndarray:
     labels : ndarray of int64, shape (n,)
     """
     roots = np.asarray(roots)
+    if roots.dtype.kind in "iu" and len(roots) and roots.max() < 4 * len(roots) + 1024:
+        return _number_by_first_row(roots.astype(np.int64, copy=False))  # row-number roots: linear time
     labels = np.full(len(roots), -1, dtype=np.int64)
     clustered = roots >= 0
     labels[clustered] = rank_by_first_appearance(roots[clustered])
+    return labels
+
+
+@numba.njit(cache=True, nogil=True)
+def _number_by_first_row(roots):
+    """:func:`consecutive_labels` of small non-negative integer keys (-1 or any negative: noise), in one pass."""
+    number = np.full(max(roots.max(), 0) + 1, -1, dtype=np.int64)
+    labels = np.full(len(roots), -1, dtype=np.int64)
+    next_label = 0
+    for i in range(len(roots)):
+        key = roots[i]
+        if key < 0:
+            continue
+        if number[key] < 0:
+            number[key] = next_label
+            next_label += 1
+        labels[i] = number[key]
     return labels
 
 

@@ -51,7 +51,7 @@ def build_grid(x, y, t, cell_size) -> GridIndex:
     cell_x = _cell_coordinates(x, cell_size, "x")
     cell_y = _cell_coordinates(y, cell_size, "y")
     keys = cell_x * _KEY_SHIFT + (cell_y + _KEY_OFFSET)
-    order = np.lexsort((t, keys))
+    order = _cell_time_order(cell_x, cell_y, t)
     keys = keys[order]
     first = np.flatnonzero(np.r_[True, keys[1:] != keys[:-1]]) if len(keys) else np.zeros(0, np.int64)
     return GridIndex(
@@ -65,6 +65,40 @@ def build_grid(x, y, t, cell_size) -> GridIndex:
         cell_start=first.astype(np.int64),
         cell_end=np.r_[first[1:], len(keys)].astype(np.int64),
     )
+
+
+def _cell_time_order(cell_x, cell_y, t):
+    """``np.lexsort((t, keys))``: by cell (x major, y minor), then time, then row; linear when the grid is compact.
+
+    When the occupied bounding box has at most about 16 cells per point, a
+    stable counting sort by cell of the time-sorted rows gives the same
+    order as the comparison sort, in linear time.
+    """
+    n = len(t)
+    if n == 0:
+        return np.zeros(0, dtype=np.int64)
+    x_low, y_low = cell_x.min(), cell_y.min()
+    width = int(cell_y.max() - y_low) + 1
+    n_boxes = (int(cell_x.max() - x_low) + 1) * width
+    if n_boxes > 16 * n + 65536:  # a sparse bounding box: the counts would cost more than the sort
+        return np.lexsort((t, cell_x * _KEY_SHIFT + (cell_y + _KEY_OFFSET)))
+    by_time = np.arange(n) if np.all(t[1:] >= t[:-1]) else np.argsort(t, kind="stable")
+    return _counting_order((cell_x - x_low) * width + (cell_y - y_low), by_time, n_boxes)
+
+
+@numba.njit(cache=True, nogil=True)
+def _counting_order(box, by_time, n_boxes):
+    """Stable counting sort of the rows ``by_time`` by their ``box`` number."""
+    count = np.zeros(n_boxes + 1, dtype=np.int64)
+    for i in range(len(box)):
+        count[box[i] + 1] += 1
+    for b in range(n_boxes):
+        count[b + 1] += count[b]
+    order = np.empty(len(box), dtype=np.int64)
+    for i in by_time:
+        order[count[box[i]]] = i
+        count[box[i]] += 1
+    return order
 
 
 def _cell_coordinates(values, cell_size, name):
@@ -112,19 +146,30 @@ def count_neighbors(grid: GridIndex, radius, before, after, cap) -> np.ndarray:
 
 @numba.njit(cache=True, nogil=True)
 def neighbor_cells(cell_keys, cell_start, cell_x, cell_y):
-    """For each occupied cell, the indices of its 3 x 3 neighbourhood in the cell table (-1: empty)."""
+    """For each occupied cell, the indices of its 3 x 3 neighbourhood in the cell table (-1: empty).
+
+    Slot ``3 * (dx + 1) + (dy + 1)`` holds the cell at offset (dx, dy).  The
+    keys are sorted and a neighbour's key grows with the cell's, so one
+    forward-moving position per column offset finds them all: linear in the
+    number of cells.
+    """
     n_cells = len(cell_keys)
     table = np.full((n_cells, 9), -1, dtype=np.int64)
+    position = np.zeros(3, dtype=np.int64)
     for c in range(n_cells):
         first = cell_start[c]
-        k = 0
         for dx in range(-1, 2):
-            for dy in range(-1, 2):
-                key = (cell_x[first] + dx) * 4294967296 + (cell_y[first] + dy + 2147483648)
-                found = np.searchsorted(cell_keys, key)
-                if found < n_cells and cell_keys[found] == key:
-                    table[c, k] = found
-                k += 1
+            low = (cell_x[first] + dx) * 4294967296 + (cell_y[first] - 1 + 2147483648)
+            q = position[dx + 1]
+            while q < n_cells and cell_keys[q] < low:
+                q += 1
+            position[dx + 1] = q
+            for dy in range(3):
+                key = low + dy
+                while q < n_cells and cell_keys[q] < key:
+                    q += 1
+                if q < n_cells and cell_keys[q] == key:
+                    table[c, 3 * (dx + 1) + dy] = q
     return table
 
 

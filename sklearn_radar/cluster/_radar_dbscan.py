@@ -6,7 +6,7 @@ from numbers import Integral, Real
 from typing import ClassVar
 
 import numpy as np
-from joblib import Parallel, delayed
+from joblib import Parallel, delayed, effective_n_jobs
 from sklearn.base import BaseEstimator, ClusterMixin, _fit_context
 from sklearn.utils._param_validation import Interval, StrOptions, validate_params
 
@@ -260,9 +260,12 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
         sequence = None if c["sequence"] is None else c["sequence"][active_rows]
         slices = [active_rows[part] for part in sequence_slices(sequence)]
         cluster = self._cluster_sequence_causal if self.causal else self._cluster_sequence
-        results = Parallel(n_jobs=self.n_jobs, prefer="threads")(
-            delayed(cluster)(rows, c, min_points, can_be_core) for rows in slices
-        )
+        if len(slices) > 1 and effective_n_jobs(self.n_jobs) > 1:
+            results = Parallel(n_jobs=self.n_jobs, prefer="threads")(
+                delayed(cluster)(rows, c, min_points, can_be_core) for rows in slices
+            )
+        else:  # one thread: no pool to set up (a tenth of a 10,000-detection fit)
+            results = [cluster(rows, c, min_points, can_be_core) for rows in slices]
         for rows, sequence_roots, sequence_core in results:
             roots_to_rows(rows, sequence_roots, roots)  # roots as global row numbers
             core[rows] = sequence_core

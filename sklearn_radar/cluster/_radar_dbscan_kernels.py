@@ -235,8 +235,10 @@ def _dbscan_sorted(points, min_points, can_be_core, cell_x, cell_y, cell_keys, c
     # Pass 2: join neighbouring core points; each pair is visited once, from its lower cell.
     parent = np.arange(n)
     owner[:] = -1
-    for i in core_position:
+    for position in range(len(core_position)):
+        i = core_position[position]
         own = point_cell[i]
+        root_i = find(parent, i)  # stays i's root: only unions with i happen until the next i
         for k in range(9):
             c = cells[own, k]
             if c < own or core_end[c] == core_start[c]:
@@ -245,12 +247,16 @@ def _dbscan_sorted(points, min_points, can_be_core, cell_x, cell_y, cell_keys, c
                 core_t, core_start[c], core_end[c], lo[k], hi[k], owner[k] != own, t[i] - eps_t, t[i] + eps_t
             )
             owner[k] = own
-            for m in range(lo[k], hi[k]):
+            # In its own cell, i meets only the core points after it (the earlier ones met i).
+            for m in range(max(lo[k], position + 1) if c == own else lo[k], hi[k]):
                 j = core_position[m]
-                if c == own and j <= i:
-                    continue
                 if _spatial_neighbor(i, j, points, crit):
-                    union_keep_smaller(parent, i, j)
+                    root_j = find(parent, j)  # union_keep_smaller(parent, i, j) with i's root known
+                    if root_j < root_i:
+                        parent[root_i] = root_j
+                        root_i = root_j
+                    elif root_i < root_j:
+                        parent[root_j] = root_i
 
     # Pass 3: roots; a non-core point takes its closest core neighbour's.
     roots = np.full(n, -1, dtype=np.int64)
