@@ -503,9 +503,14 @@ def test_the_report_shows_every_figure_it_drew_with_a_caption(tiny_report):
     shown = re.findall(r"!\[[^\]]*\]\(([^)]+)\)", report)
     drawn = sorted(p.name for p in tiny_report.glob("*.png"))
     assert sorted(shown) == drawn and len(drawn) == 5
-    for name in shown:  # a caption (a paragraph of text) right above each figure
-        before = report[: report.index(f"]({name})")].rstrip().rsplit("\n\n", 2)[-2]
-        assert len(before) > 40 and not before.startswith(("|", "!")), name
+    for match in re.finditer(r"!\[[^\]]*\]\(([^)]+)\)", report):  # a caption (a paragraph) right above each
+        caption = report[: match.start()].rstrip().rsplit("\n\n", 1)[-1]
+        assert len(caption) > 40 and not caption.startswith(("|", "!", "#")), match.group(1)
+    glance = report.split("## At a glance", 1)[1].split("\n## ", 1)[0]
+    assert all(f"]({name})" in glance for name in drawn)  # the summary links every figure
+    findings = report.split("## The paper's findings, checked", 1)[1]
+    held, total = findings.count("**holds**"), findings.count("**holds**") + findings.count("**does not hold**")
+    assert f"the paper's findings: {held} of {total} hold here" in glance
     assert "background-only" in report and "black crosses" in report
 
 

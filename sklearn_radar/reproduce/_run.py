@@ -513,7 +513,9 @@ def _run_filter(run, context, key):
 def _statistics(scenes):
     """The data's statistics (:func:`scene_statistics`) as JSON numbers and as text."""
     summary, table = scene_statistics(scenes)
-    return DataStatistics(summary=_native(summary), text=format_statistics(summary, table))
+    # The plain numbers and words of the summary; anything richer stays in the text.
+    numbers = {key: value for key, value in _native(summary).items() if isinstance(value, (bool, int, float, str))}
+    return DataStatistics(summary=numbers, text=format_statistics(summary, table))
 
 
 def _error_windows(scenes, window=0.15, min_kept=0.75):

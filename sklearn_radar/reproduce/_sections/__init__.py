@@ -8,12 +8,25 @@ raw dictionaries.  To add a section (a metric, a data preset, a figure):
 write a module here with its ``SECTION`` and add it to :data:`SECTIONS`.
 """
 
-from . import _baselines, _comparison, _data, _figures, _filter, _filter_effect, _header, _instance, _stage1, _stage2
+from . import (
+    _baselines,
+    _comparison,
+    _data,
+    _figures,
+    _filter,
+    _filter_effect,
+    _header,
+    _instance,
+    _stage1,
+    _stage2,
+    _summary,
+)
 from ._base import Section
 
 #: The report's sections, in order.  Figures are drawn in this order too, before any markdown is written.
 SECTIONS: tuple[Section, ...] = (
     _header.SECTION,
+    _summary.SECTION,
     _data.SECTION,
     _filter.SECTION,
     _stage1.SECTION,

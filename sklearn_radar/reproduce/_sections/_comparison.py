@@ -114,22 +114,33 @@ FILTER_FINDINGS = (
 )
 
 
-def markdown(results: RunResults) -> list[str]:
-    """Each finding whose experiments (or filter tables) ran: holds or not, with the numbers; [] when none can be."""
+def checked(results: RunResults):
+    """Every finding that this run can check: (text, holds, the numbers that decide it), in the report's order.
+
+    Returns
+    -------
+    checks : list of (str, bool, str)
+    """
     v1 = results.v1_test()
     checks = []
     if results.filter is not None:
         for finding in FILTER_FINDINGS:
             outcome = finding.check(results.filter)
             if outcome is not None:
-                holds, values = outcome
-                verdict = "holds" if holds else "does not hold"
-                checks.append(f"- {finding.text}: **{verdict}** here ({values}).")
+                checks.append((finding.text, *outcome))
     for finding in FINDINGS:
         if all(n in v1 for n in finding.numbers):
             values = ", ".join(f"#{n} {percent(v1[n])}" for n in finding.numbers)
-            verdict = "holds" if finding.holds(v1) else "does not hold"
-            checks.append(f"- {finding.text}: **{verdict}** here ({values}).")
+            checks.append((finding.text, finding.holds(v1), values))
+    return checks
+
+
+def markdown(results: RunResults) -> list[str]:
+    """Each finding whose experiments (or filter tables) ran: holds or not, with the numbers; [] when none can be."""
+    checks = [
+        f"- {text}: **{'holds' if holds else 'does not hold'}** here ({values})."
+        for text, holds, values in checked(results)
+    ]
     if not checks:
         return []
     reduced = ", and this run used a reduced budget." if results.meta.budget.reduced else "."

@@ -118,8 +118,8 @@ def _convergence(plt, path, curves, results):
     styles = curve_styles(len(others))
     for k, name in enumerate(others):
         colour, linestyle = styles[k]
-        # The baselines dashed, the paper's experiments solid, unless more than 20 curves need the styles.
-        if k < 20 and name not in (f"#{n}" for n in results.experiments):
+        # The baselines dashed, the paper's experiments solid, while the 20 colours tell every curve apart.
+        if len(others) <= 20 and name not in (f"#{n}" for n in results.experiments):
             linestyle = "--"
         scores = curves[name]
         ax.plot(

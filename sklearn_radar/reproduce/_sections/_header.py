@@ -20,7 +20,8 @@ def markdown(results: RunResults) -> list[str]:
         f"({budget.n_initial_points} random), {budget.cv_folds}-fold CV grouped by sequence on the training half. "
         "The paper used 100 iterations (30 random) on about a million detections of real data: "
         "`sklearn-radar reproduce --full` uses that budget on about a million simulated ones. "
-        "The paper's own setting is scored beside each search and kept when the search found nothing better.",
+        "The paper's own setting is scored beside each search and kept when the search found nothing better "
+        "(marked \u2020 in the tables).",
         f"- scores: radar V-measure (V1) on the test half against the pre-clustered target; seed {meta.seed}; "
         f"sklearn-radar {meta.version}; wall time {wall_time:.0f} s.",
     ]

@@ -1,0 +1,82 @@
+"""At a glance: the run's main results in a few lines, each pointing to the section that has the details."""
+
+from __future__ import annotations
+
+from ...experiments import get_experiment
+from .._constants import BEST_STAGE1, STAGE1
+from .._results import RunResults
+from ._base import OVERFIT_GAP, SETTING_PAPER, Section, objective_name, percent, setting_source, test_score
+from ._comparison import _chosen_rows, checked
+
+
+def markdown(results: RunResults) -> list[str]:
+    """The best setting, the findings that hold, the overfitting, the paper's settings kept and the filter."""
+    experiments = results.experiments
+    lines = []
+    stage1 = {number: e for number, e in experiments.items() if number in STAGE1}
+    if stage1:
+        best = max(stage1, key=lambda number: stage1[number].v1_test)
+        e = stage1[best]
+        ours8 = (
+            f"; ours for #{BEST_STAGE1}: {percent(experiments[BEST_STAGE1].v1_test)}"
+            if BEST_STAGE1 in experiments and best != BEST_STAGE1
+            else ""
+        )
+        paper = f" (the paper's best is #{BEST_STAGE1}, {get_experiment(BEST_STAGE1).v1_percent:.2f} %{ours8})"
+        lines.append(f"- best point clustering by test V1: #{best} {e.method}, {percent(e.v1_test)}{paper}.")
+    checks = checked(results)
+    if checks:
+        held = [text for text, holds, _ in checks if holds]
+        lines.append(
+            f"- the paper's findings: {len(held)} of {len(checks)} hold here (last section, "
+            "'The paper's findings, checked')."
+        )
+    named = [(f"#{n}", e) for n, e in sorted(experiments.items())] + list((results.baselines or {}).items())
+    over = [
+        name for name, r in named if r.search is not None and r.search.cv_best - test_score(r, results) > OVERFIT_GAP
+    ]
+    if over:
+        gap = f"{100 * OVERFIT_GAP:g} points" if results.meta.objective == "v1" else f"{OVERFIT_GAP:g}"
+        lines.append(
+            f"- cross-validated {objective_name(results)} more than {gap} above the test score (overfitting the "
+            f"few training sequences): {', '.join(over)}."
+        )
+    kept = [f"#{n}" for n, e in sorted(experiments.items()) if setting_source(e) == SETTING_PAPER]
+    if kept:
+        lines.append(
+            f"- the search found nothing better than the paper's setting for {', '.join(kept)}: those rows are the "
+            f"paper's setting, scored here (marked {SETTING_PAPER.split()[-1]})."
+        )
+    unmerged = [f"#{n}" for n, e in sorted(experiments.items()) if e.n_merges_test == 0]
+    if unmerged:
+        lines.append(
+            f"- {', '.join(unmerged)} merged nothing on the test half: the scores equal those of the stage-1 input."
+        )
+    w = results.filter.windows if results.filter is not None else None
+    row = _chosen_rows(results.filter).get(w.frame) if w is not None else None
+    if w is not None and row is not None:
+        lines.append(
+            f"- the filter at the paper's chosen setting: {w.n_errors:,} error windows of {w.n_windows:,} (the "
+            f"paper: {row.paper_errors}), background removed {row.removal_rate:.2f} % (the paper: "
+            f"{row.paper_removal_rate:.2f} %); explained under Tables I and II."
+        )
+    drawn = results.figures.drawn
+    shown = [f"[{FIGURE_NAMES.get(name, name)}]({file})" for name, file in drawn.items()]
+    if shown:
+        lines.append(f"- figures: {', '.join(shown)}.")
+    if not lines:
+        return []
+    return ["", "## At a glance", "", *lines]
+
+
+#: How the summary names each figure.
+FIGURE_NAMES = {
+    "table1_heatmap": "Table I heatmaps",
+    "filter_scene": "what the filter removes",
+    "v1_bars": "V1 ours vs the paper's",
+    "scene": "Fig. 6 analogue",
+    "convergence": "convergence of the searches",
+}
+
+
+SECTION = Section("summary", markdown)
