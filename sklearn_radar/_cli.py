@@ -82,6 +82,13 @@ def _parser():
     simulate.add_argument("--duration", type=float, default=30.0, help="length of each recording in s (default: 30)")
     simulate.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
     simulate.add_argument("--overwrite", action="store_true", help="replace an existing data folder")
+    simulate.add_argument(
+        "--difficulty",
+        choices=("easy", "realistic"),
+        default="realistic",
+        help="phenomena of real radar data: realistic (ego-motion errors, multipath, clutter, dense traffic, "
+        "sensing limits) or easy (none) (default: realistic)",
+    )
     simulate.set_defaults(run=_simulate)
 
     stats = commands.add_parser(
@@ -116,6 +123,12 @@ def _parser():
     )
     reproduce.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
     reproduce.add_argument(
+        "--difficulty",
+        choices=("easy", "realistic"),
+        default="realistic",
+        help="difficulty of the simulated data when --data is not given (default: realistic)",
+    )
+    reproduce.add_argument(
         "--objective",
         choices=("v1", "pq"),
         default="v1",
@@ -142,7 +155,9 @@ def _simulate(args) -> int:
     from .datasets import format_statistics, make_scenes, scene_statistics, write_radarscenes
 
     start = time.perf_counter()
-    scenes = make_scenes(n_sequences=args.n_sequences, duration=args.duration, random_state=args.seed)
+    scenes = make_scenes(
+        n_sequences=args.n_sequences, duration=args.duration, random_state=args.seed, difficulty=args.difficulty
+    )
     simulated = time.perf_counter() - start
     try:
         path = write_radarscenes(scenes, args.out, overwrite=args.overwrite)
@@ -183,6 +198,7 @@ def _reproduce(args) -> int:
         full=args.full,
         seed=args.seed,
         objective=args.objective,
+        difficulty=args.difficulty,
     )
     print(
         f"wrote {_shown(args.out)}/report.md, results.json, params.json and figures "

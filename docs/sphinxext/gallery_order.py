@@ -7,6 +7,7 @@ Examples not listed here come after the listed ones, by file name.
 ORDER = (
     "plot_quick_start.py",
     "plot_simulated_scene.py",
+    "plot_simulator_difficulty.py",
     "plot_ccs_vs_fcs.py",
     "plot_filter_grid.py",
     "plot_stage1_criteria.py",

@@ -49,6 +49,7 @@ DOPPLER_NOISE = 0.04  # m/s
 DOPPLER_OUTLIER_RATE = 0.02
 AZIMUTH_NOISE_BORESIGHT = np.deg2rad(0.15)  # rad, about 0.3 x the resolution
 AZIMUTH_NOISE_EDGE = np.deg2rad(0.6)  # rad
+AZIMUTH_MARGIN = np.deg2rad(2.0)  # rad, beyond the field of view that an azimuth estimate can reach (realistic)
 AZIMUTH_NOISE_GROWTH = 2.5  # at most this factor more azimuth noise at range: 8 dB less SNR, the detection threshold
 CLUTTER_PER_SCAN = 6.0  # false alarms per scan
 GHOST_RATE = 0.04  # multipath ghosts per object detection
@@ -125,7 +126,7 @@ def make_scenes(
     n_objects=(3, 12),
     static_density=1.0,
     first_sequence=1,
-    difficulty="easy",
+    difficulty="realistic",
     knobs=None,
 ):
     """Simulate radar recordings of an urban drive, in the RadarScenes layout.
@@ -154,13 +155,14 @@ def make_scenes(
         Seed; equal seeds give identical data sets.
     n_objects : tuple of (int, int), default=(3, 12)
         Inclusive range ``(low, high)``, ``0 <= low <= high``, of the number
-        of moving road users per sequence.
+        of moving road users per sequence; the ``traffic`` knob of the
+        realistic preset adds the road users of its close situations.
     static_density : float, default=1.0
         Scales the number of static scatterers and clutter (1.0: urban
         street), > 0.
     first_sequence : int, default=1
         Number N >= 1 of the first sequence (folder ``sequence_N``).
-    difficulty : {"easy", "realistic"}, default="easy"
+    difficulty : {"easy", "realistic"}, default="realistic"
         Preset of the phenomena that make real radar data hard.  "easy" turns
         them all off (the simulator described above); "realistic" turns each
         on at a physically argued value
@@ -843,11 +845,14 @@ def _measure(truth, scans, odometry, rng, angular_noise_range=np.inf):
     scan = truth["scan"]
     edge = (np.abs(truth["azimuth"]) / FOV) ** 2
     az_sigma = AZIMUTH_NOISE_BORESIGHT + (AZIMUTH_NOISE_EDGE - AZIMUTH_NOISE_BORESIGHT) * edge
+    limit = None
     if np.isfinite(angular_noise_range):
         growth = np.clip(truth["range"] / angular_noise_range, 1.0, np.sqrt(AZIMUTH_NOISE_GROWTH)) ** 2
         az_sigma = az_sigma * growth
+        limit = FOV + AZIMUTH_MARGIN  # the angle estimator's grid ends a little beyond the field of view
     r = np.maximum(truth["range"] + rng.normal(0.0, RANGE_NOISE, n), 0.2).astype(np.float32)
-    azimuth = (truth["azimuth"] + rng.normal(0.0, 1.0, n) * az_sigma).astype(np.float32)
+    azimuth = truth["azimuth"] + rng.normal(0.0, 1.0, n) * az_sigma
+    azimuth = (azimuth if limit is None else np.clip(azimuth, -limit, limit)).astype(np.float32)
     vr = truth["vr"] + rng.normal(0.0, DOPPLER_NOISE, n)
     outlier = rng.random(n) < DOPPLER_OUTLIER_RATE
     vr[outlier] += rng.normal(0.0, 0.5, outlier.sum())

@@ -201,6 +201,7 @@ def parse_experiments(text):
         "seed": [Interval(Integral, 0, None, closed="left")],
         "stream": [HasMethods(["write"]), None],
         "objective": [StrOptions(set(OBJECTIVES))],
+        "difficulty": [StrOptions({"easy", "realistic"})],
     },
     prefer_skip_nested_validation=True,
 )
@@ -215,6 +216,7 @@ def reproduce(
     seed=0,
     stream=None,
     objective="v1",
+    difficulty="realistic",
 ):
     """Run the paper's experiments and write ``report.md``, ``results.json``, ``params.json`` and figures.
 
@@ -250,6 +252,9 @@ def reproduce(
         ``"pq"`` the panoptic quality of moving road users per 0.5 s frame
         (:func:`~sklearn_radar.metrics.panoptic_quality`).  Both are
         reported for every experiment whatever the choice.
+    difficulty : {"easy", "realistic"}, default="realistic"
+        Difficulty of the simulated data (:func:`make_scenes`) when
+        ``data`` is None; ignored for a RadarScenes folder.
 
     Returns
     -------
@@ -263,7 +268,7 @@ def reproduce(
     budget = Budget.full(n_iter) if full else Budget.default(n_iter)
     stream = stream or sys.stdout
     try:
-        scenes, source = _data(data, budget, seed)
+        scenes, source = _data(data, budget, seed, difficulty)
     except BaseException:
         remove_empty_folders(created)  # a run that never started leaves no folder behind
         raise
@@ -434,10 +439,14 @@ def _sha256(path):
     return digest.hexdigest()
 
 
-def _data(data, budget, seed):
+def _data(data, budget, seed, difficulty="realistic"):
     if data is None:
-        scenes = make_scenes(n_sequences=budget.n_sequences, duration=budget.duration, random_state=seed)
-        return scenes, f"simulated ({budget.n_sequences} sequences x {budget.duration:g} s, seed {seed})"
+        scenes = make_scenes(
+            n_sequences=budget.n_sequences, duration=budget.duration, random_state=seed, difficulty=difficulty
+        )
+        return scenes, (
+            f"simulated ({budget.n_sequences} sequences x {budget.duration:g} s, seed {seed}, difficulty {difficulty})"
+        )
     # The source goes into report.md (UTF-8): an undecodable byte of the path is shown as \xff.
     return load_radarscenes(data), f"RadarScenes folder {os.fsencode(data).decode('utf-8', 'backslashreplace')}"
 

@@ -244,3 +244,40 @@ def test_bad_knobs_raise_a_value_error_naming_the_knob(knobs, match):
 def test_an_unknown_difficulty_is_a_value_error():
     with pytest.raises(ValueError, match="difficulty"):
         make_scenes(n_sequences=1, duration=1.0, difficulty="hard")
+
+
+def test_statistics_count_annotations_by_hand_and_print_the_published_figures():
+    from sklearn.utils import Bunch
+
+    from sklearn_radar.datasets import format_statistics, scene_statistics
+    from sklearn_radar.datasets._statistics import RADARSCENES_PUBLISHED
+
+    # Two scans of 2 s apart: 3 car detections of one instance, 1 pedestrian detection, 2 background detections.
+    data = pd.DataFrame(
+        {
+            "sequence": [1] * 6,
+            "timestamp": [0, 0, 0, 2_000_000, 2_000_000, 2_000_000],
+            "range_sc": [5.0, 6.0, 30.0, 5.5, 7.0, 40.0],
+            "label_id": [0, 0, 11, 0, 7, 11],
+        }
+    )
+    summary, table = scene_statistics(Bunch(data=data, target=np.array([0, 0, -1, 0, 1, -1])))
+    assert summary["annotated_per_scan"] == pytest.approx(4 / 2)
+    assert summary["instances_per_minute"] == pytest.approx(2 * 60 / 2.0)
+    assert summary["annotated_per_instance"] == pytest.approx(2.0)
+    assert summary["class_mix"] == pytest.approx({"CAR": 0.75, "PEDESTRIAN": 0.25})
+    text = format_statistics(summary, table)
+    assert f"RadarScenes about {RADARSCENES_PUBLISHED['annotated_per_scan']:.1f}" in text
+    assert "class mix (annotated) CAR 75 %, PEDESTRIAN 25 %" in text
+
+
+def test_realistic_data_come_closer_to_the_published_annotation_density_than_easy_data():
+    from sklearn_radar.datasets import scene_statistics
+    from sklearn_radar.datasets._statistics import RADARSCENES_PUBLISHED
+
+    published = RADARSCENES_PUBLISHED["annotated_per_scan"]
+    gaps = {
+        difficulty: abs(scene_statistics(_scenes(difficulty=difficulty, n=3))[0]["annotated_per_scan"] - published)
+        for difficulty in ("easy", "realistic")
+    }
+    assert gaps["realistic"] < gaps["easy"]

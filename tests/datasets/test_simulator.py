@@ -169,7 +169,8 @@ def test_road_users_of_every_class_appear(scenes):
 
 
 def test_object_count_per_sequence_respects_n_objects():
-    scenes = make_scenes(n_sequences=6, duration=15.0, random_state=1, n_objects=(3, 5))
+    # The easy preset: the realistic one's dense traffic adds road users beyond the base n_objects.
+    scenes = make_scenes(n_sequences=6, duration=15.0, random_state=1, n_objects=(3, 5), difficulty="easy")
     objects = scenes.data.loc[scenes.target >= 0].groupby("sequence")["track_id"].agg(lambda t: t.str[:16].nunique())
     assert objects.max() <= 5
     assert objects.mean() >= 2.5
