@@ -33,11 +33,26 @@ def test_simulate_writes_a_loadable_data_set_equal_to_make_scenes(tmp_path, caps
     assert loaded.data.equals(expected.data)
 
 
+@pytest.mark.parametrize("difficulty", ["easy", "realistic"])
+def test_simulate_difficulty_is_that_of_make_scenes(tmp_path, capsys, difficulty):
+    out = tmp_path / "sim"
+    argv = ["simulate", "--out", str(out), "--n-sequences", "1", "--duration", "2", "--seed", "3"]
+    assert main([*argv, "--difficulty", difficulty]) == 0
+    expected = make_scenes(n_sequences=1, duration=2.0, random_state=3, difficulty=difficulty)
+    assert load_radarscenes(out).data.equals(expected.data)
+    other = make_scenes(
+        n_sequences=1, duration=2.0, random_state=3, difficulty={"easy": "realistic"}.get(difficulty, "easy")
+    )
+    assert not load_radarscenes(out).data.equals(other.data)
+
+
 def test_stats_prints_the_statistics_of_a_data_folder(tmp_path, capsys):
     main(["simulate", "--out", str(tmp_path / "sim"), "--n-sequences", "1", "--duration", "2"])
     capsys.readouterr()
     assert main(["stats", "--data", str(tmp_path / "sim")]) == 0
-    assert "detections per second" in capsys.readouterr().out
+    printed = capsys.readouterr().out
+    assert "detections per second" in printed
+    assert "annotated per scan" in printed and "RadarScenes about 4.2" in printed
 
 
 def test_existing_output_is_a_one_line_error_without_traceback(tmp_path, capsys):
