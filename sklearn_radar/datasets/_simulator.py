@@ -202,10 +202,10 @@ def make_scenes(
           wheels, moving with 30-90 % of the vehicle's velocity (0.05).
         * ``sidelobes``: sidelobe detections per detection of >= 10 dBsm,
           2-6 deg beside it at its range and Doppler, 15-25 dB weaker (0.2).
-        * ``traffic``: close situations of dense traffic per minute (5, which
-          brings the road users to about 30 per minute, the published
-          RadarScenes mean of 7,500 road users in 4 h):
-          turning vehicles (their Doppler varies across the body), convoys
+        * ``traffic``: close situations of dense urban traffic per minute
+          (12, about 40 road users per minute in all; RadarScenes averages
+          at most 31 over its 4 h, quieter stretches included): turning
+          vehicles (their Doppler varies across the body), convoys
           1.5-4 m apart, a pedestrian beside a pedestrian group, pedestrians
           and cyclists passing parked cars 0.3-0.7 m away.
         * ``occlusion``: mean number of 1-4 s occlusions per road user (0.3).
@@ -217,7 +217,7 @@ def make_scenes(
           leaves lone detections at range.  ``inf``: no thinning.
         * ``object_detection_probability``: probability, in [0, 1], that a
           road user's scattering point in view is detected in a scan at
-          close range (0.55); calibrated to the published RadarScenes figure
+          close range (0.5); calibrated to the published RadarScenes figure
           of about 4 million annotated detections in 4 h of 4 sensors, about
           4 per scan.
         * ``angular_noise_range``: m, beyond it the azimuth noise grows with
