@@ -53,7 +53,7 @@ easy = simulate()
 # The odometry's speed and yaw rate carry a bias and noise, each sensor is
 # turned by its mounting error and its time stamps are a few ms off.  The
 # compensated radial velocity of static detections is then no longer about 0:
-# it spreads, and the Doppler criterion of the filter (|v_r| < 0.10 m/s)
+# it spreads, and the Doppler criterion of the filter (:math:`|v_r| < 0.10` m/s)
 # catches fewer of them.
 ego = simulate("ego-motion errors")
 fig, ax = plt.subplots(figsize=(7, 3.5))
