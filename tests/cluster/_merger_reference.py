@@ -47,10 +47,17 @@ def reference_continuation(rows, x, y, t):
     return times[-1], np.array([sx[-1], sy[-1]]), velocity
 
 
+def _start_key(rows, x, y, t, v_r, los):
+    """ClusterMerger's documented order of clusters: by the values (t, x, y, v_r, line of sight) of the
+    smallest such tuple among their detections, then by size; never by label ids, which follow the rows."""
+    first = min((t[r], x[r], y[r], v_r[r], los[r]) for r in rows)
+    return (*first, len(rows))
+
+
 def reference_merges(labels, x, y, t, v_r, los, *, mode, eps_d, eps_phi, eps_v, eps_t2, unknown_velocity):
     """Set of (label A, label B) pairs that meet the criterion, for one sequence."""
     clusters = _per_cluster_rows(labels, t)
-    ids = sorted(clusters, key=lambda label: (t[clusters[label]][0], label))
+    ids = sorted(clusters, key=lambda label: _start_key(clusters[label], x, y, t, v_r, los))
     merges = set()
     for position, b in enumerate(ids):
         rows_b_all = clusters[b]

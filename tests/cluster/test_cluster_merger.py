@@ -178,15 +178,16 @@ def test_velocity_mode_needs_the_line_of_sight_columns():
         ClusterMerger(mode="velocity", stage1=STAGE1).fit(_split_by_a_gap().drop(columns="azimuth_sc"))
 
 
-@pytest.fixture(scope="module")
-def simulated_stage1():
-    """Two simulated sequences through frame transform, filter and a loose stage 1 (many small clusters)."""
+@pytest.fixture(scope="module", params=["easy", "realistic"])
+def simulated_stage1(request):
+    """Two simulated sequences through frame transform, filter and a loose stage 1 (many small clusters).
+
+    On the realistic preset stage-1 clusters start in the same scan, which checks the order of such ties.
+    """
     from sklearn_radar import DopplerDensityFilter, FrameTransform
     from sklearn_radar.datasets import make_scenes
 
-    # The easy preset: on the realistic one two stage-1 clusters that start in the same scan are ordered
-    # differently by ClusterMerger and by the reference (a tie of start times), see the report of issue 13.
-    scenes = make_scenes(n_sequences=2, duration=6.0, random_state=3, difficulty="easy")
+    scenes = make_scenes(n_sequences=2, duration=6.0, random_state=3, difficulty=request.param)
     X = DopplerDensityFilter().fit_transform(FrameTransform().fit_transform(scenes.data))
     stage1 = RadarDBSCAN(metric="xyv", eps_xyv=0.9, vr_scale=1.0, min_samples=2, vr_min=0.2)
     return X, stage1
