@@ -33,7 +33,7 @@ def main(argv=None) -> int:
         # The reader left (``sklearn-radar stats | head -2``): not an error. Nothing more can be written.
         _silence_stdout()
         return 0
-    except (ValueError, OSError) as error:
+    except (ValueError, OSError, ImportError) as error:  # ImportError: dask for --scheduler/--workers, missing
         print(f"sklearn-radar: error: {error}", file=sys.stderr)
         return 1
 
@@ -135,6 +135,13 @@ def _parser():
         help="what the searches maximise: v1, the paper's radar V-measure, or pq, the panoptic quality of moving "
         "road users per 0.5 s frame (default: v1)",
     )
+    _add_cluster_flags(reproduce)
+    reproduce.add_argument(
+        "--n-points",
+        metavar="K",
+        help="candidates each search step evaluates at a time (default 1; on a cluster: worker threads // folds); "
+        "the results depend on it, not on where the fits run",
+    )
     reproduce.set_defaults(run=_reproduce)
 
     cluster = commands.add_parser(
@@ -147,8 +154,38 @@ def _parser():
     cluster.add_argument("--params", required=True, help="params.json written by 'sklearn-radar reproduce'")
     cluster.add_argument("--out", required=True, help="predictions file to write (JSON)")
     cluster.add_argument("--experiment", type=int, help="which saved experiment (default: the best)")
+    _add_cluster_flags(cluster)
     cluster.set_defaults(run=_cluster)
     return parser
+
+
+def _add_cluster_flags(command):
+    """``--scheduler`` and ``--workers`` (dask.distributed, the ``[distributed]`` extra)."""
+    where = command.add_mutually_exclusive_group()
+    where.add_argument(
+        "--scheduler",
+        metavar="ADDRESS",
+        help="run on an existing dask scheduler, e.g. tcp://host:8786 (needs the [distributed] extra)",
+    )
+    # Parsed here rather than by argparse, so that a bad value is a one-line error like the others.
+    where.add_argument("--workers", metavar="N", help="run on a local dask cluster of N worker processes")
+
+
+def _cluster_args(args):
+    """``(scheduler, workers)`` of the command line; ValueError for a bad ``--workers``."""
+    return args.scheduler, _positive_int(args.workers, "--workers", "a whole number of worker processes")
+
+
+def _positive_int(text, flag, what):
+    if text is None:
+        return None
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise ValueError(f"{flag} must be {what} >= 1, got {text!r}")
+    return value
 
 
 def _simulate(args) -> int:
@@ -188,6 +225,8 @@ def _reproduce(args) -> int:
 
     if args.n_iter is not None and args.n_iter < 1:
         raise ValueError(f"--n-iter must be at least 1, got {args.n_iter}")
+    scheduler, workers = _cluster_args(args)
+    n_points = _positive_int(args.n_points, "--n-points", "a whole number of candidates")
     start = time.perf_counter()
     reproduce(
         args.data,
@@ -199,6 +238,9 @@ def _reproduce(args) -> int:
         seed=args.seed,
         objective=args.objective,
         difficulty=args.difficulty,
+        scheduler=scheduler,
+        workers=workers,
+        n_points=n_points,
     )
     print(
         f"wrote {_shown(args.out)}/report.md, results.json, params.json and figures "
@@ -210,7 +252,10 @@ def _reproduce(args) -> int:
 def _cluster(args) -> int:
     from .reproduce import cluster_radarscenes
 
-    summary = cluster_radarscenes(args.data, args.params, args.out, experiment=args.experiment)
+    scheduler, workers = _cluster_args(args)
+    summary = cluster_radarscenes(
+        args.data, args.params, args.out, experiment=args.experiment, scheduler=scheduler, workers=workers
+    )
     print(
         f"experiment #{summary['experiment']}: {summary['n_detections']} detections in "
         f"{summary['n_clusters']} clusters; wrote {_shown(summary['out'])}"

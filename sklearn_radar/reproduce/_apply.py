@@ -8,13 +8,15 @@ from numbers import Integral
 from pathlib import Path
 
 import numpy as np
-from sklearn.base import BaseEstimator
+from sklearn.base import BaseEstimator, clone
 from sklearn.utils._param_validation import Interval, validate_params
 
+from .._distributed import connect_cluster, map_sequences
 from .._schema import LABELS, STATIC_LABEL
 from ..datasets import load_radarscenes
+from ..datasets._radarscenes import _read_sensors_json, _read_sequences_json, _resolve_data_dir
 from ..experiments import experiment_pipeline, get_experiment
-from ._io import atomic_write_text
+from ._io import atomic_write
 
 #: Our two "classes" in the devkit's per-point prediction file: clustered or noise.
 CLASS_NAMES = {0: "NOISE", 1: "CLUSTERED"}
@@ -106,16 +108,27 @@ def _checked_setting(saved, path, experiment):
 
 
 @validate_params(
-    {"data": [str, os.PathLike], "params": [str, os.PathLike], "out": [str, os.PathLike], "experiment": _EXPERIMENT},
+    {
+        "data": [str, os.PathLike],
+        "params": [str, os.PathLike],
+        "out": [str, os.PathLike],
+        "experiment": _EXPERIMENT,
+        "scheduler": [str, None],
+        "workers": [Integral, None],
+    },
     prefer_skip_nested_validation=True,
 )
-def cluster_radarscenes(data, params, out, experiment=None):
-    """Cluster every detection of a RadarScenes folder with saved parameters.
+def cluster_radarscenes(data, params, out, experiment=None, *, scheduler=None, workers=None):
+    """Cluster every detection of a RadarScenes folder with saved parameters, one sequence at a time.
 
     Writes the RadarScenes devkit's per-point predictions JSON (schema 2:
     ``{uuid: [class, instance]}``), class 1 for clustered detections and 0
-    for noise, instance = cluster id (-1 for noise).  The file is written
-    atomically.
+    for noise, instance = cluster id (-1 for noise).  The pipeline never
+    crosses sequences, so each sequence is loaded, clustered and written
+    on its own (its cluster ids shifted past those of the sequences before
+    it): the predictions are written as a stream and the data set need not
+    fit in memory.  The file is written atomically (a temporary sibling,
+    renamed when complete).
 
     Parameters
     ----------
@@ -127,6 +140,12 @@ def cluster_radarscenes(data, params, out, experiment=None):
         Predictions file to write.
     experiment : int, default=None
         Which saved experiment; None: the best.
+    scheduler : str, default=None
+        Address of a running dask scheduler: the sequences are loaded and
+        clustered on its workers (which must see ``data`` at the same
+        path), a few at a time, and streamed back in order.
+    workers : int, default=None
+        Start a local dask cluster of this many worker processes instead.
 
     Returns
     -------
@@ -136,10 +155,48 @@ def cluster_radarscenes(data, params, out, experiment=None):
     setting = load_params(params, experiment)
     number = setting["experiment"]
     pipeline = _pipeline(setting, params)
-    scenes = load_radarscenes(data)
-    labels = pipeline.fit_predict(scenes.data)
-    write_predictions(scenes.data["uuid"].to_numpy(), labels, out)
-    return {"experiment": number, "n_detections": len(labels), "n_clusters": int(labels.max() + 1), "out": str(out)}
+    data_dir = _resolve_data_dir(Path(data))
+    _read_sensors_json(data_dir / "sensors.json")  # a malformed folder fails here, before any worker starts
+    numbers = sorted(_read_sequences_json(data_dir / "sequences.json"))
+    counts = {"n_detections": 0, "n_clusters": 0}
+    failed = []
+
+    def write(stream):
+        stream.write(_PREDICTIONS_HEAD)
+        try:
+            for uuids, labels in map_sequences(cluster, cluster_sequence, tasks):
+                shifted = np.where(labels >= 0, labels + counts["n_clusters"], -1)
+                _write_entries(stream, uuids, shifted, first=counts["n_detections"] == 0)
+                counts["n_detections"] += len(labels)
+                counts["n_clusters"] += int(labels.max()) + 1 if len(labels) else 0
+        except OSError as error:  # reading a sequence failed: not a write error of ``out``
+            failed.append(error)
+            raise _ReadFailed from None
+        stream.write(_PREDICTIONS_TAIL if counts["n_detections"] else _PREDICTIONS_EMPTY_TAIL)
+
+    with connect_cluster(scheduler, workers) as cluster:
+        tasks = [(str(data_dir), n, pipeline) for n in numbers]
+        try:
+            atomic_write(Path(out), write)
+        except _ReadFailed:
+            raise failed[0] from None
+    return {"experiment": number, **counts, "out": str(out)}
+
+
+class _ReadFailed(Exception):
+    """A sequence could not be read while the predictions were being written (the OSError is re-raised)."""
+
+
+def cluster_sequence(task):
+    """Load one sequence and cluster it: ``(data folder, sequence number, pipeline)`` -> ``(uuids, labels)``.
+
+    Runs on a dask worker with ``--scheduler``/``--workers`` (so the worker
+    reads the sequence itself), else in this process.
+    """
+    data_dir, number, pipeline = task
+    scenes = load_radarscenes(data_dir, sequences=number)
+    labels = clone(pipeline).fit_predict(scenes.data)
+    return scenes.data["uuid"].to_numpy(), np.asarray(labels, dtype=np.int64)
 
 
 def _pipeline(setting, path):
@@ -180,11 +237,47 @@ def write_predictions(uuids, labels, out):
         File to write (atomically).
     """
     labels = np.asarray(labels)
+    uuids = np.asarray(uuids)
+    if len(uuids) != len(labels):
+        raise ValueError(f"uuids and labels differ in length: {len(uuids)} != {len(labels)}")
+
+    def write(stream):
+        stream.write(_PREDICTIONS_HEAD)
+        _write_entries(stream, uuids, labels, first=True)
+        stream.write(_PREDICTIONS_TAIL if len(labels) else _PREDICTIONS_EMPTY_TAIL)
+
+    atomic_write(Path(out), write)
+
+
+def _predictions_frame():
+    """The document around the predictions, split where they go: ``(head, tail, tail without predictions)``.
+
+    The pieces and :func:`_write_entries` make the same bytes as
+    ``json.dumps(document, ensure_ascii=True, indent=2)``, written a
+    sequence at a time.
+    """
     mapping = {label: (0 if label == STATIC_LABEL else 1) for label in LABELS}
     document = {
         "schema": 2,
         "label_mapping": {str(k): v for k, v in mapping.items()},
         "new_label_names": {str(k): v for k, v in CLASS_NAMES.items()},
-        "predictions": {str(u): [int(label >= 0), int(label)] for u, label in zip(uuids, labels, strict=True)},
+        "predictions": {},
     }
-    atomic_write_text(Path(out), json.dumps(document, ensure_ascii=True, indent=2))
+    text = json.dumps(document, ensure_ascii=True, indent=2)
+    empty = '"predictions": {}\n}'
+    assert text.endswith(empty)
+    head = text[: -len(empty)] + '"predictions": {'
+    return head.encode("ascii"), b"\n  }\n}", b"}\n}"
+
+
+_PREDICTIONS_HEAD, _PREDICTIONS_TAIL, _PREDICTIONS_EMPTY_TAIL = _predictions_frame()
+
+
+def _write_entries(stream, uuids, labels, first):
+    """``"uuid": [class, instance]`` lines (indent 2, as json.dumps), comma-separated across calls."""
+    lines = [
+        f"{'' if first and i == 0 else ','}\n    {json.dumps(str(u), ensure_ascii=True)}: [\n"
+        f"      {int(label >= 0)},\n      {int(label)}\n    ]"
+        for i, (u, label) in enumerate(zip(uuids, labels.tolist(), strict=True))
+    ]
+    stream.write("".join(lines).encode("ascii"))

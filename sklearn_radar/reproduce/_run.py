@@ -42,6 +42,7 @@ from sklearn.utils._param_validation import HasMethods, Interval, StrOptions, va
 from threadpoolctl import threadpool_limits
 
 from .. import __version__
+from .._distributed import connect_cluster, search_backend
 from .._skopt import Integer, Real
 from ..cluster import SequenceDBSCAN, SequenceHDBSCAN, WindowedDBSCAN, WindowedHDBSCAN
 from ..datasets import format_statistics, load_radarscenes, make_scenes, scene_statistics
@@ -137,6 +138,9 @@ class Run:
     stream: object
     results: RunResults
     started: float = field(default_factory=time.perf_counter)
+    # --- dask (sklearn_radar._distributed): candidates proposed per search step, and the cluster or None.
+    n_points: int = 1
+    cluster: object = None
     run_id: str = field(default_factory=lambda: uuid.uuid4().hex)
     started_utc: str = field(default_factory=lambda: _utc_now())
     progress: RunProgress | None = None
@@ -202,6 +206,9 @@ def parse_experiments(text):
         "stream": [HasMethods(["write"]), None],
         "objective": [StrOptions(set(OBJECTIVES))],
         "difficulty": [StrOptions({"easy", "realistic"})],
+        "scheduler": [str, None],
+        "workers": [Integral, None],
+        "n_points": [Interval(Integral, 1, None, closed="left"), None],
     },
     prefer_skip_nested_validation=True,
 )
@@ -217,6 +224,9 @@ def reproduce(
     stream=None,
     objective="v1",
     difficulty="realistic",
+    scheduler=None,
+    workers=None,
+    n_points=None,
 ):
     """Run the paper's experiments and write ``report.md``, ``results.json``, ``params.json`` and figures.
 
@@ -255,12 +265,34 @@ def reproduce(
     difficulty : {"easy", "realistic"}, default="realistic"
         Difficulty of the simulated data (:func:`make_scenes`) when
         ``data`` is None; ignored for a RadarScenes folder.
+    scheduler : str, default=None
+        Address of a running dask scheduler (``tcp://host:8786``): the
+        searches' cross-validation fits run on its workers.  Needs the
+        ``[distributed]`` extra; an unreachable address fails within a few
+        seconds (OSError naming it).
+    workers : int, default=None
+        Start a local dask cluster of this many worker processes instead.
+        Without ``scheduler`` or ``workers`` dask is not imported.
+    n_points : int, default=None
+        Candidates each search step proposes and evaluates at a time
+        (``BayesSearchCV(n_points=...)``); None: 1, or on a cluster as many as
+        keep its workers busy (worker threads // folds).  The results
+        depend on it, not on where the fits run: for the same seed and
+        ``n_points`` a cluster run equals a single-process one.
 
     Returns
     -------
     results : dict
         What ``results.json`` holds, and ``figures``: the figures drawn.
     """
+    with connect_cluster(scheduler, workers) as cluster:
+        return _reproduce(
+            data, out, n_iter, n_jobs, experiments, full, seed, stream, objective, difficulty, cluster, n_points
+        )
+
+
+def _reproduce(data, out, n_iter, n_jobs, experiments, full, seed, stream, objective, difficulty, cluster, n_points):
+    """:func:`reproduce` with its cluster (or None) connected."""
     started = time.perf_counter()
     keys = parse_experiments(experiments)
     out = Path(out)
@@ -290,6 +322,7 @@ def reproduce(
     )
     results = RunResults(meta=meta, statistics=_statistics(scenes))
     run = Run(out=out, budget=budget, seed=seed, n_jobs=n_jobs, stream=stream, results=results, started=started)
+    _use_cluster(run, cluster, n_points)
     _start_folder(run)
     _say(
         run,
@@ -364,6 +397,16 @@ REPORT = "report"
 
 def _tuned(key):
     return key.isdigit() and get_experiment(int(key)).tuned
+
+
+def _use_cluster(run, cluster, n_points):
+    """On a cluster the searches' fits are dask tasks, and a step proposes enough candidates to keep it busy."""
+    run.cluster = cluster
+    if cluster is None:
+        run.n_points = n_points or 1
+        return
+    run.n_points = n_points or max(1, cluster.n_threads // run.budget.cv_folds)
+    _say(run, f"{cluster.describe()}; {run.n_points} candidate(s) x {run.budget.cv_folds} folds per search step")
 
 
 def _finish(run, context, status):
@@ -610,14 +653,15 @@ def _tune(run, context, estimator, space, label, start_from=None, part=0, parts=
         n_iter=budget.n_iter,
         n_initial_points=budget.n_initial_points,
         cv=cv,
-        n_jobs=run.n_jobs,
+        n_jobs=-1 if run.cluster is not None else run.n_jobs,  # on a cluster: every fit a dask task
+        n_points=run.n_points,
         random_state=run.seed,
     )
     search.set_params(refit=False)  # only the best parameters are used, never a refitted estimator
     status = None if run.progress is None else run.progress.search_status(part, parts)
     printer = ProgressPrinter(budget.n_iter, label=label, stream=run.stream, status=status)
     # The Gaussian process works on tiny matrices, where multi-threaded BLAS was 20x slower (measured).
-    with threadpool_limits(limits=1, user_api="blas"):
+    with threadpool_limits(limits=1, user_api="blas"), search_backend(run.cluster):
         search.fit(X_searched, target, groups=groups, callback=printer)
     convergence = [float(s) for s in search.cv_results_["mean_test_score"]]
     best = {prefix + key: value for key, value in _native(search.best_params_).items()}

@@ -1,0 +1,303 @@
+"""``--scheduler`` / ``--workers``: the run and ``cluster`` on a local dask cluster that the tests start themselves.
+
+The references are single-process runs of the same code path without dask
+(and, for ``cluster``, one pipeline fitted on the whole table): a cluster
+run must give the same figures and the same bytes.
+"""
+
+import json
+import os
+import socket
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+from sklearn_radar._cli import main
+from sklearn_radar.datasets import load_radarscenes, make_scenes, write_radarscenes
+from sklearn_radar.experiments import experiment_pipeline
+from sklearn_radar.reproduce import cluster_radarscenes, load_params, reproduce, write_predictions
+
+distributed = pytest.importorskip("dask.distributed")
+
+#: The tiny run every comparison makes: one tuned stage-1 experiment, two candidates per step.
+RUN = {"n_iter": 4, "experiments": "3", "seed": 0, "n_points": 2}
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def _env():
+    """Subprocess environment that imports this checkout's package."""
+    return {**os.environ, "PYTHONPATH": os.pathsep.join([ROOT, os.environ.get("PYTHONPATH", "")])}
+
+
+@pytest.fixture(scope="module")
+def local_cluster():
+    """Two worker processes (one thread each), as ``--workers 2`` starts them."""
+    import logging
+
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=logging.ERROR
+    ) as cluster:
+        yield cluster
+
+
+@pytest.fixture(scope="module")
+def tiny_folder(tmp_path_factory):
+    path = tmp_path_factory.mktemp("data") / "tiny"
+    write_radarscenes(make_scenes(n_sequences=4, duration=4.0, random_state=3), path)
+    return path
+
+
+@pytest.fixture(scope="module")
+def single_process_run(tiny_folder, tmp_path_factory):
+    out = tmp_path_factory.mktemp("single") / "out"
+    reproduce(tiny_folder, out, stream=open(os.devnull, "w"), **RUN)
+    return out
+
+
+def _figures(out):
+    """results.json without what may differ between equal runs (wall times, the run's own settings)."""
+
+    def strip(value):
+        if isinstance(value, dict):
+            return {k: strip(v) for k, v in value.items() if "time" not in k}
+        if isinstance(value, list):
+            return [strip(v) for v in value]
+        return value
+
+    return strip(json.loads((out / "results.json").read_text()))
+
+
+def _free_port():
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return probe.getsockname()[1]
+
+
+# ----------------------------------------------------------------------------- without the flags
+
+
+def test_without_the_flags_dask_is_not_imported(tiny_folder, tmp_path):
+    out = tmp_path / "out"
+    code = f"""
+import sys
+from sklearn_radar._cli import main
+assert main(["reproduce", "--data", {str(tiny_folder)!r}, "--out", {str(out)!r}, "--n-iter", "1",
+             "--experiments", "1"]) == 0
+assert main(["cluster", "--data", {str(tiny_folder)!r}, "--params", {str(out / "params.json")!r},
+             "--out", {str(tmp_path / "p.json")!r}]) == 0
+print(sorted(m for m in sys.modules if m.split(".")[0] in ("dask", "distributed")))
+"""
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=_env(), timeout=300)
+    assert done.returncode == 0, done.stderr
+    assert done.stdout.strip().splitlines()[-1] == "[]"
+    assert (tmp_path / "p.json").is_file()
+
+
+# ----------------------------------------------------------------------------- bad input: one line, quickly
+
+
+def test_unreachable_scheduler_is_a_one_line_error_naming_the_address(tiny_folder, tmp_path, capsys):
+    address = f"tcp://127.0.0.1:{_free_port()}"  # nothing listens there
+    code = main(["reproduce", "--data", str(tiny_folder), "--out", str(tmp_path / "o"), "--scheduler", address])
+    err = capsys.readouterr().err
+    assert code == 1
+    assert err.count("\n") == 1 and err.startswith("sklearn-radar: error:")
+    assert address in err
+    assert not (tmp_path / "o").exists()  # nothing started
+
+
+def test_malformed_scheduler_address_is_a_one_line_error(tiny_folder, tmp_path, capsys):
+    params = tmp_path / "params.json"
+    reproduce(tiny_folder, tmp_path / "r", n_iter=1, experiments="1", stream=open(os.devnull, "w"))
+    params.write_text((tmp_path / "r" / "params.json").read_text())
+    code = main(
+        [
+            *("cluster", "--data", str(tiny_folder), "--params", str(params), "--out", str(tmp_path / "p.json")),
+            *("--scheduler", "not an address::"),
+        ]
+    )
+    err = capsys.readouterr().err
+    assert code == 1 and err.count("\n") == 1
+    assert "not an address::" in err
+    assert not (tmp_path / "p.json").exists()
+
+
+@pytest.mark.parametrize("value", ["0", "-2", "two", "1.5"])
+@pytest.mark.parametrize("command", ["reproduce", "cluster"])
+def test_bad_workers_value_is_a_one_line_error_naming_the_flag(command, value, tmp_path, capsys):
+    args = ["--data", str(tmp_path), "--out", str(tmp_path / "o"), "--workers", value]
+    if command == "cluster":
+        args += ["--params", str(tmp_path / "params.json")]
+    code = main([command, *args])
+    err = capsys.readouterr().err
+    assert code == 1 and err.count("\n") == 1
+    assert "--workers" in err and repr(value) in err
+
+
+def test_missing_dask_is_a_one_line_error_naming_the_extra(tiny_folder, tmp_path):
+    # A fresh interpreter in which importing dask fails, as on a machine without the extra.
+    code = f"""
+import sys
+sys.modules["dask"] = None
+from sklearn_radar._cli import main
+sys.exit(main(["reproduce", "--data", {str(tiny_folder)!r}, "--out", {str(tmp_path / "o")!r}, "--workers", "2"]))
+"""
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=_env(), timeout=120)
+    assert done.returncode == 1
+    assert done.stderr.count("\n") == 1, done.stderr
+    assert "pip install 'sklearn-radar[distributed]'" in done.stderr
+
+
+def test_both_scheduler_and_workers_is_an_error(tmp_path):
+    with pytest.raises(ValueError, match="not both"):
+        reproduce(tmp_path, tmp_path / "o", scheduler="tcp://127.0.0.1:1", workers=2)
+
+
+# ----------------------------------------------------------------------------- the search on the cluster
+
+
+def test_search_on_the_cluster_equals_the_single_process_run(local_cluster, tiny_folder, single_process_run, tmp_path):
+    import io
+
+    progress = io.StringIO()
+    out = tmp_path / "out"
+    reproduce(tiny_folder, out, stream=progress, scheduler=local_cluster.scheduler_address, **RUN)
+    assert "dask cluster at" in progress.getvalue()
+    cluster_figures, single_figures = _figures(out), _figures(single_process_run)
+    assert cluster_figures == single_figures
+    assert len(single_figures["experiments"]["3"]["convergence"]) == RUN["n_iter"]
+    assert (out / "params.json").read_text() == (single_process_run / "params.json").read_text()
+
+
+# ----------------------------------------------------------------------------- cluster: per sequence, a stream
+
+
+@pytest.fixture(scope="module")
+def saved_params(single_process_run):
+    return single_process_run / "params.json"
+
+
+def _whole_table_predictions(tiny_folder, saved_params, path):
+    """The reference: the saved pipeline fitted once on every detection, written in one piece."""
+    setting = load_params(saved_params)
+    scenes = load_radarscenes(tiny_folder)
+    pipeline = experiment_pipeline(setting["experiment"], params=setting["params"])
+    write_predictions(scenes.data["uuid"].to_numpy(), pipeline.fit_predict(scenes.data), path)
+    return path.read_bytes()
+
+
+def test_cluster_streams_per_sequence_and_equals_the_whole_table_fit(tiny_folder, saved_params, tmp_path, monkeypatch):
+    from sklearn_radar.reproduce import _apply
+
+    loaded = []
+
+    def load_one(path, sequences=None):
+        bunch = load_radarscenes(path, sequences=sequences)
+        loaded.append(np.unique(bunch.groups).tolist())
+        return bunch
+
+    monkeypatch.setattr(_apply, "load_radarscenes", load_one)
+    summary = cluster_radarscenes(tiny_folder, saved_params, tmp_path / "p.json")
+    assert loaded == [[1], [2], [3], [4]]  # one sequence at a time, never the whole table
+    reference = _whole_table_predictions(tiny_folder, saved_params, tmp_path / "ref.json")
+    assert (tmp_path / "p.json").read_bytes() == reference
+    document = json.loads(reference)
+    assert summary["n_detections"] == len(document["predictions"])
+    assert summary["n_clusters"] == len({v[1] for v in document["predictions"].values()} - {-1})
+
+
+def test_cluster_on_the_workers_writes_the_same_bytes(local_cluster, tiny_folder, saved_params, tmp_path):
+    cluster_radarscenes(tiny_folder, saved_params, tmp_path / "p.json", scheduler=local_cluster.scheduler_address)
+    reference = _whole_table_predictions(tiny_folder, saved_params, tmp_path / "ref.json")
+    assert (tmp_path / "p.json").read_bytes() == reference
+
+
+def test_cluster_command_with_local_workers(tiny_folder, saved_params, tmp_path):
+    out = tmp_path / "p.json"
+    args = ["cluster", "--data", str(tiny_folder), "--params", str(saved_params), "--out", str(out), "--workers", "2"]
+    done = subprocess.run(
+        [sys.executable, "-m", "sklearn_radar", *args], capture_output=True, text=True, env=_env(), timeout=300
+    )
+    assert done.returncode == 0, done.stderr
+    assert out.read_bytes() == _whole_table_predictions(tiny_folder, saved_params, tmp_path / "ref.json")
+
+
+def test_a_sequence_that_cannot_be_read_fails_the_stream_without_output(local_cluster, tiny_folder, tmp_path):
+    import shutil
+
+    broken = tmp_path / "broken"
+    shutil.copytree(tiny_folder, broken)
+    (broken / "sequence_3" / "radar_data.h5").unlink()
+    params = tmp_path / "params.json"
+    reproduce(tiny_folder, tmp_path / "r", n_iter=1, experiments="1", stream=open(os.devnull, "w"))
+    params.write_text((tmp_path / "r" / "params.json").read_text())
+    with pytest.raises(FileNotFoundError, match="sequence_3"):
+        cluster_radarscenes(broken, params, tmp_path / "p.json", scheduler=local_cluster.scheduler_address)
+    assert not (tmp_path / "p.json").exists()
+    assert not [p for p in tmp_path.iterdir() if p.name.endswith(".tmp")]
+
+
+# ----------------------------------------------------------------------------- fault tolerance
+
+
+#: Kills one worker process while it computes, after the search's first tasks finished (a later step's run).
+KILLER = """
+import json, logging, os, signal, sys, threading, time
+import dask.distributed as distributed
+from sklearn_radar.reproduce import reproduce
+
+data, out, run = sys.argv[1], sys.argv[2], json.loads(sys.argv[3])
+killed = []
+
+
+def kill_one_worker(address, stop):
+    client = distributed.Client(address, set_as_default=False)
+    pids = client.run(os.getpid)
+    seen_busy = seen_idle = False
+    while not stop.is_set():
+        busy = [w for w, keys in client.processing().items() if keys]
+        if busy and seen_idle:
+            os.kill(pids[busy[0]], signal.SIGKILL)
+            killed.append(busy[0])
+            break
+        seen_busy |= bool(busy)
+        seen_idle |= seen_busy and not busy
+        time.sleep(0.005)
+    client.close()
+
+
+if __name__ == "__main__":
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=logging.CRITICAL
+    ) as cluster:
+        stop = threading.Event()
+        killer = threading.Thread(target=kill_one_worker, args=(cluster.scheduler_address, stop))
+        killer.start()
+        try:
+            reproduce(data, out, stream=open(os.devnull, "w"), scheduler=cluster.scheduler_address, **run)
+        finally:
+            stop.set()
+            killer.join()
+    print(json.dumps(killed))
+"""
+
+
+def test_a_worker_killed_mid_search_loses_nothing(tiny_folder, single_process_run, tmp_path):
+    """SIGKILL the worker process computing a task mid-search; the run ends with the same figures."""
+    # In a subprocess: a worker restarted by its nanny under pytest's output capture hung the test process.
+    script = tmp_path / "kill_a_worker.py"
+    script.write_text(KILLER)
+    out = tmp_path / "out"
+    done = subprocess.run(
+        [sys.executable, str(script), str(tiny_folder), str(out), json.dumps(RUN)],
+        capture_output=True,
+        text=True,
+        env=_env(),
+        timeout=600,
+    )
+    assert done.returncode == 0, done.stderr
+    assert len(json.loads(done.stdout.strip().splitlines()[-1])) == 1, "no worker was killed during the search"
+    assert _figures(out) == _figures(single_process_run)
+    assert json.loads((out / "run.json").read_text())["complete"] is True
