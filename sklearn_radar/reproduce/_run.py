@@ -636,6 +636,8 @@ def _tune(run, context, estimator, space, label, start_from=None, part=0, parts=
     else:
         cv = [(rows, rows) for _, rows in GroupKFold(n_splits=n_folds).split(train, groups=groups)]
     scorer = OBJECTIVES[run.results.meta.objective]
+    # dask (sklearn_radar._distributed): the cluster or None, and candidates per step (a bare run object lacks them).
+    cluster, n_points = getattr(run, "cluster", None), getattr(run, "n_points", 1)
     start = time.perf_counter()
     X, target = context.X.iloc[train], context.target[train]
     searched, searched_space, X_searched, prefix = estimator, space, X, ""
@@ -653,15 +655,15 @@ def _tune(run, context, estimator, space, label, start_from=None, part=0, parts=
         n_iter=budget.n_iter,
         n_initial_points=budget.n_initial_points,
         cv=cv,
-        n_jobs=-1 if run.cluster is not None else run.n_jobs,  # on a cluster: every fit a dask task
-        n_points=run.n_points,
+        n_jobs=-1 if cluster is not None else run.n_jobs,  # on a cluster: every fit a dask task
+        n_points=n_points,
         random_state=run.seed,
     )
     search.set_params(refit=False)  # only the best parameters are used, never a refitted estimator
     status = None if run.progress is None else run.progress.search_status(part, parts)
     printer = ProgressPrinter(budget.n_iter, label=label, stream=run.stream, status=status)
     # The Gaussian process works on tiny matrices, where multi-threaded BLAS was 20x slower (measured).
-    with threadpool_limits(limits=1, user_api="blas"), search_backend(run.cluster):
+    with threadpool_limits(limits=1, user_api="blas"), search_backend(cluster):
         search.fit(X_searched, target, groups=groups, callback=printer)
     convergence = [float(s) for s in search.cv_results_["mean_test_score"]]
     best = {prefix + key: value for key, value in _native(search.best_params_).items()}
