@@ -15,15 +15,16 @@ from ._constants import BASELINES, FILTER, FILTER_EFFECT, STAGE2
 from ._results import Budget
 
 #: Seconds per iteration of one search on about 90,000 training detections (:data:`REFERENCE_TRAIN`), by kind of
-#: step, measured on the default run on an idle 2-core machine (the four baselines together).
-PER_ITERATION = {"stage 1": 0.35, "stage 2": 1.1, BASELINES: 4.6}
+#: step, measured on the default run on an idle 2-core machine (the four baselines together; commit 0d7f519).
+PER_ITERATION = {"stage 1": 0.2, "stage 2": 0.3, BASELINES: 3.1}
 #: The training detections of that measurement.
 REFERENCE_TRAIN = 90_000
 #: How an iteration's time grows with the training detections: fitted to the default run (about 2 min) and
-#: ``--full`` (100 iterations on 6.4 times the data, about 1.5 h) on the same machine.
+#: ``--full`` (100 iterations on 6.4 times the data, about 1.5 h) on the same machine, before the kernels got
+#: faster; the estimate of ``--full`` is an extrapolation, the progress lines correct it as the run goes.
 SIZE_EXPONENT = 0.9
 #: Shortest time of one iteration (the optimiser's and the scoring's fixed costs), s, by kind of step.
-MIN_PER_ITERATION = {"stage 1": 0.25, "stage 2": 0.25, BASELINES: 1.2}
+MIN_PER_ITERATION = {"stage 1": 0.15, "stage 2": 0.15, BASELINES: 1.0}
 #: Each search also scores the paper's setting and the kept one on the test half: about two iterations more.
 EXTRA_ITERATIONS = 2
 #: Seconds per detection of the steps without a search.

@@ -380,18 +380,22 @@ def _estimate(run, keys, *, full, simulated):
         steps = {key: step_cost(key, budget, tuned=_tuned(key), **sizes) for key in keys}
         return {**steps, REPORT: REPORT_S}
 
-    progress = RunProgress(costs(run.budget, 1.0), run.started)
+    # The time spent on the data so far (simulation, statistics, compilation) counts towards the run's length.
+    spent = time.perf_counter() - run.started
+    progress = RunProgress({**costs(run.budget, 1.0), DATA: spent}, run.started)
+    progress.finish(DATA)
     text = f"estimated run time: {rough(progress.total)} on an idle 2-core machine"
     if not full:
         # --full simulates the paper's data size; on a data folder it keeps the data and raises the budget.
         default, paper = Budget.default(), Budget.full()
         scale = (paper.n_sequences * paper.duration) / (default.n_sequences * default.duration) if simulated else 1.0
-        text += f"; --full (the paper's budget) takes {rough(sum(costs(paper, scale).values()))}"
+        text += f"; --full (the paper's budget) takes {rough(spent * scale + sum(costs(paper, scale).values()))}"
     _say(run, text + "; the progress lines below re-estimate the time left as the run goes")
     return progress
 
 
-#: The last step of every run, for the progress: the figures and the report.
+#: The first and the last step of every run, for the progress: making the data, and the figures and the report.
+DATA = "data"
 REPORT = "report"
 
 
