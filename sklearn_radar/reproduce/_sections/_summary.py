@@ -44,8 +44,8 @@ def markdown(results: RunResults) -> list[str]:
     kept = [f"#{n}" for n, e in sorted(experiments.items()) if setting_source(e) == SETTING_PAPER]
     if kept:
         lines.append(
-            f"- the search found nothing better than the paper's setting for {', '.join(kept)}: those rows are the "
-            f"paper's setting, scored here (marked {SETTING_PAPER.split()[-1]})."
+            f"- the search found nothing better than the paper's setting for {', '.join(kept)}: the tables show the "
+            f"paper's setting there, scored on our data (marked {SETTING_PAPER.split()[-1]})."
         )
     unmerged = [f"#{n}" for n, e in sorted(experiments.items()) if e.n_merges_test == 0]
     if unmerged:
