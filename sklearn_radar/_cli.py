@@ -123,6 +123,12 @@ def _parser():
     )
     reproduce.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
     reproduce.add_argument(
+        "--repeats",
+        type=int,
+        help="searches per tuned experiment and baseline, with the seeds seed, seed+1, ... on the same split; the "
+        "report gives mean +- sd and checks the findings beyond the noise (default: 1; 3 with --full)",
+    )
+    reproduce.add_argument(
         "--difficulty",
         choices=("easy", "realistic"),
         default="realistic",
@@ -227,6 +233,8 @@ def _reproduce(args) -> int:
         raise ValueError(f"--n-iter must be at least 1, got {args.n_iter}")
     scheduler, workers = _cluster_args(args)
     n_points = _positive_int(args.n_points, "--n-points", "a whole number of candidates")
+    if args.repeats is not None and args.repeats < 1:
+        raise ValueError(f"--repeats must be at least 1, got {args.repeats}")
     start = time.perf_counter()
     reproduce(
         args.data,
@@ -241,6 +249,7 @@ def _reproduce(args) -> int:
         scheduler=scheduler,
         workers=workers,
         n_points=n_points,
+        repeats=args.repeats,
     )
     print(
         f"wrote {_shown(args.out)}/report.md, results.json, params.json and figures "

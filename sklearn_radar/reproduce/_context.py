@@ -41,6 +41,9 @@ class RunContext:
         method, #8 (:data:`~sklearn_radar.reproduce._constants.BEST_STAGE1`),
         once it ran: #10, #11, the stage-2 experiments and the filter effect
         reuse it.
+    best_stage1_repeats : list of dict or None, default=None
+        The same for each repeat of a run with several (``meta.repeats``):
+        repeat ``k`` of #10, #11 and stage 2 builds on repeat ``k`` of #8.
     """
 
     scenes: Any
@@ -52,6 +55,7 @@ class RunContext:
     labels: dict[int, np.ndarray] = field(default_factory=dict)
     filter_grids: dict[str, Any] | None = None
     best_stage1: dict[str, Any] | None = None
+    best_stage1_repeats: list[dict[str, Any]] | None = None
 
 
 __all__ = ["RunContext"]

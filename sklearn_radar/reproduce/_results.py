@@ -183,6 +183,9 @@ class RunMeta:
     objective : {"v1", "pq"}, default="v1"
         What the searches maximised and ``params.json``'s ``best`` ranks by: the paper's radar
         V-measure, or the panoptic quality of moving road users per 0.5 s frame.
+    repeats : int, default=1
+        Searches per tuned experiment and baseline, with the seeds ``seed``, ``seed + 1``, ... on the same
+        split (the key is absent for 1).
     """
 
     version: str
@@ -193,6 +196,7 @@ class RunMeta:
     interrupted: bool = False
     wall_time_s: float | None = None
     objective: str = "v1"
+    repeats: int = 1
 
     def to_json_dict(self):
         """The ``meta`` entry of ``results.json``."""
@@ -205,6 +209,7 @@ class RunMeta:
             "interrupted": self.interrupted,
             "objective": self.objective,
         }
+        _put(document, "repeats", self.repeats if self.repeats != 1 else None)
         return _put(document, "wall_time_s", self.wall_time_s)
 
     @classmethod
@@ -591,6 +596,77 @@ def _instance_from_json(rest):
     return rest
 
 
+def _repeats_from_json(rest):
+    """Turn the optional ``repeats`` entry of a parsed record into a list of :class:`RepeatResult`."""
+    if rest.get("repeats") is not None:
+        rest["repeats"] = [RepeatResult.from_json_dict(record) for record in rest["repeats"]]
+    return rest
+
+
+@dataclass(**_RECORD)
+class RepeatResult:
+    """One repeat of an experiment or baseline: its search with its own seed, and the kept setting's test scores.
+
+    Attributes
+    ----------
+    seed : int
+        Random seed of the repeat's search (the run's seed plus the repeat's index).
+    params : dict
+        The setting scored on the test half, as pipeline parameters.
+    v1_test : float
+        Radar V-measure on the test half, 0-1.
+    n_clusters_test : int
+        Clusters found on the test half.
+    search : SearchRecord or None, default=None
+        The repeat's search; None for #10 and #11, which take the same repeat's #8 setting.
+    instance_test : InstanceScores or None, default=None
+        Object-level scores on the test half.
+    """
+
+    seed: int
+    params: dict[str, Any]
+    v1_test: float
+    n_clusters_test: int
+    search: SearchRecord | None = None
+    instance_test: InstanceScores | None = None
+
+    def to_json_dict(self):
+        """One entry of a record's ``repeats``: the seed, the search's keys, then the test scores."""
+        document = {"seed": self.seed}
+        if self.search is not None:
+            document.update(self.search.to_json_dict())
+        document.update(params=self.params, v1_test=self.v1_test, n_clusters_test=self.n_clusters_test)
+        if self.instance_test is not None:
+            document["instance_test"] = self.instance_test.to_json_dict()
+        return document
+
+    @classmethod
+    def from_json_dict(cls, document):
+        """Read :meth:`to_json_dict`'s form back."""
+        search, rest = SearchRecord.split_json_dict(document)
+        return cls(search=search, **_instance_from_json(rest))
+
+
+def repeated_scores(result, score="v1"):
+    """The test scores of an experiment or baseline, one per repeat (one value for a single run).
+
+    Parameters
+    ----------
+    result : ExperimentResult or BaselineResult
+    score : {"v1", "pq"}, default="v1"
+        The radar V-measure or the panoptic quality.
+
+    Returns
+    -------
+    scores : list of float
+        Per repeat, in order; ``[]`` for PQ when the record has no object-level scores.
+    """
+    records = result.repeats or [result]
+    if score == "v1":
+        return [float(r.v1_test) for r in records]
+    return [float(r.instance_test.pq) for r in records if r.instance_test is not None]
+
+
 @dataclass(**_RECORD)
 class ExperimentResult:
     """One experiment of Tables III and IV, re-run (``experiments.N``).
@@ -627,6 +703,10 @@ class ExperimentResult:
         returned its stage-1 clustering unchanged.
     n_stage1_clusters_test : int or None, default=None
         Stage 2 only: stage-1 clusters on the test half, before merging.
+    repeats : list of RepeatResult or None, default=None
+        Every repeat of a run with more than one (``meta.repeats``), the
+        first being the one whose values the other fields hold; None for a
+        single run and for the fixed expert setting, which no seed changes.
     """
 
     number: int
@@ -646,6 +726,7 @@ class ExperimentResult:
     instance_test: InstanceScores | None = None
     n_merges_test: int | None = None
     n_stage1_clusters_test: int | None = None
+    repeats: list[RepeatResult] | None = None
 
     def to_json_dict(self):
         """The experiment's record in ``results.json``: the search's keys flat among the others."""
@@ -669,13 +750,15 @@ class ExperimentResult:
         _put(document, "n_merges_test", self.n_merges_test)
         if self.instance_test is not None:
             document["instance_test"] = self.instance_test.to_json_dict()
+        if self.repeats is not None:
+            document["repeats"] = [repeat.to_json_dict() for repeat in self.repeats]
         return document
 
     @classmethod
     def from_json_dict(cls, document):
         """Read :meth:`to_json_dict`'s form back."""
         search, rest = SearchRecord.split_json_dict(document)
-        return cls(search=search, **_instance_from_json(rest))
+        return cls(search=search, **_repeats_from_json(_instance_from_json(rest)))
 
 
 @dataclass(**_RECORD)
@@ -695,6 +778,9 @@ class BaselineResult:
         Wall time of the search and scoring, s.
     instance_test : InstanceScores or None, default=None
         Object-level scores on the test half.
+    repeats : list of RepeatResult or None, default=None
+        Every repeat of a run with more than one, the first being the one
+        whose values the other fields hold; None for a single run.
     """
 
     search: SearchRecord
@@ -703,6 +789,7 @@ class BaselineResult:
     n_clusters_test: int
     wall_time_s: float
     instance_test: InstanceScores | None = None
+    repeats: list[RepeatResult] | None = None
 
     def to_json_dict(self):
         """The baseline's record in ``results.json``: the search's keys first."""
@@ -715,13 +802,15 @@ class BaselineResult:
         }
         if self.instance_test is not None:
             document["instance_test"] = self.instance_test.to_json_dict()
+        if self.repeats is not None:
+            document["repeats"] = [repeat.to_json_dict() for repeat in self.repeats]
         return document
 
     @classmethod
     def from_json_dict(cls, document):
         """Read :meth:`to_json_dict`'s form back."""
         search, rest = SearchRecord.split_json_dict(document)
-        return cls(search=search, **_instance_from_json(rest))
+        return cls(search=search, **_repeats_from_json(_instance_from_json(rest)))
 
 
 # ----------------------------------------------------------------------------- the filter's effect
@@ -1012,7 +1101,9 @@ __all__ = [
     "FilterSettingRow",
     "FilterWindows",
     "GridTable",
+    "RepeatResult",
     "RunMeta",
     "RunResults",
     "SearchRecord",
+    "repeated_scores",
 ]

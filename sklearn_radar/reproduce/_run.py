@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import datetime
 import hashlib
+import io
 import json
 import os
 import sys
@@ -34,8 +35,10 @@ import uuid
 from dataclasses import dataclass, field
 from numbers import Integral
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
+from joblib import Parallel, delayed, effective_n_jobs
 from sklearn.base import clone
 from sklearn.model_selection import GroupKFold
 from sklearn.utils._param_validation import HasMethods, Interval, StrOptions, validate_params
@@ -97,6 +100,7 @@ from ._results import (
     FilterWindows,
     GridTable,
     InstanceScores,
+    RepeatResult,
     RunMeta,
     RunResults,
     SearchRecord,
@@ -209,6 +213,7 @@ def parse_experiments(text):
         "scheduler": [str, None],
         "workers": [Integral, None],
         "n_points": [Interval(Integral, 1, None, closed="left"), None],
+        "repeats": [Interval(Integral, 1, None, closed="left"), None],
     },
     prefer_skip_nested_validation=True,
 )
@@ -227,6 +232,7 @@ def reproduce(
     scheduler=None,
     workers=None,
     n_points=None,
+    repeats=None,
 ):
     """Run the paper's experiments and write ``report.md``, ``results.json``, ``params.json`` and figures.
 
@@ -279,6 +285,14 @@ def reproduce(
         keep its workers busy (worker threads // folds).  The results
         depend on it, not on where the fits run: for the same seed and
         ``n_points`` a cluster run equals a single-process one.
+    repeats : int, default=None
+        Searches per tuned experiment and per baseline, with the seeds
+        ``seed``, ``seed + 1``, ... on the same split, each repeat's kept
+        setting scored on the test half; None: 1, or 3 with ``full``.  The
+        report gives test scores as mean and standard deviation over the
+        repeats and checks the paper's findings by paired differences
+        (``results.json`` keeps every repeat).  With ``n_jobs`` above 1 the
+        repeats of a step run concurrently, ``n_jobs`` split between them.
 
     Returns
     -------
@@ -287,17 +301,32 @@ def reproduce(
     """
     with connect_cluster(scheduler, workers) as cluster:
         return _reproduce(
-            data, out, n_iter, n_jobs, experiments, full, seed, stream, objective, difficulty, cluster, n_points
+            data,
+            out,
+            n_iter,
+            n_jobs,
+            experiments,
+            full,
+            seed,
+            stream,
+            objective,
+            difficulty,
+            cluster,
+            n_points,
+            repeats,
         )
 
 
-def _reproduce(data, out, n_iter, n_jobs, experiments, full, seed, stream, objective, difficulty, cluster, n_points):
+def _reproduce(
+    data, out, n_iter, n_jobs, experiments, full, seed, stream, objective, difficulty, cluster, n_points, repeats
+):
     """:func:`reproduce` with its cluster (or None) connected."""
     started = time.perf_counter()
     keys = parse_experiments(experiments)
     out = Path(out)
     created = check_writable(out)
     budget = Budget.full(n_iter) if full else Budget.default(n_iter)
+    repeats = (3 if full else 1) if repeats is None else int(repeats)
     stream = stream or sys.stdout
     try:
         scenes, source = _data(data, budget, seed, difficulty)
@@ -310,6 +339,7 @@ def _reproduce(data, out, n_iter, n_jobs, experiments, full, seed, stream, objec
         seed=seed,
         budget=budget,
         objective=objective,
+        repeats=repeats,
         data=DataMeta(
             source=source,
             n_detections=len(scenes.data),
@@ -327,7 +357,8 @@ def _reproduce(data, out, n_iter, n_jobs, experiments, full, seed, stream, objec
     _say(
         run,
         f"data: {source}, {len(scenes.data):,} detections in {meta.data.n_sequences} sequences; "
-        f"train {len(train):,} / test {len(test):,}; budget: {budget.label}, {budget.n_iter} iterations",
+        f"train {len(train):,} / test {len(test):,}; budget: {budget.label}, {budget.n_iter} iterations"
+        + (f"; {repeats} repeats of each search (seeds {seed}-{seed + repeats - 1})" if repeats > 1 else ""),
     )
     run.progress = _estimate(run, keys, full=full, simulated=data is None)
     target = precluster_target(scenes.data, scenes.target)
@@ -371,25 +402,26 @@ def _estimate(run, keys, *, full, simulated):
     """The run's cost model (:class:`RunProgress`), and a line saying how long this run and ``--full`` take."""
     data = run.results.meta.data
 
-    def costs(budget, scale):
+    def costs(budget, scale, repeats):
         sizes = {
             "n_train": data.n_train * scale,
             "n_test": data.n_test * scale,
             "n_detections": data.n_detections * scale,
         }
-        steps = {key: step_cost(key, budget, tuned=_tuned(key), **sizes) for key in keys}
+        steps = {key: step_cost(key, budget, tuned=_tuned(key), **sizes) * _repeated(key, repeats) for key in keys}
         return {**steps, REPORT: REPORT_S}
 
     # The time spent on the data so far (simulation, statistics, compilation) counts towards the run's length.
     spent = time.perf_counter() - run.started
-    progress = RunProgress({**costs(run.budget, 1.0), DATA: spent}, run.started)
+    progress = RunProgress({**costs(run.budget, 1.0, run.results.meta.repeats), DATA: spent}, run.started)
     progress.finish(DATA)
     text = f"estimated run time: {rough(progress.total)} on an idle 2-core machine"
     if not full:
         # --full simulates the paper's data size; on a data folder it keeps the data and raises the budget.
         default, paper = Budget.default(), Budget.full()
         scale = (paper.n_sequences * paper.duration) / (default.n_sequences * default.duration) if simulated else 1.0
-        text += f"; --full (the paper's budget) takes {rough(spent * scale + sum(costs(paper, scale).values()))}"
+        full_s = spent * scale + sum(costs(paper, scale, 3).values())  # --full repeats each search 3 times
+        text += f"; --full (the paper's budget, 3 repeats) takes {rough(full_s)}"
     _say(run, text + "; the progress lines below re-estimate the time left as the run goes")
     return progress
 
@@ -411,6 +443,15 @@ def _use_cluster(run, cluster, n_points):
         return
     run.n_points = n_points or max(1, cluster.n_threads // run.budget.cv_folds)
     _say(run, f"{cluster.describe()}; {run.n_points} candidate(s) x {run.budget.cv_folds} folds per search step")
+
+
+def _repeated(key, repeats):
+    """How many times a step's work runs: ``repeats`` for the searches and for #8's derived settings, else once."""
+    if key == BASELINES or _tuned(key):
+        return repeats
+    if key.isdigit() and get_experiment(int(key)).derived_from is not None:
+        return repeats
+    return 1
 
 
 def _finish(run, context, status):
@@ -619,10 +660,11 @@ def _score(context, pipeline):
     return v1, labels, instance
 
 
-def _tune(run, context, estimator, space, label, start_from=None, part=0, parts=1):
+def _tune(run, context, estimator, space, label, start_from=None, part=0, parts=1, seed=None):
     """Bayesian optimisation on the training half with grouped CV; returns (best params, SearchRecord).
 
-    ``part`` of ``parts`` says which of the step's searches this is, for the overall progress.
+    ``part`` of ``parts`` says which of the step's searches this is, for the overall progress; ``seed``
+    is the search's random seed (None: the run's).
 
     ``start_from`` (e.g. the paper's optimum) is scored on the same folds as
     one more candidate and wins when the search found nothing better: a
@@ -661,7 +703,7 @@ def _tune(run, context, estimator, space, label, start_from=None, part=0, parts=
         cv=cv,
         n_jobs=-1 if cluster is not None else run.n_jobs,  # on a cluster: every fit a dask task
         n_points=n_points,
-        random_state=run.seed,
+        random_state=run.seed if seed is None else seed,
     )
     search.set_params(refit=False)  # only the best parameters are used, never a refitted estimator
     status = None if run.progress is None else run.progress.search_status(part, parts)
@@ -750,31 +792,110 @@ def _with_cluster_gate(space, stage, objective):
     return {**space, name: Real(0.0, 1.5, name=name)}
 
 
+def _repeat_runs(run, repeats):
+    """How the repeats of a step run: (concurrent repeats, the run each of them sees).
+
+    With ``n_jobs`` above 1 and several repeats, up to ``n_jobs`` repeats run
+    at once as independent joblib jobs, the cores split between them, each
+    search quiet (its progress lines would interleave); otherwise, and on a
+    dask cluster (whose workers each search keeps busy with its candidates),
+    one after the other in this process, each search with the run's
+    ``n_jobs`` and progress lines.  The seeds, and so the results, are the
+    same either way.
+    """
+    if getattr(run, "cluster", None) is not None:
+        return 1, run
+    workers = effective_n_jobs(run.n_jobs) if run.n_jobs is not None else 1
+    concurrent = min(repeats, workers)
+    if concurrent < 2:
+        return 1, run
+    worker = SimpleNamespace(
+        budget=run.budget,
+        seed=run.seed,
+        n_jobs=max(1, workers // concurrent),
+        n_points=getattr(run, "n_points", 1),
+        cluster=None,
+        progress=None,
+        stream=io.StringIO(),
+        results=SimpleNamespace(meta=SimpleNamespace(objective=run.results.meta.objective)),
+    )
+    return concurrent, worker
+
+
+def _map_repeats(run, job, repeats):
+    """``[job(worker_run, k) for k in range(repeats)]``, concurrently where ``n_jobs`` allows (:func:`_repeat_runs`)."""
+    concurrent, worker = _repeat_runs(run, repeats)
+    if concurrent == 1:
+        return [job(run, k) for k in range(repeats)]
+    _say(run, f"    {repeats} repeats, {concurrent} at a time (their searches print no iterations)")
+    return Parallel(n_jobs=concurrent)(delayed(job)(worker, k) for k in range(repeats))
+
+
+def _repeat_label(label, k, repeats):
+    return label if repeats == 1 else f"{label} repeat {k + 1}/{repeats}"
+
+
+def _experiment_repeat(run, context, number, k, repeats, stage1):
+    """Repeat ``k`` of experiment ``number``: search (seed ``run.seed + k``) or derive its setting, then score it.
+
+    ``stage1`` is #8's setting of the same repeat (None: the paper's); returns a dictionary of what it found.
+    """
+    experiment = get_experiment(number)
+    start = time.perf_counter()
+    pipeline = experiment_pipeline(
+        number, memory=context.cache, stage1_params=stage1 if experiment.stage == 2 else None
+    )
+    search = None
+    if experiment.tuned:
+        space = _with_cluster_gate(search_space(number), experiment.stage, run.results.meta.objective)
+        params, search = _tune(
+            run,
+            context,
+            pipeline,
+            space,
+            _repeat_label(f"#{number}", k, repeats),
+            paper_params(number),
+            part=k,
+            parts=repeats,
+            seed=run.seed + k,
+        )
+    elif experiment.derived_from is None:  # the expert setting (#1): the paper's, as it is
+        params = {}
+    else:  # #10, #11: #8's setting, transferred
+        params = derived_params(number, stage1)
+    pipeline.set_params(**params)
+    v1, labels, instance = _score(context, pipeline)
+    found = {"params": params, "search": search, "v1": v1, "labels": labels, "instance": instance}
+    found["n_merges"] = found["n_stage1"] = None
+    if experiment.stage == 2:
+        merger = pipeline[-1]
+        found["n_merges"] = len(merger.merges_)
+        found["n_stage1"] = len(np.unique(merger.stage1_labels_[merger.stage1_labels_ >= 0]))
+    found["wall_time_s"] = time.perf_counter() - start
+    return found
+
+
 def _run_experiment(run, context, key):
     number = int(key)
     experiment = get_experiment(number)
     best = context.best_stage1
     start = time.perf_counter()
-    stage1_params = recorded_stage1 = derived = search = None
+    # The fixed expert setting (#1) does not depend on a seed: it runs once whatever the repeats.
+    repeats = run.results.meta.repeats if experiment.tuned or experiment.derived_from is not None else 1
+    stage1s = context.best_stage1_repeats or [best] * repeats
+    if len(stage1s) != repeats:
+        stage1s = [best] * repeats
+
+    def job(worker, k):
+        return _experiment_repeat(worker, context, number, k, repeats, stage1s[k])
+
+    found = _map_repeats(run, job, repeats)
+    first = found[0]
+    recorded_stage1 = derived = None
     if experiment.stage == 2:
-        stage1_params = best  # None: the paper's #8
         recorded_stage1 = best or paper_params(BEST_STAGE1)
-    pipeline = experiment_pipeline(number, memory=context.cache, stage1_params=stage1_params)
-    if experiment.tuned:
-        space = _with_cluster_gate(search_space(number), experiment.stage, run.results.meta.objective)
-        params, search = _tune(run, context, pipeline, space, f"#{number}", paper_params(number))
-    elif experiment.derived_from is None:  # the expert setting (#1): the paper's, as it is
-        params = {}
-    else:  # #10, #11: #8's setting, transferred
-        params = derived_params(number, best)
+    if not experiment.tuned and experiment.derived_from is not None:
         derived = f"tuned #{BEST_STAGE1}" if best else f"paper's #{BEST_STAGE1} (experiment {BEST_STAGE1} not run)"
-    pipeline.set_params(**params)
-    v1, labels, instance = _score(context, pipeline)
-    n_merges = n_stage1 = None
-    if experiment.stage == 2:
-        merger = pipeline[-1]
-        n_merges = len(merger.merges_)
-        n_stage1 = len(np.unique(merger.stage1_labels_[merger.stage1_labels_ >= 0]))
     result = ExperimentResult(
         number=number,
         method=experiment.method,
@@ -783,22 +904,55 @@ def _run_experiment(run, context, key):
         stage=experiment.stage,
         paper_v1_percent=experiment.v1_percent,
         paper_params=paper_params(number),
-        params={**paper_params(number), **params},
-        v1_test=v1,
-        n_clusters_test=int(labels.max() + 1),
+        params={**paper_params(number), **first["params"]},
+        v1_test=first["v1"],
+        n_clusters_test=int(first["labels"].max() + 1),
         wall_time_s=time.perf_counter() - start,
         stage1_params=recorded_stage1,
         derived_from_8=derived,
-        instance_test=instance,
-        search=search,
-        n_merges_test=n_merges,
-        n_stage1_clusters_test=n_stage1,
+        instance_test=first["instance"],
+        search=first["search"],
+        n_merges_test=first["n_merges"],
+        n_stage1_clusters_test=first["n_stage1"],
+        repeats=_repeat_records(run, found, paper_params(number)) if repeats > 1 else None,
     )
-    context.labels[number] = labels
+    context.labels[number] = first["labels"]
     if number == BEST_STAGE1:
-        context.best_stage1 = {k: v for k, v in result.params.items() if k.startswith("cluster__")}
+        context.best_stage1 = _stage1_setting(result.params)
+        context.best_stage1_repeats = [_stage1_setting(r.params) for r in result.repeats or [result]]
     run.results.experiments[number] = result
-    _say(run, f"    #{number}: test V1 {100 * v1:.2f} % (paper {experiment.v1_percent:.2f} %), PQ {instance.pq:.3f}")
+    _say(
+        run, f"    #{number}: test V1 {_spread(found, 'v1')} (paper {experiment.v1_percent:.2f} %), PQ {_spread(found)}"
+    )
+
+
+def _stage1_setting(params):
+    return {k: v for k, v in params.items() if k.startswith("cluster__")}
+
+
+def _repeat_records(run, found, defaults=None):
+    """One :class:`RepeatResult` per repeat, in order."""
+    return [
+        RepeatResult(
+            seed=run.seed + k,
+            params={**(defaults or {}), **f["params"]},
+            v1_test=f["v1"],
+            n_clusters_test=int(f["labels"].max() + 1),
+            search=f["search"],
+            instance_test=f["instance"],
+        )
+        for k, f in enumerate(found)
+    ]
+
+
+def _spread(found, score="pq"):
+    """``"71.55 %"`` / ``"0.412"`` for one repeat, mean and sd over several (``"71.20 +- 0.35 %"``)."""
+    values = np.array([f["v1"] if score == "v1" else f["instance"].pq for f in found])
+    scale, unit, digits = (100, " %", 2) if score == "v1" else (1, "", 3)
+    text = f"{scale * values.mean():.{digits}f}"
+    if len(values) > 1:
+        text += f" +- {scale * values.std(ddof=1):.{digits}f}"
+    return text + unit
 
 
 def _run_filter_effect(run, context, key):
@@ -881,25 +1035,55 @@ _BASELINES = {
 }
 
 
+def _baseline_repeat(run, context, name, clusterer, space, k, repeats, part, parts):
+    """Repeat ``k`` of a baseline: its search (seed ``run.seed + k``) and the kept setting's test scores."""
+    start = time.perf_counter()
+    pipeline = experiment_pipeline(FCS_BASELINE, memory=context.cache)
+    pipeline.steps[-1] = ("cluster", clusterer())
+    params, search = _tune(
+        run,
+        context,
+        pipeline,
+        space,
+        _repeat_label(name, k, repeats),
+        part=part * repeats + k,
+        parts=parts * repeats,
+        seed=run.seed + k,
+    )
+    pipeline.set_params(**params)
+    v1, labels, instance = _score(context, pipeline)
+    return {
+        "params": params,
+        "search": search,
+        "v1": v1,
+        "labels": labels,
+        "instance": instance,
+        "wall_time_s": time.perf_counter() - start,
+    }
+
+
 def _run_baselines(run, context, key):
     """The clusterers a user would otherwise pick, on the same FCS + filter input, same budget and split."""
     baselines = run.results.baselines = {}
+    repeats = run.results.meta.repeats
     for part, (name, (clusterer, space)) in enumerate(_BASELINES.items()):
         start = time.perf_counter()
-        pipeline = experiment_pipeline(FCS_BASELINE, memory=context.cache)
-        pipeline.steps[-1] = ("cluster", clusterer())
-        params, search = _tune(run, context, pipeline, space, name, part=part, parts=len(_BASELINES))
-        pipeline.set_params(**params)
-        v1, labels, instance = _score(context, pipeline)
+
+        def job(worker, k, name=name, clusterer=clusterer, space=space, part=part):
+            return _baseline_repeat(worker, context, name, clusterer, space, k, repeats, part, len(_BASELINES))
+
+        found = _map_repeats(run, job, repeats)
+        first = found[0]
         baselines[name] = BaselineResult(
-            search=search,
-            params=params,
-            v1_test=v1,
-            n_clusters_test=int(labels.max() + 1),
+            search=first["search"],
+            params=first["params"],
+            v1_test=first["v1"],
+            n_clusters_test=int(first["labels"].max() + 1),
             wall_time_s=time.perf_counter() - start,
-            instance_test=instance,
+            instance_test=first["instance"],
+            repeats=_repeat_records(run, found) if repeats > 1 else None,
         )
-        _say(run, f"    {name}: test V1 {100 * v1:.2f} %, PQ {instance.pq:.3f}")
+        _say(run, f"    {name}: test V1 {_spread(found, 'v1')}, PQ {_spread(found)}")
 
 
 _RUNNERS = {

@@ -12,7 +12,7 @@ import numpy as np
 from .._constants import BEST_STAGE1, FRAME_NAMES, SOURCE_PAPER
 from .._context import RunContext
 from .._io import atomic_write
-from .._results import ExperimentResult, GridTable, RunResults
+from .._results import ExperimentResult, GridTable, RunResults, repeated_scores
 
 #: Markdown of a section: its lines, each starting a new line of report.md; [] leaves the section out.
 Markdown = Callable[[RunResults], list[str]]
@@ -79,6 +79,46 @@ _SHORT = {"eps_phi": "eps_phi (rad)"}
 def percent(value):
     """A share 0-1 as ``"71.55 %"``; ``"-"`` for None or NaN."""
     return "-" if value is None or (isinstance(value, float) and np.isnan(value)) else f"{100 * value:.2f} %"
+
+
+def score_cell(result, score="v1"):
+    """A test score over the repeats: ``"71.55 %"`` for one run, ``"71.20 \u00b1 0.35 %"`` (mean \u00b1 sd) for more.
+
+    Parameters
+    ----------
+    result : ExperimentResult or BaselineResult
+    score : {"v1", "pq"}, default="v1"
+        V1 in percent, or PQ with 3 decimals.
+
+    Returns
+    -------
+    text : str
+        ``"-"`` without the score.
+    """
+    values = repeated_scores(result, score)
+    if not values:
+        return "-"
+    scale, unit, digits = (100, " %", 2) if score == "v1" else (1, "", 3)
+    if len(values) == 1:
+        return f"{scale * values[0]:.{digits}f}{unit}"
+    return f"{scale * np.mean(values):.{digits}f} \u00b1 {scale * np.std(values, ddof=1):.{digits}f}{unit}"
+
+
+def mean_score(result, results: RunResults):
+    """The mean test score over the repeats in the run's objective (V1, or PQ when tuned for PQ)."""
+    values = repeated_scores(result, "pq" if results.meta.objective == "pq" else "v1")
+    return float(np.mean(values)) if values else result.v1_test
+
+
+def repeats_legend(results: RunResults):
+    """What a score cell means in a run of several repeats; ``""`` for a single run."""
+    repeats = results.meta.repeats
+    if repeats < 2:
+        return ""
+    return (
+        f" Test scores are mean \u00b1 standard deviation over {repeats} searches with different seeds on the same "
+        "split (results.json `repeats` holds each); the other columns are those of the first repeat."
+    )
 
 
 def frame_name(frame):
@@ -222,7 +262,7 @@ def column_legend(results: RunResults, stage2=False, short=False):
         "and kept because the search found nothing better (results.json `best_source`), "
         f"`{SETTING_FIXED}` the paper's fixed expert setting (not tuned), `{SETTING_DERIVED}` "
         f"#{BEST_STAGE1}'s setting transferred (not tuned); *CS*: coordinate system (FCS: frame/world, "
-        "CCS: car); *filtered*: whether the Doppler-density filter ran first." + merges
+        "CCS: car); *filtered*: whether the Doppler-density filter ran first." + merges + repeats_legend(results)
     ]
 
 
@@ -233,7 +273,7 @@ def experiment_row(e: ExperimentResult, results: RunResults, stage2=False):
         e.method,
         frame_name(e.frame),
         "yes" if e.filtered else "no",
-        percent(e.v1_test),
+        score_cell(e),
         f"{e.paper_v1_percent:.2f} %",
         cv_cell(e, results),
         setting_source(e),
@@ -276,10 +316,13 @@ __all__ = [
     "format_score",
     "frame_name",
     "grid_markdown",
+    "mean_score",
     "objective_name",
     "overfit_lines",
     "percent",
+    "repeats_legend",
     "save_figure",
+    "score_cell",
     "setting_source",
     "test_score",
 ]

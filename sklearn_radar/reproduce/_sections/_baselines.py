@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from .._results import RunResults
-from ._base import Section, cv_cell, format_params, objective_name, overfit_lines, percent
+from ._base import Section, cv_cell, format_params, objective_name, overfit_lines, repeats_legend, score_cell
 
 
 def markdown(results: RunResults) -> list[str]:
@@ -22,14 +22,14 @@ def markdown(results: RunResults) -> list[str]:
     ]
     for name, result in results.baselines.items():
         lines.append(
-            f"| {name} | {percent(result.v1_test)} | {cv_cell(result, results)} | {format_params(result.params)} "
+            f"| {name} | {score_cell(result)} | {cv_cell(result, results)} | {format_params(result.params)} "
             f"| {result.wall_time_s:.0f} s |"
         )
     lines += [
         "",
         f"Columns: *V1 (test)*: radar V-measure on the test half; *CV {score} (train)*: mean {score} of the kept "
         f"setting over the {results.meta.budget.cv_folds} cross-validation folds of the training half (what the "
-        "search maximised); *wall time*: search and scoring, s.",
+        "search maximised); *wall time*: search and scoring, s." + repeats_legend(results),
     ]
     lines += overfit_lines(list(results.baselines.items()), results)
     return lines

@@ -5,9 +5,67 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import dataclass
 
+import numpy as np
+
 from .._constants import BEST_STAGE1, EXPERT, PAPER_FILTER_SETTING
-from .._results import FilterResult, RunResults
+from .._results import FilterResult, RunResults, repeated_scores
 from ._base import Section, frame_name, percent
+
+#: The verdicts of a finding.
+HOLDS, DOES_NOT_HOLD, UNCLEAR = "holds", "does not hold", "unclear"
+
+#: A difference is beyond the noise when it exceeds this many standard errors of its mean.
+N_STANDARD_ERRORS = 2
+
+
+def paired_verdict(differences, *, strict=True):
+    """The verdict on a claim that a difference of test scores is positive, from its values over repeats.
+
+    The rule of the report: with ``d_k`` the paired difference of repeat
+    ``k`` (the same seed and split for both experiments), mean ``m`` and
+    standard error ``se = sd(d, ddof=1) / sqrt(K)``, the claim *holds* when
+    ``m > 2 se`` and *does not hold* when ``m < -2 se``; otherwise it is
+    *unclear*.  Without any spread (``se = 0``, e.g. two settings that
+    label alike) a zero difference holds a non-strict claim (``>=``) and
+    not a strict one (``>``).  A single run (K = 1) has no standard error:
+    its verdict is the sign of its one difference, noise or not.
+
+    Parameters
+    ----------
+    differences : array-like of float
+        Paired differences, one per repeat, signed so that the claim says they are positive.
+    strict : bool, default=True
+        A strict claim (``>``) or not (``>=``).
+
+    Returns
+    -------
+    verdict : {"holds", "does not hold", "unclear"}
+    mean : float
+        Mean difference.
+    se : float or None
+        Its standard error; None for a single run.
+    """
+    d = np.asarray(differences, dtype=float)
+    if d.ndim != 1 or len(d) == 0 or not np.isfinite(d).all():
+        raise ValueError(f"differences must be a non-empty list of finite numbers, got {differences!r}")
+    mean = float(d.mean())
+    se = float(d.std(ddof=1) / np.sqrt(len(d))) if len(d) > 1 else None
+    noise = N_STANDARD_ERRORS * (se or 0.0)
+    if mean > noise:
+        return HOLDS, mean, se
+    if mean < -noise:
+        return DOES_NOT_HOLD, mean, se
+    if noise == 0.0:  # no difference at all, and no spread
+        return (DOES_NOT_HOLD if strict else HOLDS), mean, se
+    return UNCLEAR, mean, se
+
+
+def combined_verdict(verdicts):
+    """A finding of several comparisons: holds when all hold, does not when one does not, else unclear."""
+    verdicts = list(verdicts)
+    if all(v == HOLDS for v in verdicts):
+        return HOLDS
+    return DOES_NOT_HOLD if DOES_NOT_HOLD in verdicts else UNCLEAR
 
 
 @dataclass(frozen=True)
@@ -18,44 +76,75 @@ class Finding:
     ----------
     text : str
         The claim, as the report states it.
-    numbers : tuple of int
-        The experiments it compares; it is checked when all of them ran.
-    holds : callable
-        ``holds(v1: dict[int, float]) -> bool``.
+    claims : tuple of (int, int, bool)
+        ``(a, b, strict)``: the claim that #a scores above #b (``strict``)
+        or at least as well; the finding is all of them.
     """
 
     text: str
-    numbers: tuple[int, ...]
-    holds: Callable[[dict[int, float]], bool]
+    claims: tuple[tuple[int, int, bool], ...]
+
+    @property
+    def numbers(self):
+        """tuple of int : The experiments it compares, in increasing order; it is checked when all of them ran."""
+        return tuple(sorted({n for a, b, _ in self.claims for n in (a, b)}))
 
 
 #: The paper's findings (Section V), in the report's order.  Each names the experiments of Tables III and IV
 #: that it compares, as the paper does.
 FINDINGS = (
-    Finding("a tuned baseline beats the expert setting (#2 > #1)", (EXPERT, 2), lambda v: v[2] > v[EXPERT]),
-    Finding("FCS is at least as good as CCS (#3 >= #2)", (2, 3), lambda v: v[3] >= v[2]),
-    Finding(
-        "the Euclidean criteria improve on the box (#5, #6 > #3)", (3, 5, 6), lambda v: v[5] > v[3] and v[6] > v[3]
-    ),
-    Finding("range-adaptive N_min improves on the baseline (#7 > #3)", (3, 7), lambda v: v[7] > v[3]),
+    Finding("a tuned baseline beats the expert setting (#2 > #1)", ((2, EXPERT, True),)),
+    Finding("FCS is at least as good as CCS (#3 >= #2)", ((3, 2, False),)),
+    Finding("the Euclidean criteria improve on the box (#5, #6 > #3)", ((5, 3, True), (6, 3, True))),
+    Finding("range-adaptive N_min improves on the baseline (#7 > #3)", ((7, 3, True),)),
     Finding(
         "the combined method is the best stage-1 setting (#8 >= #2-#7)",
-        tuple(range(2, BEST_STAGE1 + 1)),
-        lambda v: v[BEST_STAGE1] >= max(v[n] for n in range(2, BEST_STAGE1)),
+        tuple((BEST_STAGE1, n, False) for n in range(2, BEST_STAGE1)),
     ),
     Finding(
         "filtering helps the combined method (#8 > #9 and #8 > #10)",
-        (BEST_STAGE1, 9, 10),
-        lambda v: v[BEST_STAGE1] > v[9] and v[BEST_STAGE1] > v[10],
+        ((BEST_STAGE1, 9, True), (BEST_STAGE1, 10, True)),
     ),
-    Finding(
-        "#8's setting transferred to the box criterion is worse (#11 < #8)",
-        (BEST_STAGE1, 11),
-        lambda v: v[11] < v[BEST_STAGE1],
-    ),
-    Finding("merging by velocity estimates hurts (#12 < #8)", (BEST_STAGE1, 12), lambda v: v[12] < v[BEST_STAGE1]),
-    Finding("merging by continuation helps slightly (#13 > #8)", (BEST_STAGE1, 13), lambda v: v[13] > v[BEST_STAGE1]),
+    Finding("#8's setting transferred to the box criterion is worse (#11 < #8)", ((BEST_STAGE1, 11, True),)),
+    Finding("merging by velocity estimates hurts (#12 < #8)", ((BEST_STAGE1, 12, True),)),
+    Finding("merging by continuation helps slightly (#13 > #8)", ((13, BEST_STAGE1, True),)),
 )
+
+
+def _paired(scores, a, b):
+    """Per-repeat differences #a - #b; a setting without repeats (the fixed #1) counts the same in each."""
+    x, y = np.asarray(scores[a]), np.asarray(scores[b])
+    if len(x) != len(y) and 1 not in (len(x), len(y)):
+        raise ValueError(f"#{a} has {len(x)} repeats and #{b} {len(y)}: they cannot be paired")
+    return x - y
+
+
+def judge(finding: Finding, scores):
+    """The verdict on a finding from per-repeat test scores, and the numbers that decide it.
+
+    Parameters
+    ----------
+    finding : Finding
+    scores : dict of int to list of float
+        Test V1 (0-1) per repeat, by experiment number; repeat ``k`` of
+        every experiment shares its seed and split.
+
+    Returns
+    -------
+    verdict : {"holds", "does not hold", "unclear"}
+    values : str
+        The scores (single run) or each mean paired difference in points with twice its standard error.
+    """
+    verdicts, shown = [], []
+    single = all(len(scores[n]) == 1 for n in finding.numbers)
+    for a, b, strict in finding.claims:
+        verdict, mean, se = paired_verdict(_paired(scores, a, b), strict=strict)
+        verdicts.append(verdict)
+        if not single:
+            shown.append(f"#{a} \u2212 #{b} {100 * mean:+.2f} \u00b1 {100 * N_STANDARD_ERRORS * se:.2f} points")
+    if single:
+        shown = [f"#{n} {percent(scores[n][0])}" for n in finding.numbers]
+    return combined_verdict(verdicts), ", ".join(shown)
 
 
 @dataclass(frozen=True)
@@ -115,43 +204,66 @@ FILTER_FINDINGS = (
 
 
 def checked(results: RunResults):
-    """Every finding that this run can check: (text, holds, the numbers that decide it), in the report's order.
+    """Every finding that this run can check: (text, verdict, the numbers that decide it), in the report's order.
 
     Returns
     -------
-    checks : list of (str, bool, str)
+    checks : list of (str, str, str)
+        The verdict is ``"holds"``, ``"does not hold"`` or ``"unclear"`` (:func:`paired_verdict`).
     """
-    v1 = results.v1_test()
+    scores = {number: repeated_scores(result) for number, result in results.experiments.items()}
     checks = []
     if results.filter is not None:
         for finding in FILTER_FINDINGS:
             outcome = finding.check(results.filter)
             if outcome is not None:
-                checks.append((finding.text, *outcome))
+                holds, values = outcome
+                checks.append((finding.text, HOLDS if holds else DOES_NOT_HOLD, values))
     for finding in FINDINGS:
-        if all(n in v1 for n in finding.numbers):
-            values = ", ".join(f"#{n} {percent(v1[n])}" for n in finding.numbers)
-            checks.append((finding.text, finding.holds(v1), values))
+        if all(n in scores for n in finding.numbers):
+            checks.append((finding.text, *judge(finding, scores)))
     return checks
 
 
 def markdown(results: RunResults) -> list[str]:
-    """Each finding whose experiments (or filter tables) ran: holds or not, with the numbers; [] when none can be."""
-    checks = [
-        f"- {text}: **{'holds' if holds else 'does not hold'}** here ({values})."
-        for text, holds, values in checked(results)
-    ]
+    """Each finding whose experiments (or filter tables) ran, its verdict with the numbers, and the rule."""
+    checks = checked(results)
     if not checks:
         return []
+    repeats = results.meta.repeats
+    where = "here" if repeats > 1 else "in this single run"
+    lines = [f"- {text}: **{verdict}** {where} ({values})." for text, verdict, values in checks]
     reduced = ", and this run used a reduced budget." if results.meta.budget.reduced else "."
     data = (
         "(see 'The data' above)" if results.statistics is not None else "(`sklearn-radar stats` prints its statistics)"
     )
+    if repeats > 1:
+        rule = (
+            f"The rule: each experiment was searched {repeats} times, with the seeds {results.meta.seed}-"
+            f"{results.meta.seed + repeats - 1} on the same split, and a comparison uses the paired differences of "
+            "test V1 over the repeats (repeat k of one experiment against repeat k of the other; the fixed #1 is "
+            "the same in every repeat). A finding **holds** when the mean difference has the paper's sign and "
+            f"exceeds {N_STANDARD_ERRORS} standard errors of the mean, **does not hold** when it has the opposite "
+            f"sign beyond {N_STANDARD_ERRORS} standard errors, and is **unclear** otherwise; a finding of several "
+            "comparisons holds when all hold. The numbers are the mean differences in percentage points "
+            f"\u00b1 {N_STANDARD_ERRORS} standard errors. The filter's findings come from fixed tables: no search, "
+            "no seed."
+        )
+    else:
+        rule = (
+            "The rule: this is a single run (`--repeats 1`): each verdict compares one search per experiment, "
+            "and cannot tell a difference from the noise of the search's random start, which moved test V1 by "
+            "about a point between two runs of the same search. `--repeats 3` searches each experiment with "
+            f"3 seeds and calls a finding holding (or not) only when the mean paired difference exceeds "
+            f"{N_STANDARD_ERRORS} standard errors, and unclear otherwise."
+        )
     return [
         "",
         "## The paper's findings, checked",
         "",
-        *checks,
+        *lines,
+        "",
+        rule,
         "",
         f"Absolute values differ from the paper's: the data here are not the paper's {data}, the target is our "
         "pre-clustering of its ground truth" + reduced,

@@ -8,7 +8,7 @@ import numpy as np
 
 from .._constants import BEST_STAGE1, FCS_BASELINE
 from .._context import RunContext
-from .._results import RunResults
+from .._results import RunResults, repeated_scores
 from ._base import SETTING_PAPER, Section, objective_name, percent, save_figure, setting_source, test_score
 
 #: The figures' files in the output folder.
@@ -39,7 +39,13 @@ def markdown(results: RunResults) -> list[str]:
         lines += [
             f"Best mean cross-validated {objective_name(results)} so far (training half), per search: one colour and "
             f"line style per curve (the scikit-learn baselines dashed); #{BEST_STAGE1}, the paper's best method, is "
-            "the wide black band with dots, drawn underneath so that a curve that coincides with it shows inside it.",
+            "the wide black band with dots, drawn underneath so that a curve that coincides with it shows inside it."
+            + (
+                f" With {results.meta.repeats} repeats per search, each line is the median over the repeats and the "
+                "shaded band around it spans their minimum to maximum."
+                if results.meta.repeats > 1
+                else ""
+            ),
             "",
             f"![convergence]({CONVERGENCE})",
         ]
@@ -94,12 +100,34 @@ def figures(out: Path, results: RunResults, context: RunContext) -> dict[str, st
     if context.labels:
         _scene_figure(plt, out / SCENE, results, context)
         drawn["scene"] = SCENE
-    curves = {f"#{number}": e.search.convergence for number, e in results.experiments.items() if e.search}
-    curves.update({name: baseline.search.convergence for name, baseline in (results.baselines or {}).items()})
+    curves = {f"#{number}": _convergences(e) for number, e in results.experiments.items() if e.search}
+    curves.update({name: _convergences(baseline) for name, baseline in (results.baselines or {}).items()})
     if curves:
         _convergence(plt, out / CONVERGENCE, curves, results)
         drawn["convergence"] = CONVERGENCE
     return drawn
+
+
+def _convergences(result):
+    """The convergence of each repeat's search (one list for a single run)."""
+    return [r.search.convergence for r in result.repeats or [result] if r.search is not None]
+
+
+def best_so_far(convergences):
+    """(median, minimum, maximum) over repeats of the best score so far, per iteration.
+
+    Parameters
+    ----------
+    convergences : list of list of float
+        Each repeat's score per iteration; repeats of different lengths are cut to the shortest.
+
+    Returns
+    -------
+    median, low, high : ndarray
+    """
+    n = min(len(c) for c in convergences)
+    best = np.maximum.accumulate(np.array([c[:n] for c in convergences], dtype=float), axis=1)
+    return np.median(best, axis=0), best.min(axis=0), best.max(axis=0)
 
 
 def curve_styles(n):
@@ -121,10 +149,13 @@ def _convergence(plt, path, curves, results):
         # The baselines dashed, the paper's experiments solid, while the 20 colours tell every curve apart.
         if len(others) <= 20 and name not in (f"#{n}" for n in results.experiments):
             linestyle = "--"
-        scores = curves[name]
+        median, low, high = best_so_far(curves[name])
+        iterations = np.arange(1, len(median) + 1)
+        if len(curves[name]) > 1:
+            ax.fill_between(iterations, low, high, color=colour, alpha=0.15, linewidth=0, zorder=1.5)
         ax.plot(
-            np.arange(1, len(scores) + 1),
-            np.maximum.accumulate(scores),
+            iterations,
+            median,
             color=colour,
             linestyle=linestyle,
             linewidth=1.5,
@@ -133,10 +164,13 @@ def _convergence(plt, path, curves, results):
         )
     if highlight in curves:
         # Underneath, wide: a curve that coincides with it stays visible inside the black band.
-        scores = curves[highlight]
+        median, low, high = best_so_far(curves[highlight])
+        iterations = np.arange(1, len(median) + 1)
+        if len(curves[highlight]) > 1:
+            ax.fill_between(iterations, low, high, color="0.6", alpha=0.35, linewidth=0, zorder=0.5)
         ax.plot(
-            np.arange(1, len(scores) + 1),
-            np.maximum.accumulate(scores),
+            iterations,
+            median,
             color="black",
             linewidth=4.5,
             marker="o",
@@ -157,11 +191,22 @@ def _convergence(plt, path, curves, results):
 def _v1_bars(plt, path, results):
     experiments = [results.experiments[number] for number in sorted(results.experiments)]
     positions = np.arange(len(experiments))
-    ours = [100 * e.v1_test for e in experiments]
+    repeated = [100 * np.asarray(repeated_scores(e)) for e in experiments]
+    ours = [float(np.mean(values)) for values in repeated]
+    spread = [float(np.std(values, ddof=1)) if len(values) > 1 else 0.0 for values in repeated]
     paper = [e.paper_v1_percent for e in experiments]
     fig, ax = plt.subplots(figsize=(max(7.5, 0.7 * len(experiments) + 2), 4.5))
     width = 0.4
-    ax.bar(positions - width / 2, ours, width, label="ours (test half)", color="tab:blue")
+    several = results.meta.repeats > 1
+    ax.bar(
+        positions - width / 2,
+        ours,
+        width,
+        yerr=spread if several else None,
+        capsize=3,
+        label=f"ours (test half, mean \u00b1 sd of {results.meta.repeats} repeats)" if several else "ours (test half)",
+        color="tab:blue",
+    )
     ax.bar(positions + width / 2, paper, width, label="paper", color="tab:gray")
     labels = [f"#{e.number}" + (" \u2020" if setting_source(e) == SETTING_PAPER else "") for e in experiments]
     ax.set_xticks(positions, labels)

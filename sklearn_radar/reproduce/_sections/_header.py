@@ -25,6 +25,12 @@ def markdown(results: RunResults) -> list[str]:
         f"- scores: radar V-measure (V1) on the test half against the pre-clustered target; seed {meta.seed}; "
         f"sklearn-radar {meta.version}; wall time {wall_time:.0f} s.",
     ]
+    if meta.repeats > 1:
+        lines.append(
+            f"- repeats: every tuned experiment and baseline searched {meta.repeats} times, with the seeds "
+            f"{meta.seed}-{meta.seed + meta.repeats - 1}, on the same split; each repeat's kept setting scored on the "
+            "test half. Test scores are mean \u00b1 standard deviation over the repeats."
+        )
     if meta.interrupted:
         lines.append(f"- **interrupted**: only {', '.join(meta.completed) or 'nothing'} finished.")
     return lines

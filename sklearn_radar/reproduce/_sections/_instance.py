@@ -3,16 +3,16 @@
 from __future__ import annotations
 
 from .._results import InstanceScores, RunResults
-from ._base import Section
+from ._base import Section, repeats_legend, score_cell
 
 
 def markdown(results: RunResults) -> list[str]:
     """One row per experiment and baseline that carries object-level scores."""
     rows = [
-        (f"#{number} {result.method}", result.v1_test, result.instance_test)
+        (f"#{number} {result.method}", result, result.instance_test)
         for number, result in sorted((results.experiments or {}).items())
     ]
-    rows += [(name, result.v1_test, result.instance_test) for name, result in (results.baselines or {}).items()]
+    rows += [(name, result, result.instance_test) for name, result in (results.baselines or {}).items()]
     rows = [row for row in rows if row[2] is not None]
     if not rows:
         return []
@@ -31,6 +31,7 @@ def markdown(results: RunResults) -> list[str]:
         "mWCov are the mean and size-weighted mean best IoU of each ground-truth segment (they ignore extra "
         "clusters). 'bg segments' and 'bg clusters' are the shares of predicted segments and of clusters that hold "
         "no detection of a moving road user."
+        + repeats_legend(results)
         + (
             " `sklearn-radar reproduce --objective pq` tunes every setting for PQ instead."
             if results.meta.objective == "v1"
@@ -40,15 +41,15 @@ def markdown(results: RunResults) -> list[str]:
         "| setting | V1 | PQ | SQ | F1 (RQ) | precision | recall | mCov | mWCov | bg segments | bg clusters |",
         "|---|---|---|---|---|---|---|---|---|---|---|",
     ]
-    lines += [_row(name, v1, scores) for name, v1, scores in rows]
+    lines += [_row(name, result, scores) for name, result, scores in rows]
     return lines
 
 
-def _row(name, v1, s: InstanceScores):
-    values = (s.pq, s.sq, s.rq, s.precision, s.recall, s.mcov, s.mwcov)
+def _row(name, result, s: InstanceScores):
+    values = (s.sq, s.rq, s.precision, s.recall, s.mcov, s.mwcov)
     shares = (s.background_segment_share, s.background_cluster_share)
     return (
-        f"| {name} | {100 * v1:.2f} % | "
+        f"| {name} | {score_cell(result)} | {score_cell(result, 'pq')} | "
         + " | ".join(f"{value:.3f}" for value in values)
         + " | "
         + " | ".join(f"{100 * share:.1f} %" for share in shares)
