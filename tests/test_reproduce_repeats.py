@@ -162,9 +162,15 @@ def test_repeats_below_one_are_a_one_line_error(capsys):
 
 
 @pytest.fixture(scope="module")
-def repeated_report(tmp_path_factory):
+def tiny_folder(tmp_path_factory):
     folder = tmp_path_factory.mktemp("data") / "tiny"
     write_radarscenes(make_scenes(n_sequences=4, duration=3.0, random_state=3), folder)
+    return folder
+
+
+@pytest.fixture(scope="module")
+def repeated_report(tiny_folder, tmp_path_factory):
+    folder = tiny_folder
     out = tmp_path_factory.mktemp("report") / "out"
     argv = ["reproduce", "--data", str(folder), "--out", str(out), "--n-iter", "2", "--repeats", "2"]
     printed = io.StringIO()
@@ -210,3 +216,14 @@ def test_a_repeated_run_records_every_repeat_and_reports_mean_sd_and_the_rule(re
         mean = 100 * statistics.fmean(differences)
         assert f"#{a} \u2212 #{b} {mean:+.2f} \u00b1 " in line
     assert (repeated_report / "convergence.png").is_file()
+
+
+def test_repeats_run_one_after_the_other_give_what_concurrent_repeats_give(repeated_report, tiny_folder, tmp_path):
+    # The fixture ran the repeats concurrently (--n-jobs 2); one at a time they have the same seeds and results.
+    from sklearn_radar.reproduce import reproduce
+
+    document = reproduce(tiny_folder, tmp_path / "out", n_iter=2, experiments="2", repeats=2, stream=io.StringIO())
+    concurrent = json.loads((repeated_report / "results.json").read_text())["experiments"]["2"]["repeats"]
+    sequential = document["experiments"]["2"]["repeats"]
+    for key in ("seed", "params", "v1_test", "convergence", "cv_best"):
+        assert [r[key] for r in sequential] == [r[key] for r in concurrent], key
