@@ -8,7 +8,7 @@ from ...experiments import get_experiment
 from .._constants import BEST_STAGE1, STAGE1
 from .._results import RunResults, repeated_scores
 from ._base import OVERFIT_GAP, SETTING_PAPER, Section, objective_name, score_cell, setting_source, test_score
-from ._comparison import HOLDS, UNCLEAR, _chosen_rows, checked
+from ._comparison import FILTER_TEXTS, HOLDS, UNCLEAR, _chosen_rows, checked
 
 
 def markdown(results: RunResults) -> list[str]:
@@ -32,7 +32,12 @@ def markdown(results: RunResults) -> list[str]:
         held = [text for text, verdict, _ in checks if verdict == HOLDS]
         unclear = [text for text, verdict, _ in checks if verdict == UNCLEAR]
         within = f", {len(unclear)} unclear (within the noise of the repeats)" if unclear else ""
-        single = "" if results.meta.repeats > 1 else " in a single run that cannot tell them from noise"
+        searched = sum(text not in FILTER_TEXTS for text, _, _ in checks)
+        single = (
+            f" ({searched} of them compare single searches, which cannot tell a difference from noise)"
+            if results.meta.repeats == 1 and searched
+            else ""
+        )
         lines.append(
             f"- the paper's findings: {len(held)} of {len(checks)} hold here{within}{single} (last section, "
             "'The paper's findings, checked')."
