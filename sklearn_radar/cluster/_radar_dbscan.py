@@ -370,7 +370,7 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
     def _cell_size(self, heading):
         """Grid cell side, m: the largest spatial reach of the criterion."""
         if self.metric == "box":
-            rotated = np.any(np.abs(np.sin(2.0 * heading)) > 1e-12)  # not a multiple of 90 degrees
+            rotated = heading.any() and np.any(np.abs(np.sin(2.0 * heading)) > 1e-12)  # not a multiple of 90 degrees
             return self.eps_xy * np.sqrt(2.0) if rotated else self.eps_xy  # a rotated box reaches its corners
         return self.eps_xy if self.metric == "xy" else self.eps_xyv
 

@@ -232,7 +232,16 @@ def _dbscan_sorted(points, min_points, can_be_core, cell_x, cell_y, cell_keys, c
             core_start[c] = k
         core_end[c] = k + 1
 
-    # Pass 2: join neighbouring core points; each pair is visited once, from its lower cell.
+    # Pass 2: join neighbouring core points; each pair is visited once, from its lower cell.  The core
+    # points' coordinates are gathered first, so that the pass reads them in order.
+    core_points = Points(
+        points.x[core_position],
+        points.y[core_position],
+        points.v[core_position],
+        core_t,
+        points.cos_h[core_position],
+        points.sin_h[core_position],
+    )
     parent = np.arange(n)
     owner[:] = -1
     for position in range(len(core_position)):
@@ -249,9 +258,8 @@ def _dbscan_sorted(points, min_points, can_be_core, cell_x, cell_y, cell_keys, c
             owner[k] = own
             # In its own cell, i meets only the core points after it (the earlier ones met i).
             for m in range(max(lo[k], position + 1) if c == own else lo[k], hi[k]):
-                j = core_position[m]
-                if _spatial_neighbor(i, j, points, crit):
-                    root_j = find(parent, j)  # union_keep_smaller(parent, i, j) with i's root known
+                if _spatial_neighbor(position, m, core_points, crit):
+                    root_j = find(parent, core_position[m])  # union_keep_smaller(parent, i, j) with i's root known
                     if root_j < root_i:
                         parent[root_i] = root_j
                         root_i = root_j
@@ -508,6 +516,15 @@ def points_of(*, x, y, v, t, heading) -> Points:
         Contiguous float64 arrays, with the cosine and sine of ``heading``.
     """
     heading = np.asarray(heading, dtype=np.float64)
+    if not heading.any():  # every heading 0 (no heading column): no trigonometry
+        return Points(
+            x=np.ascontiguousarray(x, dtype=np.float64),
+            y=np.ascontiguousarray(y, dtype=np.float64),
+            v=np.ascontiguousarray(v, dtype=np.float64),
+            t=np.ascontiguousarray(t, dtype=np.float64),
+            cos_h=np.ones(len(heading)),
+            sin_h=np.zeros(len(heading)),
+        )
     return Points(
         x=np.ascontiguousarray(x, dtype=np.float64),
         y=np.ascontiguousarray(y, dtype=np.float64),
