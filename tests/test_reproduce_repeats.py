@@ -216,6 +216,7 @@ def test_a_repeated_run_records_every_repeat_and_reports_mean_sd_and_the_rule(re
         mean = 100 * statistics.fmean(differences)
         assert f"#{a} \u2212 #{b} {mean:+.2f} \u00b1 " in line
     assert (repeated_report / "convergence.png").is_file()
+    assert "the median over the repeats" in report and "error bars one standard deviation" in report
 
 
 def test_repeats_run_one_after_the_other_give_what_concurrent_repeats_give(repeated_report, tiny_folder, tmp_path):

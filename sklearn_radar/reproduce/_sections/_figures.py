@@ -28,7 +28,13 @@ def markdown(results: RunResults) -> list[str]:
         lines += [
             "V1 on the test half, ours beside the paper's, per experiment (Tables III and IV); a dagger (\u2020) "
             "after the number marks experiments whose setting is the paper's, kept because the search found nothing "
-            "better.",
+            "better."
+            + (
+                f" Our bars are the mean over the {results.meta.repeats} repeats, the error bars one standard "
+                "deviation either side."
+                if results.meta.repeats > 1
+                else ""
+            ),
             "",
             f"![V1 ours vs paper]({V1_BARS})",
             "",
