@@ -563,7 +563,7 @@ def test_a_fold_scored_as_fitted_scores_as_a_fresh_fit(number):
 
     from sklearn_radar.experiments import experiment_pipeline
     from sklearn_radar.metrics import panoptic_quality_scorer, precluster_target, radar_v_measure_scorer
-    from sklearn_radar.reproduce._run import _scored_as_fitted
+    from sklearn_radar.reproduce._run import _ScoredAsFitted
 
     scenes = make_scenes(n_sequences=2, duration=4.0, random_state=3)
     X = scenes.data[[c for c in scenes.data.columns if c not in ("uuid", "track_id", "label_id")]]
@@ -572,10 +572,15 @@ def test_a_fold_scored_as_fitted_scores_as_a_fresh_fit(number):
     for scorer in (radar_v_measure_scorer, panoptic_quality_scorer):
         fresh = scorer(clone(pipeline), X, y)
         fitted = clone(pipeline).fit(X, y)
-        assert _scored_as_fitted(scorer)(fitted, X, y) == fresh
+        assert _ScoredAsFitted(scorer)(fitted, X, y) == fresh
         assert 0.0 < fresh <= 1.0
     # Fitted on other rows: scored as a failed fit, never as the labels of other rows.
-    assert _scored_as_fitted(radar_v_measure_scorer)(clone(pipeline).fit(X.iloc[:100]), X, y) == 0.0
+    assert _ScoredAsFitted(radar_v_measure_scorer)(clone(pipeline).fit(X.iloc[:100]), X, y) == 0.0
+    # Parallel workers receive it pickled.
+    import pickle
+
+    restored = pickle.loads(pickle.dumps(_ScoredAsFitted(radar_v_measure_scorer)))
+    assert restored(clone(pipeline).fit(X, y), X, y) == radar_v_measure_scorer(clone(pipeline), X, y)
 
 
 @pytest.mark.parametrize("number", [3, 13, "baseline"])

@@ -697,7 +697,7 @@ def _tune(run, context, estimator, space, label, start_from=None, part=0, parts=
     search = make_bayes_search(
         searched,
         searched_space,
-        scoring=_scored_as_fitted(scorer),  # each fold is its own training side: score the labels of its fit
+        scoring=_ScoredAsFitted(scorer),  # each fold is its own training side: score the labels of its fit
         n_iter=budget.n_iter,
         n_initial_points=budget.n_initial_points,
         cv=cv,
@@ -761,7 +761,7 @@ class _FittedLabels:
         return labels
 
 
-def _scored_as_fitted(scorer):
+class _ScoredAsFitted:
     """``scorer`` for folds whose training rows are their test rows: the search's fit is not repeated.
 
     scikit-learn fits each candidate on the training side of a fold, then
@@ -769,12 +769,14 @@ def _scored_as_fitted(scorer):
     no out-of-sample predict).  With equal sides the second fit computes the
     same labels as the first (the clusterers are deterministic), so the
     scorer gets them from the first: half the clustering work, same scores.
+    A class rather than a closure, so that parallel workers can unpickle it.
     """
 
-    def score(estimator, X, y):
-        return scorer(_FittedLabels(estimator), X, y)
+    def __init__(self, scorer):
+        self.scorer = scorer
 
-    return score
+    def __call__(self, estimator, X, y):
+        return self.scorer(_FittedLabels(estimator), X, y)
 
 
 def _with_cluster_gate(space, stage, objective):
