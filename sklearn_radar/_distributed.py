@@ -241,10 +241,22 @@ def map_sequences(cluster, function, items, *, in_flight=None):
 
 def worker_peak_rss(cluster):
     """Peak resident memory of each worker process so far, bytes (``{address: bytes}``)."""
-    return cluster.client.run(_peak_rss)
+    return cluster.client.run(peak_rss)
 
 
-def _peak_rss():
+def peak_rss():
+    """Peak resident memory of this process, bytes: ``VmHWM`` (Linux), else ``ru_maxrss``.
+
+    ``ru_maxrss`` survives ``exec`` on Linux, so a process started by a
+    large one would report its parent's peak; ``VmHWM`` is the process's own.
+    """
+    try:
+        with open("/proc/self/status", encoding="ascii") as status:
+            for line in status:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
     import resource
 
     peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
