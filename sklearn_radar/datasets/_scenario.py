@@ -377,18 +377,7 @@ def _road_user(kind, ego, road, duration, stops, rng) -> RoadUser:
             crossing=True,
             t_cross=t_cross - half_road / abs(speed),
         )
-    params = ROAD_USER_CLASSES[cls]
-    length, width = rng.uniform(*params["length"]), rng.uniform(*params["width"])
-    return RoadUser(
-        kind=cls,
-        length=length,
-        width=width,
-        centres=scattering_centres(length, width, rng),
-        road=road,
-        absences=_absences(duration, rng),
-        gait_hz=rng.uniform(1.5, 2.2) if params["micro"] > 0 else 0.0,
-        **user,
-    )
+    return _new_user(cls, road, duration, rng, **user)
 
 
 def scattering_centres(length, width, rng, spacing=1.5):
