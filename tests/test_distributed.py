@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from sklearn_radar._cli import main
-from sklearn_radar.datasets import load_radarscenes, make_scenes, write_radarscenes
+from sklearn_radar.datasets import load_radarscenes
 from sklearn_radar.experiments import experiment_pipeline
 from sklearn_radar.reproduce import cluster_radarscenes, load_params, reproduce, write_predictions
 
@@ -40,13 +40,6 @@ def local_cluster():
         n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=logging.ERROR
     ) as cluster:
         yield cluster
-
-
-@pytest.fixture(scope="module")
-def tiny_folder(tmp_path_factory):
-    path = tmp_path_factory.mktemp("data") / "tiny"
-    write_radarscenes(make_scenes(n_sequences=4, duration=4.0, random_state=3), path)
-    return path
 
 
 @pytest.fixture(scope="module")

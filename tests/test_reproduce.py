@@ -14,13 +14,6 @@ from sklearn_radar.reproduce import parse_experiments
 
 
 @pytest.fixture(scope="module")
-def tiny_folder(tmp_path_factory):
-    path = tmp_path_factory.mktemp("data") / "tiny"
-    write_radarscenes(make_scenes(n_sequences=4, duration=4.0, random_state=3), path)
-    return path
-
-
-@pytest.fixture(scope="module")
 def tiny_report(tiny_folder, tmp_path_factory):
     out = tmp_path_factory.mktemp("report") / "out"
     steps = "filter,1,2,8,10,11,13,filter-effect,baselines"

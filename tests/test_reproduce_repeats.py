@@ -12,7 +12,6 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from sklearn_radar._cli import main
-from sklearn_radar.datasets import make_scenes, write_radarscenes
 from sklearn_radar.reproduce._sections._comparison import (
     DOES_NOT_HOLD,
     FINDINGS,
@@ -162,17 +161,9 @@ def test_repeats_below_one_are_a_one_line_error(capsys):
 
 
 @pytest.fixture(scope="module")
-def tiny_folder(tmp_path_factory):
-    folder = tmp_path_factory.mktemp("data") / "tiny"
-    write_radarscenes(make_scenes(n_sequences=4, duration=3.0, random_state=3), folder)
-    return folder
-
-
-@pytest.fixture(scope="module")
 def repeated_report(tiny_folder, tmp_path_factory):
-    folder = tiny_folder
     out = tmp_path_factory.mktemp("report") / "out"
-    argv = ["reproduce", "--data", str(folder), "--out", str(out), "--n-iter", "2", "--repeats", "2"]
+    argv = ["reproduce", "--data", str(tiny_folder), "--out", str(out), "--n-iter", "2", "--repeats", "2"]
     printed = io.StringIO()
     with contextlib.redirect_stdout(printed):
         assert main([*argv, "--experiments", "1,2,8,13", "--n-jobs", "2"]) == 0
