@@ -82,7 +82,7 @@ def _ratio(numerator, denominator):
 
 
 def _segment_scores(labels_true, labels_pred, *, times=None, groups=None, frame=0.5):
-    """Every score of :func:`instance_scores` in one pass, without parameter validation."""
+    """Every score of :func:`instance_scores`, and ``iou_sum`` (Σ_TP IoU), in one pass, without parameter validation."""
     labels_true = np.asarray(labels_true)
     labels_pred = np.asarray(labels_pred)
     n = labels_true.shape[0] if labels_true.ndim == 1 else -1
@@ -154,6 +154,7 @@ def _segment_scores(labels_true, labels_pred, *, times=None, groups=None, frame=
         tp=tp,
         fp=int(fp),
         fn=int(fn),
+        iou_sum=iou_sum,  # Σ_TP IoU: additive over sequences (sklearn_radar.metrics._parts); not in instance_scores
         mcov=_ratio(float(cover.sum()), n_true),
         mwcov=_ratio(float(true_size @ cover), int(true_size.sum())),
         background_segment_share=_ratio(int(n_pred - pred_has_object.sum()), n_pred),
@@ -211,7 +212,8 @@ def instance_scores(labels_true, labels_pred, *, times, groups=None, frame=0.5):
     >>> round(scores.pq, 6), scores.mcov, scores.background_cluster_share
     (0.666667, 1.0, 0.5)
     """
-    return _segment_scores(labels_true, labels_pred, times=times, groups=groups, frame=frame)
+    scores = _segment_scores(labels_true, labels_pred, times=times, groups=groups, frame=frame)
+    return Bunch(**{key: scores[key] for key in _PQ_KEYS + _COVERAGE_KEYS + _BACKGROUND_KEYS})
 
 
 @validate_params(_CONSTRAINTS, prefer_skip_nested_validation=True)
