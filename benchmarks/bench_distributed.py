@@ -68,24 +68,26 @@ def _search_seconds(out, number="8"):
 # ----------------------------------------------------------------------------- 1. speed-up
 
 
-def speedup(work, n_iter, repeats, n_points):
+def speedup(work, n_iter, repeats, n_points, scale=1):
     from sklearn_radar.datasets import make_scenes, write_radarscenes
     from sklearn_radar.reproduce import reproduce
     from sklearn_radar.reproduce._results import Budget
 
     budget = Budget.default()
-    data = work / "speedup-data"
-    scenes = make_scenes(n_sequences=budget.n_sequences, duration=budget.duration, random_state=0)
+    data = work / f"speedup-data-{scale}"
+    n_sequences = budget.n_sequences * scale
+    scenes = make_scenes(n_sequences=n_sequences, duration=budget.duration, random_state=0)
     write_radarscenes(scenes, data)
     print(
         f"## 1. Speed-up: a {n_iter}-iteration stage-1 search (#8), {len(scenes.data):,} detections "
-        f"({budget.n_sequences} x {budget.duration:g} s), {budget.cv_folds} folds, n_points {n_points}"
+        f"({n_sequences} x {budget.duration:g} s, {scale}x the default data), {budget.cv_folds} folds, "
+        f"n_points {n_points}"
     )
     times = {"1 process": [], "2 workers": []}
     figures = {}
     for repeat in range(repeats):
         for name, workers in (("1 process", None), ("2 workers", 2)):
-            out = work / f"speedup-{repeat}-{workers}"
+            out = work / f"speedup-{scale}-{repeat}-{workers}"
             reproduce(data, out, n_iter=n_iter, experiments="8", n_points=n_points, workers=workers, stream=_quiet())
             seconds = _search_seconds(out)
             times[name].append(seconds)
@@ -97,16 +99,22 @@ def speedup(work, n_iter, repeats, n_points):
     print(f"  same figures (results.json without wall times): {'yes' if same else 'NO'}")
     per_run = [a / b for a, b in zip(times["1 process"], times["2 workers"], strict=True)]
     print(f"  speed-up per interleaved pair: {', '.join(f'{r:.2f}x' for r in per_run)}")
-    return {"one": one, "two": two, "n_iter": n_iter, "n_train": figures["1 process"]["meta"]["data"]["n_train"]}
+    return {
+        "one": one,
+        "two": two,
+        "n_iter": n_iter,
+        "n_train": figures["1 process"]["meta"]["data"]["n_train"],
+        "scale": scale,
+    }
 
 
-def evaluation_cost(work, n_candidates=20):
+def evaluation_cost(work, n_candidates=20, scale=1):
     """Seconds per candidate (all folds) of #8's search without the Gaussian process (random candidates only)."""
     from sklearn_radar.reproduce import reproduce
     from sklearn_radar.reproduce._results import Budget
 
-    data = work / "speedup-data"
-    out = work / "random-only"
+    data = work / f"speedup-data-{scale}"
+    out = work / f"random-only-{scale}"
     # Every candidate random (n_initial_points = n_iter): the time is the evaluations', no Gaussian process.
     original = Budget.__dict__["default"]
     Budget.default = staticmethod(
@@ -308,16 +316,20 @@ def main():
     parser.add_argument("--n-iter", type=int, default=100)
     parser.add_argument("--repeats", type=int, default=2)
     parser.add_argument("--n-points", type=int, default=1)
-    parser.add_argument("--scale", type=int, default=10)
+    parser.add_argument("--scale", type=int, default=10, help="data size of the memory part, x the default")
+    parser.add_argument(
+        "--search-scales", default="1,4", help="data sizes of the speed-up part, x the default (comma-separated)"
+    )
     args = parser.parse_args()
     parts = set(args.parts.split(","))
     with tempfile.TemporaryDirectory(prefix="bench-distributed-") as work:
         work = Path(work)
         search = per_candidate = cluster_cost = None
         if parts & {"speedup", "projection"}:
-            search = speedup(work, args.n_iter, args.repeats, args.n_points)
-            per_candidate = evaluation_cost(work)
-            print(f"  one candidate without the Gaussian process: {per_candidate:.3f} s (20 random candidates)")
+            for scale in (int(text) for text in args.search_scales.split(",")):
+                search = speedup(work, args.n_iter, args.repeats, args.n_points, scale)
+                per_candidate = evaluation_cost(work, scale=scale)
+                print(f"  one candidate without the Gaussian process: {per_candidate:.3f} s (20 random candidates)")
         if parts & {"memory", "projection"}:
             cluster_cost = memory(work, args.scale)
         if "projection" in parts:

@@ -49,4 +49,4 @@ class BayesSearchCV(_SkoptBayesSearchCV):
         return optimizer
 
 
-__all__ = ["BayesSearchCV", "Categorical", "Integer", "Optimizer", "Real"]
+__all__ = ["BayesSearchCV", "Categorical", "Integer", "Optimizer", "Real", "dimensions_aslist"]

@@ -44,6 +44,15 @@ class RunContext:
     best_stage1_repeats : list of dict or None, default=None
         The same for each repeat of a run with several (``meta.repeats``):
         repeat ``k`` of #10, #11 and stage 2 builds on repeat ``k`` of #8.
+    search_data : SearchData or None, default=None
+        The training half per sequence, placed where the searches' tasks
+        run (:mod:`._search`), once the first search ran.
+    prepared : dict, default={}
+        The same with stage 0 applied, by stage 0's hash: searches with the
+        same stage 0 (repeats, experiments on the same input) share it.
+    pending : dict, default={}
+        Searches started ahead on a dask cluster, by step (and baseline):
+        ``{repeat: concurrent future}``.
     """
 
     scenes: Any
@@ -56,6 +65,9 @@ class RunContext:
     filter_grids: dict[str, Any] | None = None
     best_stage1: dict[str, Any] | None = None
     best_stage1_repeats: list[dict[str, Any]] | None = None
+    search_data: Any = None
+    prepared: dict[str, Any] = field(default_factory=dict)
+    pending: dict[Any, Any] = field(default_factory=dict)
 
 
 __all__ = ["RunContext"]

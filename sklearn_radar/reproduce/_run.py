@@ -23,6 +23,7 @@ The results are typed (:mod:`._results`), the in-memory state is a
 
 from __future__ import annotations
 
+import contextlib
 import datetime
 import hashlib
 import io
@@ -30,22 +31,24 @@ import json
 import os
 import sys
 import tempfile
+import threading
 import time
 import uuid
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from numbers import Integral
 from pathlib import Path
 from types import SimpleNamespace
 
+import joblib
 import numpy as np
 from joblib import Parallel, delayed, effective_n_jobs
 from sklearn.base import clone
-from sklearn.model_selection import GroupKFold
 from sklearn.utils._param_validation import HasMethods, Interval, StrOptions, validate_params
 from threadpoolctl import threadpool_limits
 
 from .. import __version__
-from .._distributed import connect_cluster, search_backend
+from .._distributed import connect_cluster
 from .._skopt import Integer, Real
 from ..cluster import SequenceDBSCAN, SequenceHDBSCAN, WindowedDBSCAN, WindowedHDBSCAN
 from ..datasets import format_statistics, load_radarscenes, make_scenes, scene_statistics
@@ -53,12 +56,10 @@ from ..evaluation import filter_error_windows, filter_grid, filter_settings_tabl
 from ..experiments import derived_params, experiment_pipeline, get_experiment, paper_params, search_space
 from ..metrics import (
     instance_scores,
-    panoptic_quality_scorer,
     precluster_target,
     radar_v_measure,
-    radar_v_measure_scorer,
 )
-from ..model_selection import ProgressPrinter, make_bayes_search, sequence_train_test_split
+from ..model_selection import ProgressPrinter, sequence_train_test_split
 from ..preprocessing import DopplerDensityFilter, FrameTransform
 from ._constants import (
     ALL_EXPERIMENTS,
@@ -105,6 +106,7 @@ from ._results import (
     RunResults,
     SearchRecord,
 )
+from ._search import SearchData, bayes_search, candidate_scores, sequence_folds
 from ._sections._figures import CONVERGENCE, SCENE, V1_BARS
 from ._sections._filter import FILTER_SCENE, HEATMAP
 
@@ -150,8 +152,8 @@ class Run:
     progress: RunProgress | None = None
 
 
-#: The search objectives: name -> scorer(estimator, X, y) on the raw detection table.
-OBJECTIVES = {"v1": radar_v_measure_scorer, "pq": panoptic_quality_scorer}
+#: The search objectives: the radar V-measure and the panoptic quality (per-sequence parts: :mod:`._search`).
+OBJECTIVES = ("v1", "pq")
 #: Length of the frames of the object-level scores, s (Scheiner et al. 2021 evaluate 500 ms).
 FRAME_S = 0.5
 #: The object-level scores kept per experiment (:class:`InstanceScores`).
@@ -371,19 +373,20 @@ def _reproduce(
         with tempfile.TemporaryDirectory(prefix=temporary_prefix("cache-"), dir=out) as cache:
             context.cache = cache
             try:
-                for position, key in enumerate(keys, start=1):
-                    _say(run, f"[{position}/{len(keys)}] {_title(key)} | {run.progress.status()}")
-                    start = time.perf_counter()
-                    run.progress.start(key)
-                    _RUNNERS[_runner_of(key)](run, context, key)
-                    run.progress.finish(key)
-                    meta.completed.append(key)
-                    _say(
-                        run,
-                        f"[{position}/{len(keys)}] {_title(key)} done in {time.perf_counter() - start:.1f} s"
-                        f" | {run.progress.status()}",
-                    )
-                    _save(run)
+                with _concurrent_searches(run, context, keys):
+                    for position, key in enumerate(keys, start=1):
+                        _say(run, f"[{position}/{len(keys)}] {_title(key)} | {run.progress.status()}")
+                        start = time.perf_counter()
+                        run.progress.start(key)
+                        _RUNNERS[_runner_of(key)](run, context, key)
+                        run.progress.finish(key)
+                        meta.completed.append(key)
+                        _say(
+                            run,
+                            f"[{position}/{len(keys)}] {_title(key)} done in {time.perf_counter() - start:.1f} s"
+                            f" | {run.progress.status()}",
+                        )
+                        _save(run)
             except KeyboardInterrupt:
                 meta.interrupted = True
                 _say(run, "interrupted: writing the finished results")
@@ -664,70 +667,102 @@ def _tune(run, context, estimator, space, label, start_from=None, part=0, parts=
     """Bayesian optimisation on the training half with grouped CV; returns (best params, SearchRecord).
 
     ``part`` of ``parts`` says which of the step's searches this is, for the overall progress; ``seed``
-    is the search's random seed (None: the run's).
+    is the search's random seed (None: the run's).  A candidate is one task per training sequence
+    (:mod:`._search`), here or on the run's dask cluster.
 
     ``start_from`` (e.g. the paper's optimum) is scored on the same folds as
     one more candidate and wins when the search found nothing better: a
     short search should not report a worse setting than a known one.
     """
-    train = context.train
     budget = run.budget
-    groups = context.scenes.groups[train]
-    n_folds = min(budget.cv_folds, len(np.unique(groups)))
-    # A clusterer labels the data it is fitted on, and the scorer fits on the scored fold: fitting the
-    # "training" side of a fold first would be wasted work, so each fold is its own training side.
-    # With a single training sequence the one fold is all of it.
-    if n_folds < 2:
-        cv = [(np.arange(len(train)), np.arange(len(train)))]
-    else:
-        cv = [(rows, rows) for _, rows in GroupKFold(n_splits=n_folds).split(train, groups=groups)]
-    scorer = OBJECTIVES[run.results.meta.objective]
-    # dask (sklearn_radar._distributed): the cluster or None, and candidates per step (a bare run object lacks them).
-    cluster, n_points = getattr(run, "cluster", None), getattr(run, "n_points", 1)
+    folds = sequence_folds(context.scenes.groups[context.train], budget.cv_folds)
+    objective = run.results.meta.objective
     start = time.perf_counter()
-    X, target = context.X.iloc[train], context.target[train]
-    searched, searched_space, X_searched, prefix = estimator, space, X, ""
+    raw = _training_sequences(run, context)
+    estimator = _without_cache(estimator)
+    searched, searched_space, data, prefix = estimator, space, raw, ""
     fixed = _fixed_stage0(estimator, space)
     if fixed is not None:
-        # Stage 0 once for every candidate and fold: it works per sequence and a fold holds whole sequences,
-        # so the fold's rows of the transformed half are the transformed fold (tested).
+        # Stage 0 once for every candidate and fold, per sequence (it never crosses sequences; tested).
         stage0, searched, prefix = fixed
-        X_searched = stage0.fit_transform(X)
+        data = _prepared(context, raw, stage0)
         searched_space = {key[len(prefix) :]: dimension for key, dimension in space.items()}
-    search = make_bayes_search(
-        searched,
-        searched_space,
-        scoring=_ScoredAsFitted(scorer),  # each fold is its own training side: score the labels of its fit
-        n_iter=budget.n_iter,
-        n_initial_points=budget.n_initial_points,
-        cv=cv,
-        n_jobs=-1 if cluster is not None else run.n_jobs,  # on a cluster: every fit a dask task
-        n_points=n_points,
-        random_state=run.seed if seed is None else seed,
-    )
-    search.set_params(refit=False)  # only the best parameters are used, never a refitted estimator
     status = None if run.progress is None else run.progress.search_status(part, parts)
     printer = ProgressPrinter(budget.n_iter, label=label, stream=run.stream, status=status)
     # The Gaussian process works on tiny matrices, where multi-threaded BLAS was 20x slower (measured).
-    with threadpool_limits(limits=1, user_api="blas"), search_backend(cluster):
-        search.fit(X_searched, target, groups=groups, callback=printer)
-    convergence = [float(s) for s in search.cv_results_["mean_test_score"]]
-    best = {prefix + key: value for key, value in _native(search.best_params_).items()}
-    cv_best, source, known = float(search.best_score_), SOURCE_SEARCH, None
+    with threadpool_limits(limits=1, user_api="blas"):
+        found = bayes_search(
+            searched,
+            searched_space,
+            data,
+            folds,
+            objective=objective,
+            n_iter=budget.n_iter,
+            n_initial_points=budget.n_initial_points,
+            n_points=getattr(run, "n_points", 1),  # a bare run object lacks it
+            random_state=run.seed if seed is None else seed,
+            callback=printer,
+        )
+    best = {prefix + key: value for key, value in _native(found.best_params).items()}
+    cv_best, source, known = found.best_score, SOURCE_SEARCH, None
     if start_from:
-        candidate = clone(estimator).set_params(**start_from)
-        known = float(np.mean([scorer(clone(candidate), X.iloc[rows], target[rows]) for _, rows in cv]))
+        if all(key.startswith(prefix) for key in start_from):
+            known_params = {key[len(prefix) :]: value for key, value in start_from.items()}
+            known = candidate_scores(data, searched, [known_params], folds, objective)[0]
+        else:
+            known = candidate_scores(raw, estimator, [start_from], folds, objective)[0]
         if known >= cv_best:
             best = {key: start_from[key] for key in space if key in start_from}
             cv_best, source = known, SOURCE_PAPER
     record = SearchRecord(
         cv_best=cv_best,
-        convergence=convergence,
+        convergence=found.scores,
         best_source=source,
         cv_start_from=known,
         search_wall_time_s=time.perf_counter() - start,
     )
     return best, record
+
+
+def _training_sequences(run, context):
+    """The training half per sequence (:class:`._search.SearchData`): placed once per run, where tasks run."""
+    cluster = getattr(run, "cluster", None)
+    placed = getattr(context, "search_data", None)
+    if placed is None or placed.cluster is not cluster:
+        train = context.train
+        placed = SearchData.place(context.X.iloc[train], context.target[train], context.scenes.groups[train], cluster)
+        context.search_data = placed
+    return SearchData(placed.sequences, placed.ids, cluster, None if cluster is not None else run.n_jobs)
+
+
+#: Stage-0 outputs kept per run (:func:`_prepared`): the inputs of the experiments, not of every setting.
+PREPARED_KEPT = 4
+_PREPARED_LOCK = threading.Lock()
+
+
+def _prepared(context, raw, stage0):
+    """``raw`` with ``stage0`` applied per sequence, shared by the searches with the same stage 0.
+
+    The last :data:`PREPARED_KEPT` are kept (on a cluster: on the workers).
+    """
+    key = joblib.hash(stage0)
+    with _PREPARED_LOCK:  # concurrent searches (threads) share the cache
+        cache = getattr(context, "prepared", None)
+        if cache is None:
+            cache = context.prepared = {}
+        found = cache.get(key)
+        if found is None or found.cluster is not raw.cluster:
+            found = cache[key] = raw.prepare(stage0)
+            while len(cache) > PREPARED_KEPT:
+                cache.pop(next(iter(cache)))
+    return SearchData(found.sequences, found.ids, raw.cluster, raw.n_jobs)
+
+
+def _without_cache(estimator):
+    """A pipeline without its cache folder (which a worker on another machine cannot reach)."""
+    if hasattr(estimator, "steps"):
+        return clone(estimator).set_params(memory=None)
+    return estimator
 
 
 def _fixed_stage0(estimator, space):
@@ -745,38 +780,6 @@ def _fixed_stage0(estimator, space):
     if not all(key.startswith(prefix) for key in space):
         return None
     return clone(estimator[:-1]).set_params(memory=None), clone(last), prefix
-
-
-class _FittedLabels:
-    """An estimator just fitted on the rows it is scored on: ``fit_predict`` returns the labels of that fit."""
-
-    def __init__(self, estimator):
-        self.estimator = estimator
-
-    def fit_predict(self, X, y=None):
-        clusterer = self.estimator[-1] if hasattr(self.estimator, "steps") else self.estimator
-        labels = clusterer.labels_
-        if len(labels) != len(X):  # not fitted on these rows: a misuse, which the scorer scores as a failed fit
-            raise ValueError(f"labels of {len(labels)} rows for {len(X)} scored rows")
-        return labels
-
-
-class _ScoredAsFitted:
-    """``scorer`` for folds whose training rows are their test rows: the search's fit is not repeated.
-
-    scikit-learn fits each candidate on the training side of a fold, then
-    calls the scorer, which fits it again on the test side (a clusterer has
-    no out-of-sample predict).  With equal sides the second fit computes the
-    same labels as the first (the clusterers are deterministic), so the
-    scorer gets them from the first: half the clustering work, same scores.
-    A class rather than a closure, so that parallel workers can unpickle it.
-    """
-
-    def __init__(self, scorer):
-        self.scorer = scorer
-
-    def __call__(self, estimator, X, y):
-        return self.scorer(_FittedLabels(estimator), X, y)
 
 
 def _with_cluster_gate(space, stage, objective):
@@ -811,21 +814,31 @@ def _repeat_runs(run, repeats):
     concurrent = min(repeats, workers)
     if concurrent < 2:
         return 1, run
-    worker = SimpleNamespace(
+    worker = _quiet_run(run, n_jobs=max(1, workers // concurrent), cluster=None)
+    return concurrent, worker
+
+
+def _quiet_run(run, *, n_jobs, cluster):
+    """A run for a search that runs beside others: no progress lines, nothing written."""
+    return SimpleNamespace(
         budget=run.budget,
         seed=run.seed,
-        n_jobs=max(1, workers // concurrent),
+        n_jobs=n_jobs,
         n_points=getattr(run, "n_points", 1),
-        cluster=None,
+        cluster=cluster,
         progress=None,
         stream=io.StringIO(),
         results=SimpleNamespace(meta=SimpleNamespace(objective=run.results.meta.objective)),
     )
-    return concurrent, worker
 
 
-def _map_repeats(run, job, repeats):
-    """``[job(worker_run, k) for k in range(repeats)]``, concurrently where ``n_jobs`` allows (:func:`_repeat_runs`)."""
+def _map_repeats(run, job, repeats, pending=None):
+    """``[job(worker_run, k) for k in range(repeats)]``, concurrently where ``n_jobs`` allows (:func:`_repeat_runs`).
+
+    ``pending`` holds the repeats already started on the cluster (:func:`_concurrent_searches`): their results.
+    """
+    if pending:
+        return [pending[k].result() if k in pending else job(run, k) for k in range(repeats)]
     concurrent, worker = _repeat_runs(run, repeats)
     if concurrent == 1:
         return [job(run, k) for k in range(repeats)]
@@ -877,6 +890,74 @@ def _experiment_repeat(run, context, number, k, repeats, stage1):
     return found
 
 
+def _experiment_job(context, number, repeats, stage1s):
+    """``job(run, k)``: repeat ``k`` of experiment ``number`` (``stage1s[k]``: #8's setting it builds on)."""
+
+    def job(worker, k):
+        return _experiment_repeat(worker, context, number, k, repeats, stage1s[k])
+
+    return job
+
+
+def _baseline_job(context, name, clusterer, space, part, repeats):
+    """``job(run, k)``: repeat ``k`` of the baseline ``name``, the ``part``-th of the baselines."""
+
+    def job(worker, k):
+        return _baseline_repeat(worker, context, name, clusterer, space, k, repeats, part, len(_BASELINES))
+
+    return job
+
+
+def _independent_searches(run, context, keys):
+    """The searches among ``keys`` that need no other step's result: ``{pending key: job}``.
+
+    The stage-1 experiments and the baselines; #10, #11 and stage 2 build on #8.
+    """
+    repeats = run.results.meta.repeats
+    jobs = {}
+    for key in keys:
+        if key == BASELINES:
+            for part, (name, (clusterer, space)) in enumerate(_BASELINES.items()):
+                jobs[(key, name)] = _baseline_job(context, name, clusterer, space, part, repeats)
+        elif _tuned(key) and get_experiment(int(key)).stage == 1:
+            jobs[key] = _experiment_job(context, int(key), repeats, [None] * repeats)
+    return jobs
+
+
+@contextlib.contextmanager
+def _concurrent_searches(run, context, keys):
+    """On a dask cluster, every independent search starts at once, each in a thread of this process.
+
+    A search alone keeps the workers busy only while its candidates run,
+    not while this process's Gaussian process chooses the next one; several
+    at once fill those gaps.  Each search has its own seed, so the results
+    are those of one search after the other.  The steps collect them in
+    their order (``context.pending``); their iterations are not printed.
+    """
+    context.pending = {}
+    cluster = getattr(run, "cluster", None)
+    jobs = _independent_searches(run, context, keys) if cluster is not None else {}
+    repeats = run.results.meta.repeats
+    if len(jobs) * repeats < 2:
+        yield
+        return
+    _training_sequences(run, context)  # placed once, before the threads share it
+    quiet = _quiet_run(run, n_jobs=None, cluster=cluster)
+    threads = max(2, cluster.n_threads)
+    executor = ThreadPoolExecutor(max_workers=threads, thread_name_prefix="sklearn-radar-search")
+    try:
+        for tag, job in jobs.items():
+            context.pending[tag] = {k: executor.submit(job, quiet, k) for k in range(repeats)}
+        _say(
+            run,
+            f"{len(jobs) * repeats} independent searches run on the cluster, {threads} at a time "
+            "(their iterations are not printed)",
+        )
+        yield
+    finally:
+        executor.shutdown(wait=False, cancel_futures=True)
+
+
 def _run_experiment(run, context, key):
     number = int(key)
     experiment = get_experiment(number)
@@ -888,10 +969,9 @@ def _run_experiment(run, context, key):
     if len(stage1s) != repeats:
         stage1s = [best] * repeats
 
-    def job(worker, k):
-        return _experiment_repeat(worker, context, number, k, repeats, stage1s[k])
-
-    found = _map_repeats(run, job, repeats)
+    found = _map_repeats(
+        run, _experiment_job(context, number, repeats, stage1s), repeats, context.pending.pop(key, None)
+    )
     first = found[0]
     recorded_stage1 = derived = None
     if experiment.stage == 2:
@@ -1071,10 +1151,8 @@ def _run_baselines(run, context, key):
     for part, (name, (clusterer, space)) in enumerate(_BASELINES.items()):
         start = time.perf_counter()
 
-        def job(worker, k, name=name, clusterer=clusterer, space=space, part=part):
-            return _baseline_repeat(worker, context, name, clusterer, space, k, repeats, part, len(_BASELINES))
-
-        found = _map_repeats(run, job, repeats)
+        job = _baseline_job(context, name, clusterer, space, part, repeats)
+        found = _map_repeats(run, job, repeats, context.pending.pop((key, name), None))
         first = found[0]
         baselines[name] = BaselineResult(
             search=first["search"],

@@ -1,0 +1,297 @@
+"""The searches of a reproduce run: the paper's Bayesian optimisation, one task per candidate and sequence.
+
+:class:`~sklearn_radar.model_selection.make_bayes_search` (skopt's
+``BayesSearchCV``) scores a candidate on a fold with one fit of the whole
+fold.  Stages 0-2 never cross sequences, so here a candidate's work is one
+task per training sequence, and a fold's score is combined from the small
+summaries of its sequences (:mod:`sklearn_radar.metrics._parts`: contingency
+counts for the V-measure, matches for the panoptic quality).
+
+* On a dask cluster each sequence's data is placed on a worker once per run
+  and stays there; stage 0 runs there once per search; a candidate's task
+  ships only the parameters there and a summary back.  The data enters the
+  cluster as tasks, not as scattered data, so that the scheduler can compute
+  it again when a worker is lost.
+* In one process the same tasks run here, or with joblib's ``n_jobs``.
+
+The optimiser loop is ``BayesSearchCV``'s (skopt's ask and tell, the same
+optimiser and random state, candidates in the same order), so a search's
+result depends on neither where its tasks ran nor how many ran at a time:
+only on the seed and on ``n_points``.
+"""
+
+from __future__ import annotations
+
+import warnings
+from dataclasses import dataclass
+
+import numpy as np
+from joblib import Parallel, delayed
+from sklearn.base import clone
+from sklearn.model_selection import GroupKFold
+from sklearn.utils import check_random_state
+
+from .._skopt import Optimizer, dimensions_aslist
+from ..metrics._parts import combine_parts, score_parts
+
+__all__ = ["SearchData", "SearchResult", "bayes_search", "sequence_folds"]
+
+
+@dataclass(frozen=True)
+class Failed:
+    """What a candidate's task returns when its fit or score raised: the error, in one line."""
+
+    error: str
+
+
+def candidate_parts(estimator, params, sequence, objective):
+    """Fit ``estimator`` with ``params`` on one sequence and summarise its labels against the target.
+
+    Parameters
+    ----------
+    estimator : estimator with ``fit_predict``
+        The searched estimator (cloned here, never modified).
+    params : dict
+        The candidate.
+    sequence : tuple of (DataFrame, ndarray)
+        The sequence's detections (stage 0 applied) and their target.
+    objective : {"v1", "pq"}
+        What the summary is for (:func:`sklearn_radar.metrics._parts.score_parts`).
+
+    Returns
+    -------
+    parts : object or Failed
+        The summary; :class:`Failed` when the fit or the score raised (the
+        fold then scores 0.0, as the package's scorers score a failing fit).
+    """
+    X, target = sequence
+    times = _times(X) if objective == "pq" else None  # a set-up mistake raises: it is not the candidate's failure
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            labels = clone(estimator).set_params(**params).fit_predict(X)
+            return score_parts(objective, target, np.asarray(labels), times)
+    except Exception as error:  # a failing candidate scores 0.0 and the search goes on
+        text = str(error).strip().splitlines()
+        return Failed(f"{type(error).__name__}: {text[0] if text else ''}")
+
+
+def _times(X):
+    """Seconds of each detection: the ``t`` column (s), else ``timestamp`` (µs) from the sequence's start."""
+    columns = getattr(X, "columns", ())
+    if "t" in columns:
+        return X["t"].to_numpy(dtype=np.float64)
+    if "timestamp" in columns:
+        stamps = X["timestamp"].to_numpy()
+        return (stamps - stamps.min()) * 1e-6 if len(stamps) else stamps.astype(np.float64)
+    raise ValueError("the panoptic quality needs the time of each detection: a 't' (s) or 'timestamp' (µs) column")
+
+
+def prepared_sequence(stage0, sequence):
+    """One sequence with stage 0 applied (``stage0`` None: as it is); the target is unchanged."""
+    if stage0 is None:
+        return sequence
+    X, target = sequence
+    return clone(stage0).fit_transform(X), target
+
+
+def _identity(value):
+    return value
+
+
+class SearchData:
+    """A search's training sequences, each ``(detections, target)``: here, or on the cluster's workers.
+
+    Parameters
+    ----------
+    sequences : list
+        Per sequence the tuple itself, or (on a cluster) a dask future of it.
+    ids : ndarray
+        The sequence id of each entry.
+    cluster : Cluster or None
+        Where the sequences live (:mod:`sklearn_radar._distributed`).
+    n_jobs : int or None, default=None
+        Tasks at a time in one process (joblib); ignored on a cluster.
+    """
+
+    def __init__(self, sequences, ids, cluster, n_jobs=None):
+        self.sequences = sequences
+        self.ids = ids
+        self.cluster = cluster
+        self.n_jobs = n_jobs
+
+    @classmethod
+    def place(cls, X, target, groups, cluster=None, n_jobs=None):
+        """Split the rows into sequences (in increasing sequence id) and put each where its tasks run.
+
+        On a cluster each sequence becomes a task's result, kept by a worker
+        until this object is dropped: computed again if that worker is lost.
+        """
+        groups = np.asarray(groups)
+        ids = np.unique(groups)
+        sequences = []
+        for sequence_id in ids:
+            rows = np.flatnonzero(groups == sequence_id)
+            sequences.append((X.iloc[rows], np.asarray(target)[rows]))
+        if cluster is not None:
+            sequences = [cluster.client.submit(_identity, s, pure=False) for s in sequences]
+        return cls(sequences, ids, cluster, n_jobs)
+
+    def prepare(self, stage0):
+        """The sequences with ``stage0`` applied to each (where they are); ``self`` when it is None."""
+        if stage0 is None:
+            return self
+        if self.cluster is not None:
+            client = self.cluster.client
+            prepared = [client.submit(prepared_sequence, stage0, s, pure=False) for s in self.sequences]
+        else:
+            prepared = self._map(prepared_sequence, [(stage0, s) for s in self.sequences])
+        return SearchData(prepared, self.ids, self.cluster, self.n_jobs)
+
+    def parts(self, estimator, candidates, objective):
+        """``candidate_parts`` of every candidate on every sequence: a list (candidates) of lists (sequences)."""
+        calls = [(estimator, params, s, objective) for params in candidates for s in self.sequences]
+        if self.cluster is not None:
+            client = self.cluster.client
+            futures = [client.submit(candidate_parts, *call, pure=False) for call in calls]
+            flat = client.gather(futures)
+        else:
+            flat = self._map(candidate_parts, calls)
+        n = len(self.sequences)
+        return [flat[i * n : (i + 1) * n] for i in range(len(candidates))]
+
+    def _map(self, function, calls):
+        if self.n_jobs in (None, 1) or len(calls) < 2:
+            return [function(*call) for call in calls]
+        return Parallel(n_jobs=self.n_jobs)(delayed(function)(*call) for call in calls)
+
+
+def sequence_folds(groups, n_folds):
+    """The sequence ids of each cross-validation fold: ``GroupKFold`` over the detections' sequences.
+
+    With fewer than two sequences, the one fold is all of them.
+
+    Parameters
+    ----------
+    groups : array-like of shape (n_detections,)
+        Sequence of each training detection.
+    n_folds : int
+        Folds wanted (at most the number of sequences).
+
+    Returns
+    -------
+    folds : list of ndarray
+    """
+    groups = np.asarray(groups)
+    n_folds = min(n_folds, len(np.unique(groups)))
+    if n_folds < 2:
+        return [np.unique(groups)]
+    return [np.unique(groups[rows]) for _, rows in GroupKFold(n_splits=n_folds).split(groups, groups=groups)]
+
+
+@dataclass
+class SearchResult:
+    """What a search found: every candidate in order, its mean fold score, and the best.
+
+    Attributes
+    ----------
+    candidates : list of dict
+    scores : list of float
+        Mean over the folds, per candidate.
+    best_params : dict
+        The first candidate with the highest score.
+    best_score : float
+    """
+
+    candidates: list
+    scores: list
+    best_params: dict
+    best_score: float
+
+
+def candidate_scores(data, estimator, candidates, folds, objective):
+    """Mean fold score of each candidate; a fold with a failed sequence scores 0.0.
+
+    Raises
+    ------
+    ValueError
+        When every task of these candidates failed: a set-up mistake rather
+        than bad candidates (scikit-learn's searches raise then, too).
+    """
+    parts = data.parts(estimator, candidates, objective)
+    failures = [p for row in parts for p in row if isinstance(p, Failed)]
+    if failures and len(failures) == sum(len(row) for row in parts):
+        raise ValueError(f"every fit of {len(candidates)} candidate(s) failed, e.g. {failures[0].error}")
+    position = {sequence_id: i for i, sequence_id in enumerate(data.ids)}
+    scores = []
+    for row in parts:
+        fold_scores = []
+        for fold in folds:
+            fold_parts = [row[position[s]] for s in fold]
+            if any(isinstance(p, Failed) for p in fold_parts):
+                fold_scores.append(0.0)
+            else:
+                score = combine_parts(objective, fold_parts)
+                fold_scores.append(float(score) if np.isfinite(score) else 0.0)
+        scores.append(float(np.mean(fold_scores)))
+    return scores
+
+
+def bayes_search(
+    estimator,
+    space,
+    data,
+    folds,
+    *,
+    objective,
+    n_iter,
+    n_initial_points,
+    n_points=1,
+    random_state=None,
+    callback=None,
+):
+    """The paper's Bayesian optimisation (skopt's ask and tell, as ``BayesSearchCV`` runs it) on ``data``.
+
+    Parameters
+    ----------
+    estimator : estimator with ``fit_predict``
+    space : dict of str to skopt dimension
+    data : SearchData
+    folds : list of ndarray
+        Sequence ids per fold (:func:`sequence_folds`).
+    objective : {"v1", "pq"}
+    n_iter : int
+        Candidates in all.
+    n_initial_points : int
+        Random candidates before the Gaussian process guides.
+    n_points : int, default=1
+        Candidates per step (the last step may hold fewer).
+    random_state : int, RandomState or None, default=None
+    callback : callable or None, default=None
+        Called with skopt's result after every step (e.g. a
+        :class:`~sklearn_radar.model_selection.ProgressPrinter`); a true
+        return value stops the search.
+
+    Returns
+    -------
+    result : SearchResult
+    """
+    names = sorted(space)
+    optimizer = Optimizer(
+        dimensions_aslist(space), n_initial_points=n_initial_points, random_state=check_random_state(random_state)
+    )
+    candidates, scores = [], []
+    remaining = n_iter
+    while remaining > 0:
+        points = optimizer.ask(n_points=min(remaining, n_points))
+        points = [[np.array(value).item() for value in point] for point in points]
+        step = [dict(zip(names, point, strict=True)) for point in points]
+        step_scores = candidate_scores(data, estimator, step, folds, objective)
+        result = optimizer.tell(points, [-score for score in step_scores])
+        candidates += step
+        scores += step_scores
+        remaining -= n_points
+        if callback is not None and callback(result):
+            break
+    best = int(np.argmax(scores))
+    return SearchResult(candidates=candidates, scores=scores, best_params=candidates[best], best_score=scores[best])
