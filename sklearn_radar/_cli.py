@@ -145,7 +145,7 @@ def _parser():
     reproduce.add_argument(
         "--n-points",
         metavar="K",
-        help="candidates each search step evaluates at a time (default 1; on a cluster: worker threads // folds); "
+        help="candidates each search step evaluates at a time (default 1, with or without a cluster); "
         "the results depend on it, not on where the fits run",
     )
     reproduce.set_defaults(run=_reproduce)

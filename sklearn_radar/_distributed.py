@@ -4,13 +4,12 @@ Everything that touches dask is here, and dask is imported only when a
 cluster is asked for: without ``--scheduler`` or ``--workers`` the package
 never imports it.
 
-Two ways the work reaches the workers:
+Two ways the work reaches the workers, both by dask's own futures:
 
-* the searches (``BayesSearchCV``) go through joblib's ``dask`` backend:
-  inside :func:`search_backend` the search's ``Parallel(n_jobs=-1)``, that
-  is each candidate's cross-validation folds (``n_points`` candidates x
-  folds per step), are dask tasks, while the estimators' own small
-  ``Parallel`` calls (``n_jobs=None``) stay sequential where they run;
+* a search of ``reproduce`` (:mod:`sklearn_radar.reproduce._search`) places
+  each training sequence on a worker once, as a task's result, and runs one
+  task per candidate and sequence there; only parameters go out and small
+  score summaries come back;
 * :func:`map_sequences` runs a function once per sequence as dask tasks
   (stages 0-2 never cross sequences), keeping only a few results in flight
   and returning them in sequence order, so the caller can stream them.
@@ -41,7 +40,7 @@ __all__ = [
     "connect_cluster",
     "map_sequences",
     "require_distributed",
-    "search_backend",
+    "without_malloc_trim",
 ]
 
 
@@ -82,16 +81,28 @@ class Cluster:
         Worker processes when connected.
     n_threads : int
         Worker threads in total (tasks that run at the same time).
+    n_malloc_trim : int, default=0
+        Workers that run with dask's ``MALLOC_TRIM_THRESHOLD_`` (about 2x
+        slower clustering; :func:`without_malloc_trim`), said in
+        :meth:`describe`.
     """
 
     client: object
     address: str
     n_workers: int
     n_threads: int
+    n_malloc_trim: int = 0
 
     def describe(self):
-        """One line: where the cluster is and how many tasks run at a time."""
-        return f"dask cluster at {self.address}: {self.n_workers} worker(s), {self.n_threads} thread(s)"
+        """One line: where the cluster is, how many tasks run at a time, and workers that run slowly."""
+        text = f"dask cluster at {self.address}: {self.n_workers} worker(s), {self.n_threads} thread(s)"
+        if self.n_malloc_trim:
+            text += (
+                f"; {self.n_malloc_trim} worker(s) run with dask's {MALLOC_TRIM}, which makes the clustering"
+                " about 2x slower: start them with DASK_CONFIG=<folder> holding a dask.yaml that sets"
+                f" distributed.nanny.pre-spawn-environ.{MALLOC_TRIM}: null"
+            )
+        return text
 
 
 def _first_line(error):
@@ -150,7 +161,7 @@ def connect_cluster(scheduler=None, workers=None, *, timeout=CONNECT_TIMEOUT_S):
                     f"cannot reach the dask scheduler at {scheduler} within {timeout:g} s: {_first_line(error)}"
                 ) from None
         else:
-            stack.enter_context(dask.config.set({"distributed.nanny.pre-spawn-environ": worker_environment()}))
+            stack.enter_context(without_malloc_trim())
             local = distributed.LocalCluster(
                 n_workers=workers,
                 threads_per_worker=1,
@@ -168,50 +179,52 @@ def connect_cluster(scheduler=None, workers=None, *, timeout=CONNECT_TIMEOUT_S):
             address=client.scheduler.address,
             n_workers=len(workers_info),
             n_threads=sum(w.get("nthreads", 1) for w in workers_info.values()) or 1,
+            n_malloc_trim=_workers_with_malloc_trim(client),
         )
         yield cluster
 
 
-def worker_environment():
-    """dask's environment for new worker processes, without its ``MALLOC_TRIM_THRESHOLD_``.
+#: What dask sets for every worker process it spawns and we do not want (:func:`without_malloc_trim`).
+MALLOC_TRIM = "MALLOC_TRIM_THRESHOLD_"
+#: A dask configuration file for ``dask worker`` processes without it (dask drops an entry set to null); give
+#: its folder in ``DASK_CONFIG``.  Environment-variable settings cannot do it: dask lower-cases their keys.
+WORKER_CONFIG = f"distributed:\n  nanny:\n    pre-spawn-environ:\n      {MALLOC_TRIM}: null\n"
+
+
+@contextlib.contextmanager
+def without_malloc_trim():
+    """Worker processes spawned inside get no ``MALLOC_TRIM_THRESHOLD_``; dask's other variables stay.
 
     dask sets that variable (65,536 bytes) for every worker process it
     spawns, to give memory back to the system sooner.  It also fixes glibc's
     mmap threshold, so that every array above 128 kB is mapped and unmapped
     anew: our clustering ran 2.1x slower per detection in such a worker
     (0.130 s instead of 0.061 s for the same 8 sequences, measured), and 2
-    workers were slower than 1 process.  The other variables (one BLAS or
-    OpenMP thread per worker) stay.
+    workers were slower than 1 process.  dask also writes it into this
+    process's environment when it spawns a worker, which later workers
+    would inherit, so it is removed from there for the duration and put
+    back afterwards.
     """
     import dask
 
-    environment = dict(dask.config.get("distributed.nanny.pre-spawn-environ", default={}) or {})
-    environment.pop("MALLOC_TRIM_THRESHOLD_", None)
-    return environment
+    before = os.environ.pop(MALLOC_TRIM, None)
+    try:
+        with dask.config.set({f"distributed.nanny.pre-spawn-environ.{MALLOC_TRIM}": None}):
+            yield
+    finally:
+        os.environ.pop(MALLOC_TRIM, None)
+        if before is not None:
+            os.environ[MALLOC_TRIM] = before
 
 
-def search_backend(cluster):
-    """Context in which ``Parallel(n_jobs=-1)`` runs its tasks on ``cluster`` (no-op for None).
+def malloc_trim_setting():
+    """This process's ``MALLOC_TRIM_THRESHOLD_``, or None (a function, so that a worker reads its own)."""
+    return os.environ.get(MALLOC_TRIM)
 
-    ``Parallel(n_jobs=None)`` stays sequential inside it (joblib's default
-    ``n_jobs`` is set to 1), so that the estimators' own per-sequence
-    ``Parallel`` calls, e.g. when the search refits in this process, do not
-    become tiny dask tasks.
 
-    Parameters
-    ----------
-    cluster : Cluster or None
-
-    Returns
-    -------
-    context : context manager
-    """
-    if cluster is None:
-        return contextlib.nullcontext()
-    from joblib import parallel_config
-
-    # The run's own client, not whichever dask calls the default (another one may be open in this process).
-    return parallel_config(backend="dask", n_jobs=1, client=cluster.client)
+def _workers_with_malloc_trim(client):
+    """How many of the cluster's workers run with ``MALLOC_TRIM_THRESHOLD_`` set."""
+    return sum(1 for value in client.run(malloc_trim_setting).values() if value is not None)
 
 
 def map_sequences(cluster, function, items, *, in_flight=None):

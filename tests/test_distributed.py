@@ -164,6 +164,63 @@ def test_search_on_the_cluster_equals_the_single_process_run(local_cluster, tiny
     assert (out / "params.json").read_text() == (single_process_run / "params.json").read_text()
 
 
+def test_independent_searches_run_concurrently_and_equal_one_after_the_other(local_cluster, tiny_folder, tmp_path):
+    # #3 and #5 (stage 1) need nothing from each other: on a cluster they start at once, each in a thread of
+    # this process.  The progress goes to an open file, which must never have to travel to a worker.
+    run = {**RUN, "experiments": "3,5", "n_points": 1}
+    alone = tmp_path / "alone"
+    reproduce(tiny_folder, alone, stream=open(os.devnull, "w"), **run)
+    together, log = tmp_path / "together", tmp_path / "progress.log"
+    with open(log, "w") as progress:
+        reproduce(tiny_folder, together, stream=progress, scheduler=local_cluster.scheduler_address, **run)
+    assert "2 independent searches run on the cluster" in log.read_text()
+    figures = _figures(together)
+    assert figures == _figures(alone)
+    assert figures["experiments"]["3"]["params"] != figures["experiments"]["5"]["params"]
+
+
+def test_local_workers_keep_glibc_default_memory_trimming(local_cluster, monkeypatch):
+    # dask's MALLOC_TRIM_THRESHOLD_ made the clustering kernels 2.1x slower per detection in its workers.  dask
+    # also writes it into the spawning process's environment (the module's default local_cluster did).
+    from sklearn_radar._distributed import MALLOC_TRIM, connect_cluster
+
+    monkeypatch.setenv(MALLOC_TRIM, "65536")
+    with connect_cluster(workers=1) as cluster:
+        environment = cluster.client.run(lambda: dict(os.environ))
+        assert "MALLOC_TRIM" not in cluster.describe()
+    (worker,) = environment.values()
+    assert MALLOC_TRIM not in worker
+    assert worker.get("OMP_NUM_THREADS") == "1"  # dask's other settings stay
+    assert os.environ[MALLOC_TRIM] == "65536"  # this process's environment is given back
+
+
+def test_workers_started_as_documented_run_without_malloc_trim_and_others_are_named(local_cluster, tmp_path):
+    # The docs' way for workers on other machines: dask worker with DASK_CONFIG holding WORKER_CONFIG.
+    from sklearn_radar._distributed import MALLOC_TRIM, WORKER_CONFIG, connect_cluster, malloc_trim_setting
+
+    (tmp_path / "dask.yaml").write_text(WORKER_CONFIG)
+    env = {**_env(), "DASK_CONFIG": str(tmp_path)}
+    env.pop(MALLOC_TRIM, None)
+    worker = subprocess.Popen(
+        [sys.executable, "-m", "distributed.cli.dask_worker", local_cluster.scheduler_address, "--nthreads", "1"],
+        env=env,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+    )
+    try:
+        with connect_cluster(scheduler=local_cluster.scheduler_address) as cluster:
+            cluster.client.wait_for_workers(3, timeout=60)
+            values = cluster.client.run(malloc_trim_setting)
+        assert sorted(v is None for v in values.values()) == [False, False, True]  # the fixture's two have it
+        with connect_cluster(scheduler=local_cluster.scheduler_address) as cluster:
+            assert cluster.n_malloc_trim == 2
+            assert f"2 worker(s) run with dask's {MALLOC_TRIM}" in cluster.describe()
+            assert f"pre-spawn-environ.{MALLOC_TRIM}: null" in cluster.describe()
+    finally:
+        worker.terminate()
+        worker.wait(timeout=30)
+
+
 # ----------------------------------------------------------------------------- cluster: per sequence, a stream
 
 

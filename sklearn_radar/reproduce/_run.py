@@ -275,7 +275,9 @@ def reproduce(
         ``data`` is None; ignored for a RadarScenes folder.
     scheduler : str, default=None
         Address of a running dask scheduler (``tcp://host:8786``): the
-        searches' cross-validation fits run on its workers.  Needs the
+        searches' training sequences are placed on its workers, each
+        candidate is one task per sequence there, and the independent
+        searches run at once.  Needs the
         ``[distributed]`` extra; an unreachable address fails within a few
         seconds (OSError naming it).
     workers : int, default=None
@@ -283,10 +285,9 @@ def reproduce(
         Without ``scheduler`` or ``workers`` dask is not imported.
     n_points : int, default=None
         Candidates each search step proposes and evaluates at a time
-        (``BayesSearchCV(n_points=...)``); None: 1, or on a cluster as many as
-        keep its workers busy (worker threads // folds).  The results
-        depend on it, not on where the fits run: for the same seed and
-        ``n_points`` a cluster run equals a single-process one.
+        (``BayesSearchCV(n_points=...)``); None: 1.  The results depend on
+        it, not on where the fits run: for the same seed and ``n_points`` a
+        cluster run equals a single-process one.
     repeats : int, default=None
         Searches per tuned experiment and per baseline, with the seeds
         ``seed``, ``seed + 1``, ... on the same split, each repeat's kept
@@ -439,13 +440,17 @@ def _tuned(key):
 
 
 def _use_cluster(run, cluster, n_points):
-    """On a cluster the searches' fits are dask tasks, and a step proposes enough candidates to keep it busy."""
+    """The cluster (or None) and the candidates per search step: 1 unless asked, with or without a cluster.
+
+    On a cluster a candidate is already one task per training sequence, and
+    independent searches run at once (:func:`_concurrent_searches`): more
+    candidates per step are not needed to keep the workers busy, and with
+    the same ``n_points`` the results equal a single-process run's.
+    """
     run.cluster = cluster
-    if cluster is None:
-        run.n_points = n_points or 1
-        return
-    run.n_points = n_points or max(1, cluster.n_threads // run.budget.cv_folds)
-    _say(run, f"{cluster.describe()}; {run.n_points} candidate(s) x {run.budget.cv_folds} folds per search step")
+    run.n_points = n_points or 1
+    if cluster is not None:
+        _say(run, f"{cluster.describe()}; {run.n_points} candidate(s) per search step, one task per sequence")
 
 
 def _repeated(key, repeats):
