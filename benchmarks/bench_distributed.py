@@ -1,19 +1,22 @@
-"""dask.distributed: search speed-up, peak memory per worker of a streamed ``cluster``, projection to RadarScenes.
+"""dask.distributed: search speed-up, concurrent searches, peak memory of a streamed ``cluster``, projection.
 
-Run: ``python benchmarks/bench_distributed.py`` (about 15 min on 2 idle cores; ``--parts speedup``,
-``--parts memory`` or ``--parts projection`` run one part; ``--repeats``, ``--n-iter``, ``--scale`` change the size).
-Needs the ``[distributed]`` extra.
+Run: ``python benchmarks/bench_distributed.py`` (about 25 min on 2 idle cores; ``--parts speedup``,
+``concurrent``, ``memory`` or ``projection`` run parts; ``--repeats``, ``--n-iter``, ``--search-scales``,
+``--scale`` change the sizes).  Needs the ``[distributed]`` extra.
 
-1. **Speed-up.**  ``reproduce`` of the stage-1 experiment #8 (default data: 4 simulated sequences x 20 s,
-   2 grouped folds on the training half) with a ``--n-iter`` (100) iteration search, once in one process
-   and once with ``--workers 2``, the same ``n_points`` (1: each step's two folds run side by side), runs
-   interleaved ``--repeats`` times.  The figure is the search's own wall time (``search_wall_time_s`` of
-   ``results.json``: no data loading, no cluster start-up, no report); the ratio of the medians is the
-   speed-up.  Both runs must write the same figures (checked and printed).
+1. **Speed-up of one search.**  The search of #8 (``--n-iter`` 100 candidates, 30 random, 3 grouped folds,
+   ``n_points`` 1) as ``reproduce`` runs it (:mod:`sklearn_radar.reproduce._search`), on the default run's
+   training half (2 simulated sequences x 20 s) times each of ``--search-scales``: in one process and on 2
+   local worker processes (``--workers 2``), interleaved ``--repeats`` times.  The clock runs from the first
+   candidate to the last (stage 0 done before; no cluster start-up, no data placement).  Both must find the
+   same scores (checked).  The step times give E (a candidate's evaluation: the random steps) and g (the
+   Gaussian process: guided steps minus E), hence Amdahl's bound.
+1b. **Concurrent searches.**  ``reproduce --experiments 2-9`` on the default data, 1 process against
+   ``--workers 2``, where the 8 independent searches run at once: whole-run wall time, same figures.
 2. **Memory.**  ``cluster`` of a simulated data set ``--scale`` (10) times the default size of
    ``sklearn-radar simulate`` (4 sequences x 30 s), with the saved setting of #8: the whole table in one
    process (what ``cluster`` did before), the stream in one process, and the stream on 2 local workers.
-   Peak RSS is each process's ``ru_maxrss``; the per-sequence task times give the per-detection cost.
+   Peak RSS is each process's ``VmHWM``; the per-sequence task times give the per-detection cost.
 3. **Projection** of ``reproduce --full`` and ``cluster`` on the real RadarScenes data set (158 sequences,
    ~100 M detections) for 8, 32 and 128 workers, from the measured costs, with the arithmetic printed.
 """
@@ -21,7 +24,6 @@ Needs the ``[distributed]`` extra.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import io
 import json
 import logging
@@ -61,71 +63,137 @@ def _figures(out):
     return strip(json.loads((Path(out) / "results.json").read_text()))
 
 
-def _search_seconds(out, number="8"):
-    return json.loads((Path(out) / "results.json").read_text())["experiments"][number]["search_wall_time_s"]
-
-
 # ----------------------------------------------------------------------------- 1. speed-up
 
 
-def speedup(work, n_iter, repeats, n_points, scale=1):
-    from sklearn_radar.datasets import make_scenes, write_radarscenes
-    from sklearn_radar.reproduce import reproduce
-    from sklearn_radar.reproduce._results import Budget
+def _training_half(scale, seed=0):
+    """The default run's training half (2 simulated sequences x 20 s) ``scale`` times: X, target, groups."""
+    from sklearn_radar.datasets import make_scenes
+    from sklearn_radar.metrics import precluster_target
 
-    budget = Budget.default()
-    data = work / f"speedup-data-{scale}"
-    n_sequences = budget.n_sequences * scale
-    scenes = make_scenes(n_sequences=n_sequences, duration=budget.duration, random_state=0)
-    write_radarscenes(scenes, data)
+    scenes = make_scenes(n_sequences=2 * scale, duration=20.0, random_state=seed)
+    X = scenes.data[[c for c in scenes.data.columns if c not in ("uuid", "track_id", "label_id")]]
+    return X, precluster_target(scenes.data, scenes.target), scenes.groups
+
+
+class _StepClock:
+    """Callback of a search: the wall time of every step."""
+
+    def __init__(self):
+        self.times, self._last = [], time.perf_counter()
+
+    def __call__(self, result):
+        now = time.perf_counter()
+        self.times.append(now - self._last)
+        self._last = now
+
+
+def _timed_search(data, searched, space, folds, n_iter):
+    from sklearn_radar.reproduce._search import bayes_search
+
+    clock = _StepClock()
+    start = time.perf_counter()
+    found = bayes_search(
+        searched,
+        space,
+        data,
+        folds,
+        objective="v1",
+        n_iter=n_iter,
+        n_initial_points=30,
+        random_state=0,
+        callback=clock,
+    )
+    return time.perf_counter() - start, clock.times, found.scores
+
+
+def speedup(scales, n_iter, repeats):
+    """Part 1: a search of #8 in one process and on 2 local workers, at several data sizes."""
+    from threadpoolctl import threadpool_limits
+
+    from sklearn_radar._distributed import connect_cluster
+    from sklearn_radar.experiments import experiment_pipeline, search_space
+    from sklearn_radar.reproduce._run import _fixed_stage0
+    from sklearn_radar.reproduce._search import SearchData, sequence_folds
+
     print(
-        f"## 1. Speed-up: a {n_iter}-iteration stage-1 search (#8), {len(scenes.data):,} detections "
-        f"({n_sequences} x {budget.duration:g} s, {scale}x the default data), {budget.cv_folds} folds, "
-        f"n_points {n_points}"
+        f"## 1. Speed-up: a {n_iter}-iteration search of #8 (30 random candidates, then guided), "
+        "1 process against 2 local worker processes"
     )
-    times = {"1 process": [], "2 workers": []}
-    figures = {}
-    for repeat in range(repeats):
-        for name, workers in (("1 process", None), ("2 workers", 2)):
-            out = work / f"speedup-{scale}-{repeat}-{workers}"
-            reproduce(data, out, n_iter=n_iter, experiments="8", n_points=n_points, workers=workers, stream=_quiet())
-            seconds = _search_seconds(out)
-            times[name].append(seconds)
-            figures[name] = _figures(out)
-            print(f"  run {repeat + 1}, {name:<9}: search {seconds:7.1f} s", flush=True)
-    one, two = statistics.median(times["1 process"]), statistics.median(times["2 workers"])
-    same = figures["1 process"] == figures["2 workers"]
-    print(f"  median: 1 process {one:.1f} s, 2 workers {two:.1f} s; speed-up {one / two:.2f}x")
-    print(f"  same figures (results.json without wall times): {'yes' if same else 'NO'}")
-    per_run = [a / b for a, b in zip(times["1 process"], times["2 workers"], strict=True)]
-    print(f"  speed-up per interleaved pair: {', '.join(f'{r:.2f}x' for r in per_run)}")
-    return {
-        "one": one,
-        "two": two,
-        "n_iter": n_iter,
-        "n_train": figures["1 process"]["meta"]["data"]["n_train"],
-        "scale": scale,
-    }
+    print("  the training half of the default run (2 sequences x 20 s) times the scale; 3 grouped folds\n")
+    print("  | scale | training detections | candidate E | proposing g | 1 process | 2 workers | speed-up |")
+    print("  |---|---|---|---|---|---|---|")
+    rows = []
+    with connect_cluster(workers=2) as cluster, threadpool_limits(limits=1, user_api="blas"):
+        for scale in scales:
+            X, target, groups = _training_half(scale)
+            stage0, searched, prefix = _fixed_stage0(experiment_pipeline(8), search_space(8))
+            space = {key[len(prefix) :]: dimension for key, dimension in search_space(8).items()}
+            folds = sequence_folds(groups, 3)
+            here = SearchData.place(X, target, groups).prepare(stage0)
+            there = SearchData.place(X, target, groups, cluster).prepare(stage0)
+            cluster.client.gather(there.blocks)  # stage 0 done on the workers before the clock starts
+            times = {"1 process": [], "2 workers": []}
+            steps, scores = {}, {}
+            for _ in range(repeats):
+                for name, data in (("1 process", here), ("2 workers", there)):
+                    seconds, step_times, found = _timed_search(data, searched, space, folds, n_iter)
+                    times[name].append(seconds)
+                    steps[name], scores[name] = step_times, found
+            one, two = statistics.median(times["1 process"]), statistics.median(times["2 workers"])
+            random_steps = statistics.median(steps["1 process"][1:30])  # no Gaussian process: the evaluation
+            guided_steps = statistics.median(steps["1 process"][30:])
+            row = {
+                "scale": scale,
+                "n_train": len(X),
+                "one": one,
+                "two": two,
+                "E": random_steps,
+                "g": guided_steps - random_steps,
+                "n_iter": n_iter,
+                "same": scores["1 process"] == scores["2 workers"],
+            }
+            rows.append(row)
+            print(
+                f"  | {scale} | {len(X):,} | {row['E']:.3f} s | {row['g']:.3f} s | {one:.1f} s | {two:.1f} s "
+                f"| **{one / two:.2f}x** |",
+                flush=True,
+            )
+            del here, there
+    print()
+    for row in rows:
+        print(
+            f"  scale {row['scale']}: same {n_iter} scores in both: {'yes' if row['same'] else 'NO'}; "
+            f"per pair: {repeats} interleaved repeat(s), medians shown"
+        )
+    print(
+        "  E: median step of the 29 random candidates after the first (the evaluation alone); g: median guided "
+        "step minus E (the Gaussian process, in the command's process).  Amdahl: at most (g + E) / (g + E / 2)."
+    )
+    return rows
 
 
-def evaluation_cost(work, n_candidates=20, scale=1):
-    """Seconds per candidate (all folds) of #8's search without the Gaussian process (random candidates only)."""
+# ----------------------------------------------------------------------------- 1b. concurrent searches
+
+
+def concurrent(work, n_iter, experiments="2-9"):
+    """Part 1b: ``reproduce`` of the independent stage-1 experiments, 1 process against 2 local workers."""
     from sklearn_radar.reproduce import reproduce
-    from sklearn_radar.reproduce._results import Budget
 
-    data = work / f"speedup-data-{scale}"
-    out = work / f"random-only-{scale}"
-    # Every candidate random (n_initial_points = n_iter): the time is the evaluations', no Gaussian process.
-    original = Budget.__dict__["default"]
-    Budget.default = staticmethod(
-        lambda n_iter=None: dataclasses.replace(original.__func__(Budget, n_iter), n_initial_points=n_candidates)
+    print(f"\n## 1b. reproduce --experiments {experiments} --n-iter {n_iter} (default data): searches at once")
+    walls, figures = {}, {}
+    for name, workers in (("1 process", None), ("2 workers", 2)):
+        out = work / f"concurrent-{workers}"
+        start = time.perf_counter()
+        reproduce(None, out, n_iter=n_iter, experiments=experiments, workers=workers, stream=_quiet())
+        walls[name] = time.perf_counter() - start
+        figures[name] = _figures(out)
+        print(f"  {name:<9}: {walls[name]:6.1f} s wall (whole run: data, searches, test scores, report)", flush=True)
+    print(
+        f"  speed-up {walls['1 process'] / walls['2 workers']:.2f}x; same figures: "
+        f"{'yes' if figures['1 process'] == figures['2 workers'] else 'NO'}"
     )
-    try:
-        reproduce(data, out, n_iter=n_candidates, experiments="8", stream=_quiet())
-    finally:
-        Budget.default = original
-    seconds = _search_seconds(out)
-    return seconds / n_candidates
+    return walls
 
 
 # ----------------------------------------------------------------------------- 2. memory
@@ -263,29 +331,28 @@ def _merge_parts(work, data, n_sequences, part_size):
 # ----------------------------------------------------------------------------- 3. projection
 
 
-def projection(search, per_candidate, cluster_cost):
+def projection(row, cluster_cost, repeats=3):
+    """Part 3: ``reproduce --full`` and ``cluster`` on RadarScenes for 8, 32 and 128 workers, from measured costs."""
     print("\n## 3. Projection to RadarScenes (158 sequences, ~100 M detections)")
-    n_train = search["n_train"]
-    g = max(search["one"] / search["n_iter"] - per_candidate, 0.0)
-    e_det = per_candidate / n_train
+    e_det = row["E"] / row["n_train"]
+    g = row["g"]
     train = REAL_DETECTIONS / 2
+    train_sequences = REAL_SEQUENCES // 2
     E = e_det * train
+    searches = FULL_SEARCHES * repeats
     print(
-        f"  measured: one candidate of #8 (all folds) {per_candidate:.3f} s on {n_train:,} training detections "
-        f"= {e_det * 1e6:.2f} µs per detection; proposing a candidate (Gaussian process, this process) "
-        f"g = {search['one']:.1f} s / {search['n_iter']} - {per_candidate:.3f} s = {g:.3f} s"
+        f"  measured (scale {row['scale']}): one candidate of #8 E = {row['E']:.3f} s on {row['n_train']:,} training "
+        f"detections = {e_det * 1e6:.3f} µs per detection; proposing a candidate g = {g:.3f} s"
     )
     print(
-        f"  RadarScenes training half: {train / 1e6:.0f} M detections -> one candidate E = {e_det * 1e6:.2f} µs "
-        f"x {train / 1e6:.0f} M = {E:.0f} s of work"
+        f"  RadarScenes training half: {train / 1e6:.0f} M detections in {train_sequences} sequences -> one "
+        f"candidate is {E:.1f} s of work in at most {train_sequences} tasks"
     )
+    print(f"  one search:  T1(W) = {FULL_ITER} x (g + E / min(W, {train_sequences}))")
     print(
-        f"  a search: {FULL_ITER} candidates, n_points = W / {FULL_FOLDS} per step (every worker busy), so "
-        f"{FULL_ITER} x {FULL_FOLDS} / W steps of (n_points x g + E / {FULL_FOLDS}):"
-    )
-    print(
-        f"    T_search(W) = {FULL_ITER} x g + {FULL_ITER} x E / W;  "
-        f"--full = {FULL_SEARCHES} searches, one after the other"
+        f"  --full: {FULL_SEARCHES} searches x {repeats} repeats = {searches}; all but #12, #13 (x {repeats}) run "
+        f"at once, so  T(W) ~ max({searches} x {FULL_ITER} x E / W, {searches} x {FULL_ITER} x g) "
+        f"+ 2 x T1(W)  (the Gaussian processes share the command's process)"
     )
     c = cluster_cost["per_detection_cluster"]
     print(
@@ -293,47 +360,43 @@ def projection(search, per_candidate, cluster_cost):
         f"of work, {REAL_SEQUENCES} sequence tasks"
     )
     print()
-    print("  | workers | one search | --full searches (x14) | cluster (100 M) |")
+    print("  | workers | one search | --full searches | cluster (100 M) |")
     print("  |---|---|---|---|")
     for W in (8, 32, 128):
-        t_search = FULL_ITER * g + FULL_ITER * E / W
-        # Sequences are the tasks: no faster than the mean sequence (100 M / 158) once W >= 158.
+        t1 = FULL_ITER * (g + E / min(W, train_sequences))
+        t_full = max(searches * FULL_ITER * E / W, searches * FULL_ITER * g) + 2 * t1
         t_cluster = c * REAL_DETECTIONS / min(W, REAL_SEQUENCES)
-        print(
-            f"  | {W:>3} | {FULL_ITER} x {g:.2f} + {FULL_ITER} x {E:.0f} / {W} = {t_search / 3600:.2f} h "
-            f"| {FULL_SEARCHES * t_search / 3600:.1f} h | {c * 1e6:.2f} µs x 100 M / {W} = {t_cluster:.0f} s |"
-        )
+        print(f"  | {W:>3} | {t1 / 60:.1f} min | {t_full / 3600:.1f} h | {t_cluster / 60:.1f} min |")
     print(
-        "  Assumptions: every search costs as much per detection as #8's (stage 2 and HDBSCAN cost more); the folds"
-        " are balanced; g does not grow with the data (it grows with n_points: skopt fits the GP once per proposed"
-        " point); the per-sequence cluster tasks are balanced (158 tasks: above 158 workers nothing is gained)."
+        "  Assumptions: every search costs as much per detection as #8's (stage 2 and HDBSCAN cost more); the "
+        "sequence blocks are balanced; g does not grow with the data; the per-sequence cluster tasks are balanced "
+        "(158 tasks: above 158 workers nothing is gained); the command's process holds the data it needs for the "
+        "report (see the docs)."
     )
 
 
 def main():
     parser = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    parser.add_argument("--parts", default="speedup,memory,projection")
+    parser.add_argument("--parts", default="speedup,concurrent,memory,projection")
     parser.add_argument("--n-iter", type=int, default=100)
-    parser.add_argument("--repeats", type=int, default=2)
-    parser.add_argument("--n-points", type=int, default=1)
+    parser.add_argument("--repeats", type=int, default=1)
     parser.add_argument("--scale", type=int, default=10, help="data size of the memory part, x the default")
     parser.add_argument(
-        "--search-scales", default="1,4", help="data sizes of the speed-up part, x the default (comma-separated)"
+        "--search-scales", default="1,4,16,64", help="data sizes of the speed-up part, x the default training half"
     )
     args = parser.parse_args()
     parts = set(args.parts.split(","))
     with tempfile.TemporaryDirectory(prefix="bench-distributed-") as work:
         work = Path(work)
-        search = per_candidate = cluster_cost = None
+        rows = cluster_cost = None
         if parts & {"speedup", "projection"}:
-            for scale in (int(text) for text in args.search_scales.split(",")):
-                search = speedup(work, args.n_iter, args.repeats, args.n_points, scale)
-                per_candidate = evaluation_cost(work, scale=scale)
-                print(f"  one candidate without the Gaussian process: {per_candidate:.3f} s (20 random candidates)")
+            rows = speedup([int(text) for text in args.search_scales.split(",")], args.n_iter, args.repeats)
+        if "concurrent" in parts:
+            concurrent(work, args.n_iter)
         if parts & {"memory", "projection"}:
             cluster_cost = memory(work, args.scale)
         if "projection" in parts:
-            projection(search, per_candidate, cluster_cost)
+            projection(rows[-1], cluster_cost)
 
 
 if __name__ == "__main__":

@@ -14,6 +14,7 @@ from sklearn_radar.metrics._parts import combine_parts
 from sklearn_radar.reproduce._search import (
     Failed,
     SearchData,
+    balanced_blocks,
     candidate_parts,
     candidate_scores,
     sequence_folds,
@@ -58,7 +59,7 @@ def test_a_failing_candidate_scores_zero_and_a_search_that_always_fails_raises(s
     bad = {"cluster__eps_xy": -1.0}  # rejected by the estimator's parameter validation inside the task
     good = candidate_scores(data, pipeline, [{}], folds, "v1")[0]
     assert candidate_scores(data, pipeline, [{}, bad], folds, "v1") == [good, 0.0]
-    failed = candidate_parts(pipeline, bad, data.sequences[0], "v1")
+    failed = candidate_parts(pipeline, bad, data.blocks[0][0], "v1")
     assert isinstance(failed, Failed) and "eps_xy" in failed.error
     with pytest.raises(ValueError, match="every fit of 1 candidate"):
         candidate_scores(data, pipeline, [bad], folds, "v1")
@@ -74,7 +75,7 @@ def test_joblib_workers_give_the_same_scores_and_tasks_pickle(scenes):
     assert here == parallel
     assert len(set(here)) == 3  # the candidates differ: the comparison could fail
     data = SearchData.place(X, target, groups)
-    parts = candidate_parts(pipeline, {}, data.sequences[0], "v1")
+    parts = candidate_parts(pipeline, {}, data.blocks[0][0], "v1")
     assert combine_parts("v1", [pickle.loads(pickle.dumps(parts))]) == combine_parts("v1", [parts])
 
 
@@ -84,8 +85,19 @@ def test_stage0_per_sequence_equals_stage0_on_the_whole_half(scenes):
     stage0 = pipeline[:-1]
     prepared = SearchData.place(X, target, groups).prepare(stage0)
     whole = clone(stage0).fit_transform(X)
-    for sequence_id, (rows, sequence_target) in zip(prepared.ids, prepared.sequences, strict=True):
+    assert prepared.sequence_ids == sorted(np.unique(groups))
+    for (sequence_id,), [(rows, sequence_target)] in zip(prepared.ids, prepared.blocks, strict=True):
         mask = groups == sequence_id
         assert list(rows.columns) == list(whole.columns)
         np.testing.assert_array_equal(rows.to_numpy(), whole[mask].to_numpy())
         assert np.array_equal(sequence_target, target[mask])
+
+
+def test_blocks_are_balanced_and_hold_every_sequence_once():
+    sizes = [50, 10, 40, 30, 20, 5]
+    blocks = balanced_blocks(sizes, 2)
+    assert sorted(p for block in blocks for p in block) == list(range(6))
+    totals = sorted(sum(sizes[p] for p in block) for block in blocks)
+    assert totals == [75, 80]  # largest first, each to the lightest block: 40+30+5 and 50+20+10
+    assert all(block == sorted(block) for block in blocks)
+    assert balanced_blocks([3, 4], 5) == [[1], [0]]  # never more blocks than sequences

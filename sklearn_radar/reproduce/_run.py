@@ -737,7 +737,7 @@ def _training_sequences(run, context):
         train = context.train
         placed = SearchData.place(context.X.iloc[train], context.target[train], context.scenes.groups[train], cluster)
         context.search_data = placed
-    return SearchData(placed.sequences, placed.ids, cluster, None if cluster is not None else run.n_jobs)
+    return SearchData(placed.blocks, placed.ids, cluster, None if cluster is not None else run.n_jobs)
 
 
 #: Stage-0 outputs kept per run (:func:`_prepared`): the inputs of the experiments, not of every setting.
@@ -760,7 +760,7 @@ def _prepared(context, raw, stage0):
             found = cache[key] = raw.prepare(stage0)
             while len(cache) > PREPARED_KEPT:
                 cache.pop(next(iter(cache)))
-    return SearchData(found.sequences, found.ids, raw.cluster, raw.n_jobs)
+    return SearchData(found.blocks, found.ids, raw.cluster, raw.n_jobs)
 
 
 def _without_cache(estimator):
