@@ -109,6 +109,7 @@ def _timed_search(data, searched, space, folds, n_iter):
 
 def speedup(scales, n_iter, repeats):
     """Part 1: a search of #8 in one process and on 2 local workers, at several data sizes."""
+    from distributed import wait
     from threadpoolctl import threadpool_limits
 
     from sklearn_radar._distributed import connect_cluster
@@ -130,14 +131,16 @@ def speedup(scales, n_iter, repeats):
             stage0, searched, prefix = _fixed_stage0(experiment_pipeline(8), search_space(8))
             space = {key[len(prefix) :]: dimension for key, dimension in search_space(8).items()}
             folds = sequence_folds(groups, 3)
-            here = SearchData.place(X, target, groups).prepare(stage0)
-            there = SearchData.place(X, target, groups, cluster).prepare(stage0)
-            cluster.client.gather(there.blocks)  # stage 0 done on the workers before the clock starts
             times = {"1 process": [], "2 workers": []}
             steps, scores = {}, {}
             for _ in range(repeats):
-                for name, data in (("1 process", here), ("2 workers", there)):
+                for name, where in (("1 process", None), ("2 workers", cluster)):
+                    # Placed anew for each run and dropped after it: at scale 128 one copy is about 3 GB.
+                    data = SearchData.place(X, target, groups, where).prepare(stage0)
+                    if where is not None:
+                        wait(data.blocks)  # stage 0 done on the workers before the clock starts
                     seconds, step_times, found = _timed_search(data, searched, space, folds, n_iter)
+                    del data
                     times[name].append(seconds)
                     steps[name], scores[name] = step_times, found
             one, two = statistics.median(times["1 process"]), statistics.median(times["2 workers"])
@@ -159,7 +162,7 @@ def speedup(scales, n_iter, repeats):
                 f"| **{one / two:.2f}x** |",
                 flush=True,
             )
-            del here, there
+            del X, target, groups
     print()
     for row in rows:
         print(

@@ -106,7 +106,7 @@ from ._results import (
     RunResults,
     SearchRecord,
 )
-from ._search import SearchData, bayes_search, candidate_scores, sequence_folds
+from ._search import SearchData, candidate_scores, search_and_score_start, search_on_a_worker, sequence_folds
 from ._sections._figures import CONVERGENCE, SCENE, V1_BARS
 from ._sections._filter import FILTER_SCENE, HEATMAP
 
@@ -692,29 +692,32 @@ def _tune(run, context, estimator, space, label, start_from=None, part=0, parts=
         stage0, searched, prefix = fixed
         data = _prepared(context, raw, stage0)
         searched_space = {key[len(prefix) :]: dimension for key, dimension in space.items()}
-    status = None if run.progress is None else run.progress.search_status(part, parts)
-    printer = ProgressPrinter(budget.n_iter, label=label, stream=run.stream, status=status)
-    # The Gaussian process works on tiny matrices, where multi-threaded BLAS was 20x slower (measured).
-    with threadpool_limits(limits=1, user_api="blas"):
-        found = bayes_search(
-            searched,
-            searched_space,
-            data,
-            folds,
-            objective=objective,
-            n_iter=budget.n_iter,
-            n_initial_points=budget.n_initial_points,
-            n_points=getattr(run, "n_points", 1),  # a bare run object lacks it
-            random_state=run.seed if seed is None else seed,
-            callback=printer,
-        )
+    # The paper's setting is scored as one more candidate on the same folds (on the data as searched, when it
+    # sets only the searched step).
+    start_here = bool(start_from) and all(key.startswith(prefix) for key in start_from)
+    start_candidate = {key[len(prefix) :]: value for key, value in start_from.items()} if start_here else None
+    options = {
+        "objective": objective,
+        "n_iter": budget.n_iter,
+        "n_initial_points": budget.n_initial_points,
+        "n_points": getattr(run, "n_points", 1),  # a bare run object lacks it
+        "random_state": run.seed if seed is None else seed,
+    }
+    cluster = getattr(run, "cluster", None)
+    if cluster is not None and getattr(run, "remote_searches", False):
+        found, known = search_on_a_worker(cluster, searched, searched_space, data, folds, start_candidate, **options)
+    else:
+        status = None if run.progress is None else run.progress.search_status(part, parts)
+        printer = ProgressPrinter(budget.n_iter, label=label, stream=run.stream, status=status)
+        # The Gaussian process works on tiny matrices, where multi-threaded BLAS was 20x slower (measured).
+        with threadpool_limits(limits=1, user_api="blas"):
+            found, known = search_and_score_start(
+                searched, searched_space, data, folds, start_candidate, callback=printer, **options
+            )
     best = {prefix + key: value for key, value in _native(found.best_params).items()}
-    cv_best, source, known = found.best_score, SOURCE_SEARCH, None
+    cv_best, source = found.best_score, SOURCE_SEARCH
     if start_from:
-        if all(key.startswith(prefix) for key in start_from):
-            known_params = {key[len(prefix) :]: value for key, value in start_from.items()}
-            known = candidate_scores(data, searched, [known_params], folds, objective)[0]
-        else:
+        if not start_here:
             known = candidate_scores(raw, estimator, [start_from], folds, objective)[0]
         if known >= cv_best:
             best = {key: start_from[key] for key in space if key in start_from}
@@ -931,13 +934,17 @@ def _independent_searches(run, context, keys):
 
 @contextlib.contextmanager
 def _concurrent_searches(run, context, keys):
-    """On a dask cluster, every independent search starts at once, each in a thread of this process.
+    """On a dask cluster, every independent search starts at once: a task on a worker, awaited by a thread here.
 
     A search alone keeps the workers busy only while its candidates run,
-    not while this process's Gaussian process chooses the next one; several
-    at once fill those gaps.  Each search has its own seed, so the results
-    are those of one search after the other.  The steps collect them in
-    their order (``context.pending``); their iterations are not printed.
+    not while its Gaussian process chooses the next one; several at once
+    fill those gaps.  Each search loop is a task on a worker
+    (:func:`._search.search_on_a_worker`), so that their Gaussian processes
+    do not queue for this process's GIL; the thread here then scores the
+    kept setting on the test half.  Each search has its own seed, so the
+    results are those of one search after the other.  The steps collect
+    them in their order (``context.pending``); their iterations are not
+    printed.
     """
     context.pending = {}
     cluster = getattr(run, "cluster", None)
@@ -948,19 +955,24 @@ def _concurrent_searches(run, context, keys):
         return
     _training_sequences(run, context)  # placed once, before the threads share it
     quiet = _quiet_run(run, n_jobs=None, cluster=cluster)
-    threads = max(2, cluster.n_threads)
+    quiet.remote_searches = True  # each search's Gaussian process on a worker, not in this process's GIL
+    threads = len(jobs) * repeats
     executor = ThreadPoolExecutor(max_workers=threads, thread_name_prefix="sklearn-radar-search")
+    # BLAS limits are process-wide: set once here, so that the threads' own enter-and-leave cannot change them
+    # under one another (a multi-threaded BLAS computes the Gaussian process to other rounding).
+    limits = threadpool_limits(limits=1, user_api="blas")
     try:
         for tag, job in jobs.items():
             context.pending[tag] = {k: executor.submit(job, quiet, k) for k in range(repeats)}
         _say(
             run,
-            f"{len(jobs) * repeats} independent searches run on the cluster, {threads} at a time "
+            f"{len(jobs) * repeats} independent searches run on the cluster at once, each a task on a worker "
             "(their iterations are not printed)",
         )
         yield
     finally:
         executor.shutdown(wait=False, cancel_futures=True)
+        limits.restore_original_limits()
 
 
 def _run_experiment(run, context, key):

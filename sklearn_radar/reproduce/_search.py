@@ -34,7 +34,14 @@ from sklearn.utils import check_random_state
 from .._skopt import Optimizer, dimensions_aslist
 from ..metrics._parts import combine_parts, score_parts
 
-__all__ = ["SearchData", "SearchResult", "bayes_search", "sequence_folds"]
+__all__ = [
+    "SearchData",
+    "SearchResult",
+    "bayes_search",
+    "search_and_score_start",
+    "search_on_a_worker",
+    "sequence_folds",
+]
 
 
 @dataclass(frozen=True)
@@ -335,3 +342,45 @@ def bayes_search(
             break
     best = int(np.argmax(scores))
     return SearchResult(candidates=candidates, scores=scores, best_params=candidates[best], best_score=scores[best])
+
+
+def search_and_score_start(estimator, space, data, folds, start_from=None, *, callback=None, **options):
+    """:func:`bayes_search`, then the mean fold score of ``start_from`` (None: not scored) on the same folds.
+
+    Returns
+    -------
+    found : SearchResult
+    known : float or None
+    """
+    found = bayes_search(estimator, space, data, folds, callback=callback, **options)
+    known = None
+    if start_from is not None:
+        known = candidate_scores(data, estimator, [start_from], folds, options["objective"])[0]
+    return found, known
+
+
+def search_on_a_worker(cluster, estimator, space, data, folds, start_from=None, **options):
+    """:func:`search_and_score_start` as one task on the cluster: its Gaussian process runs on a worker.
+
+    Several searches at once would otherwise share this process (and its
+    GIL) for their Gaussian processes.  The task gets the blocks by key, so
+    that dask does not bring their data to it; from the worker it submits
+    the candidates' tasks as usual (``worker_client``: while it waits, its
+    worker thread runs other tasks).  Same code, same single BLAS thread as
+    dask gives its workers: the same result as here.
+    """
+    keys = [block.key for block in data.blocks]
+    future = cluster.client.submit(
+        _search_task, estimator, space, keys, data.ids, folds, start_from, options, pure=False
+    )
+    return future.result()
+
+
+def _search_task(estimator, space, keys, ids, folds, start_from, options):
+    from types import SimpleNamespace
+
+    from distributed import Future, worker_client
+
+    with worker_client() as client:
+        data = SearchData([Future(key, client=client) for key in keys], ids, SimpleNamespace(client=client))
+        return search_and_score_start(estimator, space, data, folds, start_from, **options)
