@@ -26,7 +26,6 @@ from __future__ import annotations
 import argparse
 import io
 import json
-import logging
 import os
 import statistics
 import subprocess
@@ -225,7 +224,7 @@ print(json.dumps({"peak": peak_rss(), "seconds":
 def memory(work, scale):
     import dask.distributed as distributed
 
-    from sklearn_radar._distributed import peak_rss
+    from sklearn_radar._distributed import connect_cluster, peak_rss
     from sklearn_radar.datasets import make_scenes, write_radarscenes
     from sklearn_radar.reproduce import cluster_radarscenes, reproduce
 
@@ -258,16 +257,13 @@ def memory(work, scale):
             check=True,
         )
         rows[mode] = json.loads(done.stdout.strip().splitlines()[-1])
-    with (
-        distributed.LocalCluster(
-            n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=logging.ERROR
-        ) as cluster,
-        distributed.Client(cluster) as client,
-    ):
+    # As --workers starts them (without dask's MALLOC_TRIM_THRESHOLD_, which slowed the kernels 2x).
+    with connect_cluster(workers=2) as local:
+        client = local.client
         idle = client.run(peak_rss)
         with distributed.get_task_stream(client=client) as stream:
             start = time.perf_counter()
-            cluster_radarscenes(data, params, work / "p-workers.json", scheduler=cluster.scheduler_address)
+            cluster_radarscenes(data, params, work / "p-workers.json", scheduler=local.address)
             seconds = time.perf_counter() - start
         peaks = client.run(peak_rss)
     same = (work / "p-workers.json").read_bytes() == (work / "p-stream.json").read_bytes()

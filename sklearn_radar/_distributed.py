@@ -24,6 +24,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import os
+import threading
 from collections import deque
 from dataclasses import dataclass
 from numbers import Integral
@@ -92,6 +93,16 @@ class Cluster:
     n_workers: int
     n_threads: int
     n_malloc_trim: int = 0
+
+    def next_worker(self):
+        """A worker's address, in turn over the workers (by thread), for spreading long tasks; None if none."""
+        workers = self.client.scheduler_info().get("workers", {})
+        slots = sorted(address for address, info in workers.items() for _ in range(info.get("nthreads", 1)))
+        if not slots:
+            return None
+        with _TURN_LOCK:
+            self._turn = getattr(self, "_turn", -1) + 1
+            return slots[self._turn % len(slots)]
 
     def describe(self):
         """One line: where the cluster is, how many tasks run at a time, and workers that run slowly."""
@@ -183,6 +194,8 @@ def connect_cluster(scheduler=None, workers=None, *, timeout=CONNECT_TIMEOUT_S):
         )
         yield cluster
 
+
+_TURN_LOCK = threading.Lock()
 
 #: What dask sets for every worker process it spawns and we do not want (:func:`without_malloc_trim`).
 MALLOC_TRIM = "MALLOC_TRIM_THRESHOLD_"

@@ -298,17 +298,23 @@ import json, logging, os, signal, sys, threading, time
 import dask.distributed as distributed
 from sklearn_radar.reproduce import reproduce
 
-data, out, run = sys.argv[1], sys.argv[2], json.loads(sys.argv[3])
+data, out, run, delay = sys.argv[1], sys.argv[2], json.loads(sys.argv[3]), float(sys.argv[4])
 killed = []
 
 
 def kill_one_worker(address, stop):
+    # Without a delay: once the cluster was busy, then idle (between search steps), the next busy worker.
+    # With one (searches at once keep the cluster busy): a busy worker, delay seconds after the first task.
     client = distributed.Client(address, set_as_default=False)
     pids = client.run(os.getpid)
     seen_busy = seen_idle = False
+    first_busy = None
     while not stop.is_set():
         busy = [w for w, keys in client.processing().items() if keys]
-        if busy and seen_idle:
+        if busy and first_busy is None:
+            first_busy = time.monotonic()
+        ready = seen_idle if delay == 0 else first_busy is not None and time.monotonic() - first_busy >= delay
+        if busy and ready:
             os.kill(pids[busy[0]], signal.SIGKILL)
             killed.append(busy[0])
             break
@@ -334,14 +340,20 @@ if __name__ == "__main__":
 """
 
 
-def test_a_worker_killed_mid_search_loses_nothing(tiny_folder, single_process_run, tmp_path):
+@pytest.mark.parametrize("concurrent", [False, True], ids=["one search", "searches at once"])
+def test_a_worker_killed_mid_search_loses_nothing(tiny_folder, single_process_run, tmp_path, concurrent):
     """SIGKILL the worker process computing a task mid-search; the run ends with the same figures."""
     # In a subprocess: a worker restarted by its nanny under pytest's output capture hung the test process.
     script = tmp_path / "kill_a_worker.py"
     script.write_text(KILLER)
     out = tmp_path / "out"
+    run, reference = RUN, single_process_run
+    if concurrent:  # the search loops are tasks on the workers too: one of them dies with its worker
+        run = {**RUN, "experiments": "3,5", "n_iter": 8, "n_points": 1}
+        reference = tmp_path / "reference"
+        reproduce(tiny_folder, reference, stream=open(os.devnull, "w"), **run)
     done = subprocess.run(
-        [sys.executable, str(script), str(tiny_folder), str(out), json.dumps(RUN)],
+        [sys.executable, str(script), str(tiny_folder), str(out), json.dumps(run), "1.0" if concurrent else "0"],
         capture_output=True,
         text=True,
         env=_env(),
@@ -349,5 +361,5 @@ def test_a_worker_killed_mid_search_loses_nothing(tiny_folder, single_process_ru
     )
     assert done.returncode == 0, done.stderr
     assert len(json.loads(done.stdout.strip().splitlines()[-1])) == 1, "no worker was killed during the search"
-    assert _figures(out) == _figures(single_process_run)
+    assert _figures(out) == _figures(reference)
     assert json.loads((out / "run.json").read_text())["complete"] is True
