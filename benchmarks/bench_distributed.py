@@ -156,6 +156,7 @@ def speedup(scales, n_iter, repeats):
                 "same": scores["1 process"] == scores["2 workers"],
             }
             rows.append(row)
+            print(f"  row: {json.dumps(row)}", file=sys.stderr)
             print(
                 f"  | {scale} | {len(X):,} | {row['E']:.3f} s | {row['g']:.3f} s | {one:.1f} s | {two:.1f} s "
                 f"| **{one / two:.2f}x** |",
@@ -383,12 +384,19 @@ def main():
     parser.add_argument(
         "--search-scales", default="1,4,16,64", help="data sizes of the speed-up part, x the default training half"
     )
+    parser.add_argument(
+        "--search-row",
+        help="JSON of a speed-up row printed by an earlier run ('row: {...}'): the projection uses it instead of "
+        "measuring again (e.g. with --parts memory,projection)",
+    )
     args = parser.parse_args()
     parts = set(args.parts.split(","))
     with tempfile.TemporaryDirectory(prefix="bench-distributed-") as work:
         work = Path(work)
         rows = cluster_cost = None
-        if parts & {"speedup", "projection"}:
+        if args.search_row:
+            rows = [json.loads(args.search_row)]
+        if "speedup" in parts or ("projection" in parts and not args.search_row):
             rows = speedup([int(text) for text in args.search_scales.split(",")], args.n_iter, args.repeats)
         if "concurrent" in parts:
             concurrent(work, args.n_iter)

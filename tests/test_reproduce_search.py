@@ -10,9 +10,8 @@ from sklearn.model_selection import GroupKFold
 from sklearn_radar.datasets import make_scenes
 from sklearn_radar.experiments import experiment_pipeline
 from sklearn_radar.metrics import panoptic_quality_scorer, precluster_target, radar_v_measure_scorer
-from sklearn_radar.metrics._parts import combine_parts
+from sklearn_radar.metrics._parts import FailedPart, combine_parts
 from sklearn_radar.reproduce._search import (
-    Failed,
     SearchData,
     balanced_blocks,
     candidate_parts,
@@ -60,7 +59,7 @@ def test_a_failing_candidate_scores_zero_and_a_search_that_always_fails_raises(s
     good = candidate_scores(data, pipeline, [{}], folds, "v1")[0]
     assert candidate_scores(data, pipeline, [{}, bad], folds, "v1") == [good, 0.0]
     failed = candidate_parts(pipeline, bad, data.blocks[0][0], "v1")
-    assert isinstance(failed, Failed) and "eps_xy" in failed.error
+    assert isinstance(failed, FailedPart) and "eps_xy" in failed.error
     with pytest.raises(ValueError, match="every fit of 1 candidate"):
         candidate_scores(data, pipeline, [bad], folds, "v1")
 

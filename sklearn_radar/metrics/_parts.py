@@ -89,6 +89,19 @@ class PanopticParts:
         return 4
 
 
+@dataclass(frozen=True)
+class FailedPart:
+    """The part of a sequence whose fit (or scoring) raised: its fold scores 0.0.
+
+    Attributes
+    ----------
+    error : str
+        The exception, in one line (``"ValueError: ..."``).
+    """
+
+    error: str
+
+
 _PART_TYPES = {"v1": VMeasureParts, "pq": PanopticParts}
 
 
@@ -248,9 +261,10 @@ def combine_parts(objective, parts, *, beta=1.0):
     ----------
     objective : {"v1", "pq"}
         The score, as given to :func:`score_parts`.
-    parts : sequence of VMeasureParts, PanopticParts or None
+    parts : sequence of VMeasureParts, PanopticParts or FailedPart
         One part per sequence, from :func:`score_parts` or
-        :func:`sequence_parts`; None marks a sequence whose fit failed.
+        :func:`sequence_parts`; a :class:`FailedPart` marks a sequence whose
+        fit failed.
     beta : float, default=1.0
         Weight of homogeneity in the V-measure, >= 0; ignored for ``"pq"``.
 
@@ -260,7 +274,7 @@ def combine_parts(objective, parts, *, beta=1.0):
         The combined score in [0, 1]; 0.0 (the worst score, as the
         scorers :func:`~sklearn_radar.metrics.radar_v_measure_scorer` and
         :func:`~sklearn_radar.metrics.panoptic_quality_scorer` give) when a
-        part is None or the score is not finite; also 0.0 for ``beta=0``
+        part failed or the score is not finite; also 0.0 for ``beta=0``
         with completeness 0, where the V-measure's formula divides by zero.
 
     Raises
@@ -275,7 +289,7 @@ def combine_parts(objective, parts, *, beta=1.0):
         raise ValueError("parts is empty: a fold needs at least one sequence's part")
     if not beta >= 0:
         raise ValueError(f"beta must be >= 0, got {beta!r}")
-    if any(part is None for part in parts):
+    if any(isinstance(part, FailedPart) for part in parts):
         return 0.0
     expected = _PART_TYPES[objective]
     for part in parts:
@@ -288,13 +302,13 @@ def combine_parts(objective, parts, *, beta=1.0):
 
 
 def sequence_parts(estimator, X, y, objective, frame=0.5):
-    """Scorer-like task: ``fit_predict`` on one sequence's detections, then its part; None if the fit fails.
+    """Scorer-like task: ``fit_predict`` on one sequence's detections, then its part; a FailedPart if the fit fails.
 
     The per-sequence counterpart of
     :func:`~sklearn_radar.metrics.radar_v_measure_scorer` (``"v1"``) and
     :func:`~sklearn_radar.metrics.panoptic_quality_scorer` (``"pq"``): the
     clusterer is fitted on the data it is scored on, with warnings silenced,
-    and a failing fit gives the sentinel None, which :func:`combine_parts`
+    and a failing fit gives a :class:`FailedPart`, which :func:`combine_parts`
     scores 0.0 for the whole fold.
 
     Parameters
@@ -316,8 +330,8 @@ def sequence_parts(estimator, X, y, objective, frame=0.5):
 
     Returns
     -------
-    part : VMeasureParts, PanopticParts or None
-        The part of :func:`score_parts`, or None when ``fit_predict`` (or
+    part : VMeasureParts, PanopticParts or FailedPart
+        The part of :func:`score_parts`, or a FailedPart when ``fit_predict`` (or
         the scoring of its labels) raised.
 
     Raises
@@ -334,5 +348,6 @@ def sequence_parts(estimator, X, y, objective, frame=0.5):
             warnings.simplefilter("ignore")
             labels = estimator.fit_predict(X)
         return score_parts(objective, np.asarray(y), np.asarray(labels), times, groups=groups, frame=frame)
-    except Exception:  # a search must go on; the fold scores 0.0, as the scorers' error_score
-        return None
+    except Exception as error:  # a search must go on; the fold scores 0.0, as the scorers' error_score
+        text = str(error).strip().splitlines()
+        return FailedPart(f"{type(error).__name__}: {text[0] if text else ''}")

@@ -32,7 +32,7 @@ from sklearn.model_selection import GroupKFold
 from sklearn.utils import check_random_state
 
 from .._skopt import Optimizer, dimensions_aslist
-from ..metrics._parts import combine_parts, score_parts
+from ..metrics._parts import FailedPart, combine_parts, sequence_parts
 
 __all__ = [
     "SearchData",
@@ -42,13 +42,6 @@ __all__ = [
     "search_on_a_worker",
     "sequence_folds",
 ]
-
-
-@dataclass(frozen=True)
-class Failed:
-    """What a candidate's task returns when its fit or score raised: the error, in one line."""
-
-    error: str
 
 
 def candidate_parts(estimator, params, sequence, objective):
@@ -67,31 +60,13 @@ def candidate_parts(estimator, params, sequence, objective):
 
     Returns
     -------
-    parts : object or Failed
-        The summary; :class:`Failed` when the fit or the score raised (the
-        fold then scores 0.0, as the package's scorers score a failing fit).
+    parts : object or FailedPart
+        The summary (:func:`sklearn_radar.metrics._parts.sequence_parts`);
+        a :class:`FailedPart` when the fit or the score raised (the fold
+        then scores 0.0, as the package's scorers score a failing fit).
     """
     X, target = sequence
-    times = _times(X) if objective == "pq" else None  # a set-up mistake raises: it is not the candidate's failure
-    try:
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            labels = clone(estimator).set_params(**params).fit_predict(X)
-            return score_parts(objective, target, np.asarray(labels), times)
-    except Exception as error:  # a failing candidate scores 0.0 and the search goes on
-        text = str(error).strip().splitlines()
-        return Failed(f"{type(error).__name__}: {text[0] if text else ''}")
-
-
-def _times(X):
-    """Seconds of each detection: the ``t`` column (s), else ``timestamp`` (µs) from the sequence's start."""
-    columns = getattr(X, "columns", ())
-    if "t" in columns:
-        return X["t"].to_numpy(dtype=np.float64)
-    if "timestamp" in columns:
-        stamps = X["timestamp"].to_numpy()
-        return (stamps - stamps.min()) * 1e-6 if len(stamps) else stamps.astype(np.float64)
-    raise ValueError("the panoptic quality needs the time of each detection: a 't' (s) or 'timestamp' (µs) column")
+    return sequence_parts(clone(estimator).set_params(**params), X, target, objective)
 
 
 def prepared_sequence(stage0, sequence):
@@ -266,20 +241,13 @@ def candidate_scores(data, estimator, candidates, folds, objective):
         than bad candidates (scikit-learn's searches raise then, too).
     """
     parts = data.parts(estimator, candidates, objective)
-    failures = [p for row in parts for p in row if isinstance(p, Failed)]
+    failures = [p for row in parts for p in row if isinstance(p, FailedPart)]
     if failures and len(failures) == sum(len(row) for row in parts):
         raise ValueError(f"every fit of {len(candidates)} candidate(s) failed, e.g. {failures[0].error}")
     position = {sequence_id: i for i, sequence_id in enumerate(data.sequence_ids)}
     scores = []
     for row in parts:
-        fold_scores = []
-        for fold in folds:
-            fold_parts = [row[position[s]] for s in fold]
-            if any(isinstance(p, Failed) for p in fold_parts):
-                fold_scores.append(0.0)
-            else:
-                score = combine_parts(objective, fold_parts)
-                fold_scores.append(float(score) if np.isfinite(score) else 0.0)
+        fold_scores = [combine_parts(objective, [row[position[s]] for s in fold]) for fold in folds]
         scores.append(float(np.mean(fold_scores)))
     return scores
 

@@ -16,7 +16,14 @@ from sklearn_radar.metrics import (
     radar_v_measure,
     radar_v_measure_scorer,
 )
-from sklearn_radar.metrics._parts import PanopticParts, VMeasureParts, combine_parts, score_parts, sequence_parts
+from sklearn_radar.metrics._parts import (
+    FailedPart,
+    PanopticParts,
+    VMeasureParts,
+    combine_parts,
+    score_parts,
+    sequence_parts,
+)
 
 TOL = dict(rel=1e-12, abs=1e-12)
 
@@ -202,7 +209,7 @@ def test_sequence_parts_combine_to_the_scorer_of_the_whole_fold(objective, score
     parts = [
         sequence_parts(estimator, X[X["sequence"] == s], y[(X["sequence"] == s).to_numpy()], objective) for s in (1, 2)
     ]
-    assert all(part is not None for part in parts)
+    assert not any(isinstance(part, FailedPart) for part in parts)
     expected = scorer(estimator, X, y)
     assert 0.0 < expected < 1.0
     assert combine_parts(objective, parts) == pytest.approx(expected, **TOL)
@@ -231,17 +238,17 @@ def test_sequence_parts_reads_timestamps_in_microseconds():
         assert (part.tp, part.fp, part.fn) == (expected.tp, expected.fp, expected.fn) == (1, 1, 1)
         assert part.iou_sum == pytest.approx(1.0, **TOL)
     # "v1" needs no time column.
-    assert sequence_parts(_Fixed(labels), pd.DataFrame({"x": t}), y, "v1") is not None
+    assert isinstance(sequence_parts(_Fixed(labels), pd.DataFrame({"x": t}), y, "v1"), VMeasureParts)
 
 
 @pytest.mark.parametrize("objective", ["v1", "pq"])
-def test_a_failing_fit_gives_none_and_the_fold_scores_zero(objective):
+def test_a_failing_fit_gives_a_failed_part_and_the_fold_scores_zero(objective):
     X, y = _two_sequences()
     one = X["sequence"] == 1
     good = sequence_parts(RadarDBSCAN(min_samples=2), X[one], y[one.to_numpy()], objective)
     failed = sequence_parts(_Failing(), X[~one], y[~one.to_numpy()], objective)
-    assert good is not None and combine_parts(objective, [good]) > 0.0
-    assert failed is None
+    assert not isinstance(good, FailedPart) and combine_parts(objective, [good]) > 0.0
+    assert failed == FailedPart("RuntimeError: boom")
     assert combine_parts(objective, [good, failed]) == 0.0
     assert combine_parts(objective, [failed, good]) == 0.0
 
