@@ -351,8 +351,8 @@ def projection(row, cluster_cost, repeats=3):
     print(f"  one search:  T1(W) = {FULL_ITER} x (g + E / min(W, {train_sequences}))")
     print(
         f"  --full: {FULL_SEARCHES} searches x {repeats} repeats = {searches}; all but #12, #13 (x {repeats}) run "
-        f"at once, so  T(W) ~ max({searches} x {FULL_ITER} x E / W, {searches} x {FULL_ITER} x g) "
-        f"+ 2 x T1(W)  (the Gaussian processes share the command's process)"
+        f"at once, each search loop on a worker, then #12 and #13 one search after the other, so  "
+        f"T(W) ~ {searches} x {FULL_ITER} x (E + g) / W + 2 x {repeats} x T1(W)"
     )
     c = cluster_cost["per_detection_cluster"]
     print(
@@ -364,14 +364,14 @@ def projection(row, cluster_cost, repeats=3):
     print("  |---|---|---|---|")
     for W in (8, 32, 128):
         t1 = FULL_ITER * (g + E / min(W, train_sequences))
-        t_full = max(searches * FULL_ITER * E / W, searches * FULL_ITER * g) + 2 * t1
+        t_full = searches * FULL_ITER * (E + g) / W + 2 * repeats * t1
         t_cluster = c * REAL_DETECTIONS / min(W, REAL_SEQUENCES)
-        print(f"  | {W:>3} | {t1 / 60:.1f} min | {t_full / 3600:.1f} h | {t_cluster / 60:.1f} min |")
+        print(f"  | {W:>3} | {t1 / 60:.1f} min | {t_full / 3600:.2f} h | {t_cluster:.0f} s |")
     print(
         "  Assumptions: every search costs as much per detection as #8's (stage 2 and HDBSCAN cost more); the "
         "sequence blocks are balanced; g does not grow with the data; the per-sequence cluster tasks are balanced "
-        "(158 tasks: above 158 workers nothing is gained); the command's process holds the data it needs for the "
-        "report (see the docs)."
+        "(158 tasks: above 158 workers nothing is gained); the workers' cores are all the search's; and the "
+        "command's process holds the whole data set, which reproduce still needs (see the docs)."
     )
 
 
