@@ -450,7 +450,7 @@ def _use_cluster(run, cluster, n_points):
     run.cluster = cluster
     run.n_points = n_points or 1
     if cluster is not None:
-        _say(run, f"{cluster.describe()}; {run.n_points} candidate(s) per search step, one task per sequence")
+        _say(run, f"{cluster.describe()}; {run.n_points} candidate(s) per search step, one task per block of sequences")
 
 
 def _repeated(key, repeats):
