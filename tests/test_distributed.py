@@ -173,7 +173,9 @@ def test_independent_searches_run_concurrently_and_equal_one_after_the_other(loc
     together, log = tmp_path / "together", tmp_path / "progress.log"
     with open(log, "w") as progress:
         reproduce(tiny_folder, together, stream=progress, scheduler=local_cluster.scheduler_address, **run)
-    assert "2 independent searches run on the cluster" in log.read_text()
+    text = log.read_text()
+    assert "2 independent searches run on the cluster" in text
+    assert "search #3 ended (" in text and "search #5 ended (" in text and "(2/2 of the concurrent searches)" in text
     figures = _figures(together)
     assert figures == _figures(alone)
     assert figures["experiments"]["3"]["params"] != figures["experiments"]["5"]["params"]

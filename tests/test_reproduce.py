@@ -546,6 +546,14 @@ def test_progress_durations_and_the_estimate_grow_with_the_budget():
     progress.finish("a")
     progress.start("b")
     assert progress.status(0.5).startswith("run 62 %")  # (1 + 1.5) / 4
+    # Searches that ran concurrently are credited as they end, and not counted again when their step ends.
+    ahead = RunProgress({"a": 1.0, "b": 3.0}, started=0.0)
+    ahead.credit("b", 0.5)
+    assert ahead.status().startswith("run 38 %")  # 1.5 / 4
+    ahead.start("b")
+    assert ahead.status(0.5).startswith("run 56 %")  # (1.5 + 0.75) / 4
+    ahead.finish("b")
+    assert ahead.status().startswith("run 75 %")  # 3 / 4, not 4.5 / 4
 
 
 @pytest.mark.parametrize("number", [3, 13, "baseline"])

@@ -102,6 +102,13 @@ class RunProgress:
         self.started = started
         self.done = 0.0
         self._current = None
+        self._credited = {}
+
+    def credit(self, key, fraction):
+        """``fraction`` of step ``key`` ended ahead of the step (a search that ran concurrently)."""
+        share = self.costs.get(key, 0.0) * min(max(fraction, 0.0), 1.0)
+        self._credited[key] = self._credited.get(key, 0.0) + share
+        self.done += share
 
     def start(self, key):
         """A step begins."""
@@ -112,12 +119,15 @@ class RunProgress:
         return self._done_with(min(max(fraction, 0.0), 1.0))
 
     def finish(self, key):
-        """A step ended."""
-        self.done += self.costs.get(key, 0.0)
+        """A step ended (what :meth:`credit` counted already is not counted twice)."""
+        self.done += max(self.costs.get(key, 0.0) - self._credited.pop(key, 0.0), 0.0)
         self._current = None
 
     def _done_with(self, fraction):
-        return self.done + (self.costs.get(self._current, 0.0) * fraction if self._current else 0.0)
+        if not self._current:
+            return self.done
+        remaining = max(self.costs.get(self._current, 0.0) - self._credited.get(self._current, 0.0), 0.0)
+        return self.done + remaining * fraction
 
     def status(self, fraction=0.0):
         """``"run 42 %, 0:53 elapsed, about 1:13 left"``, with ``fraction`` of the current step done."""

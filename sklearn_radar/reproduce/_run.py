@@ -961,18 +961,56 @@ def _concurrent_searches(run, context, keys):
     # BLAS limits are process-wide: set once here, so that the threads' own enter-and-leave cannot change them
     # under one another (a multi-threaded BLAS computes the Gaussian process to other rounding).
     limits = threadpool_limits(limits=1, user_api="blas")
+    finished = _FinishedCount(run, threads)
     try:
         for tag, job in jobs.items():
-            context.pending[tag] = {k: executor.submit(job, quiet, k) for k in range(repeats)}
+            context.pending[tag] = {}
+            for k in range(repeats):
+                future = context.pending[tag][k] = executor.submit(job, quiet, k)
+                key, share = (tag, 1 / repeats) if isinstance(tag, str) else (tag[0], 1 / (len(_BASELINES) * repeats))
+                future.add_done_callback(finished.said(_pending_label(tag, k, repeats), key, share))
         _say(
             run,
-            f"{len(jobs) * repeats} independent searches run on the cluster at once, each a task on a worker "
-            "(their iterations are not printed)",
+            f"{threads} independent searches run on the cluster at once, each a task on a worker "
+            "(their iterations are not printed; a line as each ends)",
         )
         yield
     finally:
         executor.shutdown(wait=False, cancel_futures=True)
         limits.restore_original_limits()
+
+
+def _pending_label(tag, k, repeats):
+    name = f"#{tag}" if isinstance(tag, str) else tag[1]
+    return _repeat_label(name, k, repeats)
+
+
+class _FinishedCount:
+    """Says, as each concurrent search ends (in its thread), which one and how many of them have ended."""
+
+    def __init__(self, run, total):
+        self.run, self.total, self.done = run, total, 0
+        self._lock = threading.Lock()
+
+    def said(self, label, key, share):
+        """The callback for the search ``label``, ``share`` of the step ``key`` (credited to the run's progress)."""
+
+        def callback(future):
+            if future.cancelled():
+                return
+            with self._lock:
+                self.done += 1
+                outcome = "failed" if future.exception() is not None else "ended"
+                status = ""
+                if self.run.progress is not None:
+                    self.run.progress.credit(key, share)
+                    status = f" | {self.run.progress.status()}"
+                _say(
+                    self.run,
+                    f"    search {label} {outcome} ({self.done}/{self.total} of the concurrent searches){status}",
+                )
+
+        return callback
 
 
 def _run_experiment(run, context, key):
