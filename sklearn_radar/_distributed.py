@@ -26,7 +26,7 @@ import logging
 import os
 import threading
 from collections import deque
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from numbers import Integral
 
 #: What to install for ``--scheduler`` / ``--workers``.
@@ -93,6 +93,7 @@ class Cluster:
     n_workers: int
     n_threads: int
     n_malloc_trim: int = 0
+    _turn: int = field(default=-1, repr=False)
 
     def next_worker(self):
         """A worker's address, in turn over the workers (by thread), for spreading long tasks; None if none."""
@@ -101,7 +102,7 @@ class Cluster:
         if not slots:
             return None
         with _TURN_LOCK:
-            self._turn = getattr(self, "_turn", -1) + 1
+            self._turn += 1
             return slots[self._turn % len(slots)]
 
     def describe(self):

@@ -672,8 +672,8 @@ def _tune(run, context, estimator, space, label, start_from=None, part=0, parts=
     """Bayesian optimisation on the training half with grouped CV; returns (best params, SearchRecord).
 
     ``part`` of ``parts`` says which of the step's searches this is, for the overall progress; ``seed``
-    is the search's random seed (None: the run's).  A candidate is one task per training sequence
-    (:mod:`._search`), here or on the run's dask cluster.
+    is the search's random seed (None: the run's).  A candidate is one task per block of training
+    sequences (:mod:`._search`), here or on the run's dask cluster.
 
     ``start_from`` (e.g. the paper's optimum) is scored on the same folds as
     one more candidate and wins when the search found nothing better: a

@@ -361,7 +361,11 @@ def _search_task(estimator, space, keys, ids, folds, start_from, options):
     from types import SimpleNamespace
 
     from distributed import Future, worker_client
+    from threadpoolctl import threadpool_limits
 
+    # One BLAS thread in this worker process for good, as dask's environment gives it and as the command's
+    # process computes its Gaussian processes: the same rounding.  Not undone: searches share the process.
+    threadpool_limits(limits=1, user_api="blas")
     with worker_client() as client:
         data = SearchData([Future(key, client=client) for key in keys], ids, SimpleNamespace(client=client))
         return search_and_score_start(estimator, space, data, folds, start_from, **options)
