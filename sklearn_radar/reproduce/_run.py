@@ -59,6 +59,7 @@ from ..metrics import (
     precluster_target,
     radar_v_measure,
 )
+from ..metrics._parts import OBJECTIVES  # what the searches can maximise: "v1", "pq"
 from ..model_selection import ProgressPrinter, sequence_train_test_split
 from ..preprocessing import DopplerDensityFilter, FrameTransform
 from ._constants import (
@@ -152,8 +153,6 @@ class Run:
     progress: RunProgress | None = None
 
 
-#: The search objectives: the radar V-measure and the panoptic quality (per-sequence parts: :mod:`._search`).
-OBJECTIVES = ("v1", "pq")
 #: Length of the frames of the object-level scores, s (Scheiner et al. 2021 evaluate 500 ms).
 FRAME_S = 0.5
 #: The object-level scores kept per experiment (:class:`InstanceScores`).
