@@ -37,6 +37,19 @@ __all__ = [
 _PQ_KEYS = ("pq", "sq", "rq", "precision", "recall", "tp", "fp", "fn")
 _COVERAGE_KEYS = ("mcov", "mwcov")
 _BACKGROUND_KEYS = ("background_segment_share", "background_cluster_share")
+#: The sums and counts of which every score of :func:`instance_scores` is a ratio (:func:`_scores_from_counts`).
+_COUNT_KEYS = (
+    "tp",
+    "fp",
+    "fn",
+    "iou_sum",
+    "cover_sum",
+    "weighted_cover_sum",
+    "n_object_detections",
+    "n_background_segments",
+    "n_clusters",
+    "n_background_clusters",
+)
 
 #: Scorer metric -> (key of instance_scores, sign).  Searches maximise, so the shares (lower is better) are negated.
 _SCORER_METRICS = {
@@ -82,7 +95,7 @@ def _ratio(numerator, denominator):
 
 
 def _segment_scores(labels_true, labels_pred, *, times=None, groups=None, frame=0.5):
-    """Every score of :func:`instance_scores`, and ``iou_sum`` (Σ_TP IoU), in one pass, without parameter validation."""
+    """Every score of :func:`instance_scores` and the counts of :data:`_COUNT_KEYS`, in one pass, without validation."""
     labels_true = np.asarray(labels_true)
     labels_pred = np.asarray(labels_pred)
     n = labels_true.shape[0] if labels_true.ndim == 1 else -1
@@ -131,10 +144,6 @@ def _segment_scores(labels_true, labels_pred, *, times=None, groups=None, frame=
     # Panoptic quality: IoU > 0.5, i.e. 2 |g ∩ p| > |g ∪ p| in integers, makes every match unique.
     matched = 2 * inter > union
     tp = int(matched.sum())
-    fp, fn = n_pred - tp, n_true - tp
-    iou_sum = float(iou[matched].sum())
-    sq = _ratio(iou_sum, tp)
-    rq = _ratio(tp, tp + 0.5 * fp + 0.5 * fn)
 
     # Coverage: best IoU of each ground-truth segment with any predicted segment (0 when none overlaps).
     cover = np.zeros(n_true)
@@ -145,6 +154,69 @@ def _segment_scores(labels_true, labels_pred, *, times=None, groups=None, frame=
     cluster, n_clusters = _joint_codes(seq[is_cluster], n_seq, *_codes(labels_pred[is_cluster]))
     cluster_has_object = np.bincount(cluster[is_object[is_cluster]], minlength=n_clusters) > 0
 
+    return _scores_from_counts(
+        tp=tp,
+        fp=int(n_pred - tp),
+        fn=int(n_true - tp),
+        iou_sum=float(iou[matched].sum()),
+        cover_sum=float(cover.sum()),
+        weighted_cover_sum=float(true_size @ cover),
+        n_object_detections=int(true_size.sum()),
+        n_background_segments=int(n_pred - pred_has_object.sum()),
+        n_clusters=int(n_clusters),
+        n_background_clusters=int(n_clusters - cluster_has_object.sum()),
+    )
+
+
+def _scores_from_counts(
+    *,
+    tp,
+    fp,
+    fn,
+    iou_sum,
+    cover_sum,
+    weighted_cover_sum,
+    n_object_detections,
+    n_background_segments,
+    n_clusters,
+    n_background_clusters,
+):
+    """Every score of :func:`instance_scores` from the sums and counts it is made of; they add up over sequences.
+
+    The one place the ratios are formed: :func:`_segment_scores` and the
+    merge of per-sequence summaries (:mod:`sklearn_radar.metrics._parts`)
+    both end here, so they agree to rounding.  The arguments (the keys of
+    :data:`_COUNT_KEYS`) are returned too, beside the scores, for the
+    summaries; :func:`instance_scores` leaves them out.
+
+    Parameters
+    ----------
+    tp, fp, fn : int
+        Matched pairs, unmatched predicted and unmatched ground-truth
+        segments (per time frame), as in :func:`panoptic_quality`.
+    iou_sum : float
+        Sum of the IoUs of the matched pairs, in [0, tp].
+    cover_sum : float
+        Sum of the coverages of the ``tp + fn`` ground-truth segments.
+    weighted_cover_sum : float
+        Sum of the coverages, each times its segment's number of detections.
+    n_object_detections : int
+        Detections of annotated objects, the sum of the ground-truth
+        segments' sizes.
+    n_background_segments : int
+        Predicted segments (of the ``tp + fp``) without an object detection.
+    n_clusters, n_background_clusters : int
+        Clusters, per sequence, and those without an object detection.
+
+    Returns
+    -------
+    scores : Bunch
+        The keys of :func:`instance_scores`, then those of :data:`_COUNT_KEYS`
+        that it lacks.
+    """
+    n_true, n_pred = tp + fn, tp + fp
+    sq = _ratio(iou_sum, tp)
+    rq = _ratio(tp, tp + 0.5 * fp + 0.5 * fn)
     return Bunch(
         pq=sq * rq,
         sq=sq,
@@ -152,13 +224,20 @@ def _segment_scores(labels_true, labels_pred, *, times=None, groups=None, frame=
         precision=_ratio(tp, n_pred),
         recall=_ratio(tp, n_true),
         tp=tp,
-        fp=int(fp),
-        fn=int(fn),
-        iou_sum=iou_sum,  # Σ_TP IoU: additive over sequences (sklearn_radar.metrics._parts); not in instance_scores
-        mcov=_ratio(float(cover.sum()), n_true),
-        mwcov=_ratio(float(true_size @ cover), int(true_size.sum())),
-        background_segment_share=_ratio(int(n_pred - pred_has_object.sum()), n_pred),
-        background_cluster_share=_ratio(int(n_clusters - cluster_has_object.sum()), n_clusters),
+        fp=fp,
+        fn=fn,
+        mcov=_ratio(cover_sum, n_true),
+        mwcov=_ratio(weighted_cover_sum, n_object_detections),
+        background_segment_share=_ratio(n_background_segments, n_pred),
+        background_cluster_share=_ratio(n_background_clusters, n_clusters),
+        # Additive over sequences (sklearn_radar.metrics._parts); not in instance_scores.
+        iou_sum=iou_sum,
+        cover_sum=cover_sum,
+        weighted_cover_sum=weighted_cover_sum,
+        n_object_detections=n_object_detections,
+        n_background_segments=n_background_segments,
+        n_clusters=n_clusters,
+        n_background_clusters=n_background_clusters,
     )
 
 

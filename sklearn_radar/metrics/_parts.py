@@ -20,6 +20,12 @@ A part's size grows with the number of distinct labels of its sequence
 (for ``"v1"`` the non-zero cells of the contingency table, at most
 ``min(n_detections, (n_objects + 1) x (n_clusters + 1))``; for ``"pq"``
 four numbers), never with the number of detections alone.
+
+Every object-level score of :func:`~sklearn_radar.metrics.instance_scores`
+at once: :func:`instance_parts` and :func:`combine_instance_parts`.  Each
+score is a ratio of sums over segments, and segments never cross
+sequences, so a part is ten sums and counts (:class:`InstanceParts`, a
+:class:`PanopticParts` with six more), whatever the size of the sequence.
 """
 
 from __future__ import annotations
@@ -31,8 +37,20 @@ from math import log
 import numpy as np
 import scipy.sparse as sp
 from sklearn.metrics import mutual_info_score
+from sklearn.utils import Bunch
 
-from ._instance import _codes, _joint_codes, _ratio, _segment_scores, _times_and_groups
+from ._instance import (
+    _BACKGROUND_KEYS,
+    _COUNT_KEYS,
+    _COVERAGE_KEYS,
+    _PQ_KEYS,
+    _codes,
+    _joint_codes,
+    _ratio,
+    _scores_from_counts,
+    _segment_scores,
+    _times_and_groups,
+)
 from ._v_measure import _unique_per_group
 
 #: The objectives a part can summarise.
@@ -87,6 +105,60 @@ class PanopticParts:
     def size(self):
         """Number of values the part holds (4)."""
         return 4
+
+
+@dataclass(frozen=True)
+class InstanceParts(PanopticParts):
+    """Additive sums and counts of one (or several) sequences' labelling, for every object-level score.
+
+    Every score of :func:`~sklearn_radar.metrics.instance_scores` is a ratio
+    of these: ``SQ = iou_sum / tp``, ``RQ = tp / (tp + fp/2 + fn/2)``,
+    ``PQ = SQ x RQ``, ``precision = tp / (tp + fp)``,
+    ``recall = tp / (tp + fn)``, ``mCov = cover_sum / (tp + fn)``,
+    ``mWCov = weighted_cover_sum / n_object_detections``, the background
+    segment share ``n_background_segments / (tp + fp)`` and the background
+    cluster share ``n_background_clusters / n_clusters`` (0.0 for 0/0).
+    Segments (per time frame) and clusters never cross sequences, so each
+    field adds up over the parts.  The means over objects (mCov, mWCov)
+    therefore need no per-object array: the part is ten numbers, whatever
+    the number of detections, objects or clusters.
+
+    A :class:`PanopticParts` too: ``combine_parts("pq", ...)`` accepts it.
+
+    Attributes
+    ----------
+    tp, fp, fn : int
+        Matched pairs, unmatched predicted and unmatched ground-truth
+        segments (per time frame) of :func:`~sklearn_radar.metrics.panoptic_quality`.
+    iou_sum : float
+        Sum of the IoUs of the matched pairs, in [0, tp].
+    cover_sum : float
+        Sum of the coverages (best IoU with any predicted segment) of the
+        ``tp + fn`` ground-truth segments, in [0, tp + fn].
+    weighted_cover_sum : float
+        Sum of the coverages times the ground-truth segments' numbers of
+        detections, in [0, n_object_detections].
+    n_object_detections : int
+        Detections of annotated objects (``labels_true != -1``).
+    n_background_segments : int
+        Predicted segments (of the ``tp + fp``) without an object detection.
+    n_clusters : int
+        Clusters (per sequence, over all its frames).
+    n_background_clusters : int
+        Clusters without an object detection.
+    """
+
+    cover_sum: float
+    weighted_cover_sum: float
+    n_object_detections: int
+    n_background_segments: int
+    n_clusters: int
+    n_background_clusters: int
+
+    @property
+    def size(self):
+        """Number of values the part holds (10)."""
+        return len(_COUNT_KEYS)
 
 
 @dataclass(frozen=True)
@@ -351,3 +423,92 @@ def sequence_parts(estimator, X, y, objective, frame=0.5):
     except Exception as error:  # a search must go on; the fold scores 0.0, as the scorers' error_score
         text = str(error).strip().splitlines()
         return FailedPart(f"{type(error).__name__}: {text[0] if text else ''}")
+
+
+def instance_parts(labels_true, labels_pred, *, times, frame=0.5, groups=None):
+    """Small mergeable summary of one sequence's labelling, for every score of :func:`combine_instance_parts`.
+
+    Parameters
+    ----------
+    labels_true : array-like of shape (n_detections,)
+        Ground-truth instance per detection, -1 for background.
+    labels_pred : array-like of shape (n_detections,)
+        Predicted cluster per detection, -1 for noise.
+    times : array-like of shape (n_detections,) or None
+        Time of each detection in s; frames are counted from the sequence's
+        first detection, ``floor((times - min(times)) / frame)``.  None: the
+        sequence is one frame.
+    frame : float or None, default=0.5
+        Length of a time frame in s, > 0 (500 ms: Scheiner et al. 2021);
+        None: one frame per sequence.
+    groups : array-like of shape (n_detections,), default=None
+        Sequence of each detection, when the labelling covers several
+        sequences: the part then equals the merge of their parts.  None: one
+        sequence.
+
+    Returns
+    -------
+    part : InstanceParts
+        Ten sums and counts, frozen and picklable; their size does not grow
+        with the sequence.
+
+    Raises
+    ------
+    ValueError
+        If the arrays are not 1-D of equal length, a time is not finite or
+        ``frame`` is not > 0.
+    """
+    if frame is not None and not frame > 0:
+        raise ValueError(f"frame must be > 0 s or None, got {frame!r}")
+    scores = _segment_scores(labels_true, labels_pred, times=times, groups=groups, frame=frame)
+    return InstanceParts(**{key: scores[key] for key in _COUNT_KEYS})
+
+
+def combine_instance_parts(parts):
+    """Every score of :func:`~sklearn_radar.metrics.instance_scores` of the concatenated sequences, from their parts.
+
+    Equal (up to rounding, about 1e-15) to
+    ``instance_scores(concat_true, concat_pred, times=concat_times, groups=concat_groups, frame=frame)``,
+    each part's sequence a group of its own (equal labels in different parts
+    are different objects and clusters), with the ``frame`` the parts were
+    made with.  The sums and counts of :class:`InstanceParts` add up, and the
+    scores are formed from the totals by the same code as
+    :func:`~sklearn_radar.metrics.instance_scores`: means over objects
+    (mCov, mWCov) weigh every object of every sequence alike, never a mean
+    of per-sequence means.  The order of the parts does not matter.
+
+    Parameters
+    ----------
+    parts : iterable of InstanceParts
+        One part per sequence (or per block of sequences), from
+        :func:`instance_parts`, all with the same ``frame``.  Empty: the
+        scores of no detection.
+
+    Returns
+    -------
+    scores : Bunch
+        A dict with the keys of
+        :func:`~sklearn_radar.metrics.instance_scores`: ``pq``, ``sq``,
+        ``rq``, ``precision``, ``recall``, ``mcov``, ``mwcov``,
+        ``background_segment_share``, ``background_cluster_share`` (floats
+        in [0, 1], 0.0 for a ratio 0/0, never NaN) and ``tp``, ``fp``,
+        ``fn`` (ints).
+
+    Raises
+    ------
+    ValueError
+        If a part is not an :class:`InstanceParts` (e.g. a
+        :class:`FailedPart`, whose error it names).
+    """
+    totals = dict.fromkeys(_COUNT_KEYS, 0)
+    for part in parts:
+        if not isinstance(part, InstanceParts):
+            detail = f": {part.error}" if isinstance(part, FailedPart) else ""
+            raise ValueError(f"parts must be InstanceParts, got {type(part).__name__}{detail}")
+        for key in _COUNT_KEYS:
+            totals[key] += getattr(part, key)
+    totals["iou_sum"] = float(totals["iou_sum"])
+    totals["cover_sum"] = float(totals["cover_sum"])
+    totals["weighted_cover_sum"] = float(totals["weighted_cover_sum"])
+    scores = _scores_from_counts(**totals)
+    return Bunch(**{key: scores[key] for key in _PQ_KEYS + _COVERAGE_KEYS + _BACKGROUND_KEYS})

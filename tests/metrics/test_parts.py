@@ -9,6 +9,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from sklearn_radar import RadarDBSCAN
+from sklearn_radar.datasets import make_scenes
+from sklearn_radar.experiments import experiment_pipeline
 from sklearn_radar.metrics import (
     instance_scores,
     panoptic_quality,
@@ -18,9 +20,12 @@ from sklearn_radar.metrics import (
 )
 from sklearn_radar.metrics._parts import (
     FailedPart,
+    InstanceParts,
     PanopticParts,
     VMeasureParts,
+    combine_instance_parts,
     combine_parts,
+    instance_parts,
     score_parts,
     sequence_parts,
 )
@@ -276,3 +281,162 @@ def test_beta_zero_with_zero_completeness_scores_zero():
     part = score_parts("v1", [0, 0, -1, -1], [1, 2, -1, -1])
     assert combine_parts("v1", [part], beta=0.0) == 0.0
     assert combine_parts("v1", [part], beta=1.0) == pytest.approx(radar_v_measure([0, 0, -1, -1], [1, 2, -1, -1]))
+
+
+# ----------------------------------------------------------------------------------------------------------------
+# Every object-level score at once: instance_parts / combine_instance_parts.
+# ----------------------------------------------------------------------------------------------------------------
+INSTANCE_KEYS = set(instance_scores([0], [0], times=[0.0]))
+
+
+def _renumbered(seq):
+    """The sequence with its objects and its clusters numbered 0, 1, ... (-1 kept): ids collide across sequences."""
+    truth, pred, times = seq
+    renumbered = []
+    for labels in (truth, pred):
+        codes = np.full(labels.shape[0], -1, dtype=np.int64)
+        codes[labels != -1] = pd.factorize(labels[labels != -1])[0]
+        renumbered.append(codes)
+    return (*renumbered, times)
+
+
+def _assert_same_scores(got, expected):
+    assert set(got) == set(expected) == INSTANCE_KEYS
+    for key, value in expected.items():
+        if key in ("tp", "fp", "fn"):
+            assert got[key] == value and isinstance(got[key], int), key
+        else:
+            assert got[key] == pytest.approx(value, **TOL), key
+
+
+@settings(max_examples=300, deadline=None)
+@given(sequences, st.sampled_from([0.5, 0.25, 2.0, None]), st.booleans())
+def test_instance_parts_combine_to_the_instance_scores_of_the_concatenation(seqs, frame, with_times):
+    seqs = [_renumbered(seq) for seq in seqs]
+    truth, pred, times, groups = _concatenate(seqs)
+    parts = [instance_parts(t, p, times=s if with_times else None, frame=frame) for t, p, s in seqs]
+    expected = instance_scores(truth, pred, times=times if with_times else None, groups=groups, frame=frame)
+    _assert_same_scores(combine_instance_parts(parts), expected)
+    # The counts of panoptic quality are those of its own part, and combine_parts("pq") takes the richer part.
+    assert combine_parts("pq", parts) == pytest.approx(expected.pq, **TOL)
+
+
+@settings(max_examples=100, deadline=None)
+@given(sequences, st.sampled_from([0.5, None]), st.randoms(use_true_random=False))
+def test_instance_parts_merge_in_any_order_and_a_part_with_groups_is_their_merge(seqs, frame, random):
+    seqs = [_renumbered(seq) for seq in seqs]
+    truth, pred, times, groups = _concatenate(seqs)
+    parts = [instance_parts(t, p, times=s, frame=frame) for t, p, s in seqs]
+    shuffled = list(parts)
+    random.shuffle(shuffled)
+    merged = instance_parts(truth, pred, times=times, frame=frame, groups=groups)
+    expected = combine_instance_parts(parts)
+    _assert_same_scores(combine_instance_parts(shuffled), expected)
+    _assert_same_scores(combine_instance_parts([merged]), expected)
+
+
+def test_instance_parts_pool_objects_and_clusters_not_the_scores_by_hand():
+    # All detections in one 0.5 s frame, so segments are clusters.  Labels restart at 0 in each sequence.
+    # A: object 0 (4 detections) split 2 + 2 over clusters 1 and 2: IoU 2/4 each, cover 1/2, no match (IoU > 1/2
+    #    needed); object 1 (2 detections) lost to noise: cover 0.  TP 0, FP 2, FN 2; mCov 1/4, mWCov 2/6.
+    # B: object 0 (2 detections) is cluster 1 exactly: TP 1, IoU 1; clusters 2 and 3 hold background only: FP 2.
+    #    mCov = mWCov = 1; background shares 2/3.
+    a = (np.array([0, 0, 0, 0, 1, 1]), np.array([1, 1, 2, 2, -1, -1]), np.zeros(6))
+    b = (np.array([0, 0, -1, -1, -1]), np.array([1, 1, 2, 2, 3]), np.full(5, 0.1))
+    part_a, part_b = instance_parts(*a[:2], times=a[2]), instance_parts(*b[:2], times=b[2])
+    assert (part_a.tp, part_a.fp, part_a.fn, part_b.tp, part_b.fp, part_b.fn) == (0, 2, 2, 1, 2, 0)
+    assert combine_instance_parts([part_a])["mcov"] == pytest.approx(1 / 4, **TOL)
+    assert combine_instance_parts([part_a])["mwcov"] == pytest.approx(1 / 3, **TOL)
+    assert combine_instance_parts([part_b])["background_cluster_share"] == pytest.approx(2 / 3, **TOL)
+    # Together: three objects with covers 1/2, 0, 1 (sizes 4, 2, 2): mCov = 1.5 / 3 = 1/2 (the mean of the
+    # sequences' mCov would be 5/8), mWCov = (2 + 0 + 2) / 8 = 1/2 (not 2/3).  TP 1, FP 4, FN 2: SQ 1,
+    # RQ = 1 / (1 + 2 + 1) = 1/4, precision 1/5, recall 1/3.  Clusters: 2 of 5 hold background only.
+    hand = dict(
+        pq=0.25,
+        sq=1.0,
+        rq=0.25,
+        precision=0.2,
+        recall=1 / 3,
+        tp=1,
+        fp=4,
+        fn=2,
+        mcov=0.5,
+        mwcov=0.5,
+        background_segment_share=0.4,
+        background_cluster_share=0.4,
+    )
+    _assert_same_scores(combine_instance_parts([part_a, part_b]), hand)
+    _assert_same_scores(combine_instance_parts([part_b, part_a]), hand)
+
+
+def test_instance_parts_count_segments_per_frame_and_clusters_per_sequence_by_hand():
+    # One cluster 4 over two frames: with object 0 in frame 0 (a match), background only in frame 1.
+    part = instance_parts([0, 0, -1, -1], [4, 4, 4, 4], times=[0.0, 0.2, 0.6, 0.7])
+    assert (part.n_clusters, part.n_background_clusters, part.n_background_segments) == (1, 0, 1)
+    assert (part.tp, part.fp, part.fn, part.n_object_detections) == (1, 1, 0, 2)
+    # The same sequence twice: 2 of the 4 segments are background-only, no cluster is.
+    scores = combine_instance_parts([part, part])
+    assert scores["background_segment_share"] == 0.5 and scores["background_cluster_share"] == 0.0
+    assert scores["precision"] == 0.5 and scores["recall"] == 1.0
+
+
+def test_instance_parts_of_nothing_and_without_objects():
+    empty = np.array([], dtype=np.int64)
+    nothing = instance_scores(empty, empty, times=np.array([]))
+    _assert_same_scores(combine_instance_parts([]), nothing)
+    _assert_same_scores(combine_instance_parts([instance_parts(empty, empty, times=np.array([]))]), nothing)
+    # Background and clusters only: no ratio with an object in it can be formed (0.0), every cluster is background.
+    part = instance_parts([-1, -1, -1], [0, 0, 1], times=None)
+    scores = combine_instance_parts([part, part])
+    assert (scores["tp"], scores["fp"], scores["fn"]) == (0, 4, 0)
+    assert scores["pq"] == scores["mcov"] == scores["mwcov"] == scores["recall"] == 0.0
+    assert scores["background_segment_share"] == scores["background_cluster_share"] == 1.0
+    _assert_same_scores(scores, instance_scores([-1] * 6, [0, 0, 1] * 2, times=None, groups=[1, 1, 1, 2, 2, 2]))
+
+
+def test_an_instance_part_is_small_and_pickles():
+    rng = np.random.default_rng(0)
+    n = 10_000
+    truth = rng.integers(-1, 40, n)
+    pred = rng.integers(-1, 60, n)
+    times = np.sort(rng.uniform(0.0, 100.0, n))
+    part = instance_parts(truth, pred, times=times)
+    assert isinstance(part, InstanceParts) and isinstance(part, PanopticParts)
+    assert part.size == 10 and part.tp + part.fn > 1_000  # ten numbers for thousands of segments
+    data = pickle.dumps(part)
+    assert len(data) < 500
+    again = pickle.loads(data)
+    assert again == part
+    _assert_same_scores(combine_instance_parts([again]), instance_scores(truth, pred, times=times))
+
+
+def test_combine_instance_parts_refuses_other_parts():
+    with pytest.raises(ValueError, match="InstanceParts, got FailedPart: RuntimeError: boom"):
+        combine_instance_parts([instance_parts([0], [0], times=None), FailedPart("RuntimeError: boom")])
+    with pytest.raises(ValueError, match="PanopticParts"):
+        combine_instance_parts([score_parts("pq", [0], [0])])
+    with pytest.raises(ValueError, match="frame"):
+        instance_parts([0], [0], times=[0.0], frame=0.0)
+    with pytest.raises(ValueError, match="equal length"):
+        instance_parts([0, 1], [0], times=None)
+
+
+@pytest.fixture(scope="module")
+def simulated():
+    scenes = make_scenes(n_sequences=3, duration=5, random_state=0)
+    X = scenes.data[[c for c in scenes.data.columns if c not in ("uuid", "track_id", "label_id")]]
+    return scenes, X, X["timestamp"].to_numpy(dtype=np.float64) * 1e-6
+
+
+def test_instance_parts_of_a_pipeline_fitted_per_sequence_combine_to_the_scores_of_the_whole(simulated):
+    scenes, X, times = simulated
+    whole = experiment_pipeline(8).fit_predict(X)
+    expected = instance_scores(scenes.target, whole, times=times, groups=scenes.groups)
+    parts = []
+    for sequence in np.unique(scenes.groups):
+        rows = scenes.groups == sequence
+        labels = experiment_pipeline(8).fit_predict(X[rows])
+        parts.append(instance_parts(scenes.target[rows], labels, times=times[rows]))
+    assert len(parts) == 3
+    assert 0.0 < expected.pq < 1.0 and 0.0 < expected.mcov < 1.0 and expected.fp > 0
+    _assert_same_scores(combine_instance_parts(parts), expected)
