@@ -239,7 +239,11 @@ def _filter_error_windows(keep, target, t, window, min_kept):
     """:func:`filter_error_windows` without its parameter validation."""
     keep = _as_keep(keep)
     target = _as_target(target, len(keep))
-    windows = _Windows(target, t, window)
+    return _windows_frame(_Windows(target, t, window), keep, min_kept)
+
+
+def _windows_frame(windows, keep, min_kept):
+    """:func:`filter_error_windows`'s table of prepared windows and a checked boolean ``keep``."""
     kept = windows.kept(keep)
     share = kept / np.maximum(windows.n, 1)  # n >= 1 for every listed window
     return pd.DataFrame(
@@ -254,14 +258,23 @@ def _filter_error_windows(keep, target, t, window, min_kept):
     )
 
 
+def _time_eps(t_abs_max):
+    """Tolerance (s) of placing times into windows when the largest object time is ``t_abs_max`` (s)."""
+    return max(_TIME_EPS, 8 * float(np.spacing(t_abs_max)))
+
+
 class _Windows:
     """The complete, occupied (object, time window) cells of a labelling.
 
     They depend on ``target``, ``t`` and ``window`` only, not on the filter,
     so a grid search builds them once and counts kept detections per cell.
+    ``time_eps`` (s) replaces the tolerance derived from the largest object
+    time; ``t_abs_max`` and ``time_eps`` record what was used (NaN without
+    objects), so that per-sequence parts can check they used the whole data
+    set's tolerance.
     """
 
-    def __init__(self, target, t, window):
+    def __init__(self, target, t, window, time_eps=None):
         t = np.asarray(t, dtype=np.float64)
         if t.shape != target.shape:
             raise ValueError(f"t must have the shape of target {target.shape}, got {t.shape}")
@@ -272,6 +285,7 @@ class _Windows:
         self.instance = np.zeros(0, np.int64)
         self.start_s = np.zeros(0, np.float64)
         self.n = np.zeros(0, np.int64)
+        self.t_abs_max = self.time_eps = float("nan")
         object_rows = np.flatnonzero(target >= 0)
         if len(object_rows) == 0:
             return
@@ -280,7 +294,9 @@ class _Windows:
             raise ValueError("t contains NaN or infinity")
         instances, inverse = np.unique(target[object_rows], return_inverse=True)
         inverse = inverse.ravel()
-        eps = max(_TIME_EPS, 8 * float(np.spacing(np.abs(obj_t).max()))) / window  # in windows
+        self.t_abs_max = float(np.abs(obj_t).max())
+        self.time_eps = _time_eps(self.t_abs_max) if time_eps is None else float(time_eps)
+        eps = self.time_eps / window  # in windows
 
         # First and last time of every object: sort by object, reduce per block.
         order = np.argsort(inverse, kind="stable")
@@ -375,12 +391,20 @@ def _counts(c, d_xy, dt, causal, cap):
     return _neighbor_counts(c["x"], c["y"], c["t"], c["sequence"], float(d_xy), dt, causal, cap, 1)
 
 
-def _scores(c, counts, vr_threshold, target, ratios, n_min, windows, min_kept):
-    """(errors, background share removed, object share removed) of one setting."""
+def _scores(c, counts, vr_threshold, background, windows, min_kept, ratios, n_min):
+    """(errors, background rows removed, object rows removed) of one setting: counts, so that parts add up."""
     keep = _doppler_density_keep(c["v_r"], counts, float(vr_threshold), ratios, n_min)
-    rates = _filter_removal_rates(keep, target)
+    removed = ~keep
+    removed_background = int(np.count_nonzero(removed & background))
+    removed_objects = int(np.count_nonzero(removed & ~background))
     errors = int(np.count_nonzero(windows.errors(windows.kept(keep), min_kept)))
-    return errors, rates["background_removed"], rates["objects_removed"]
+    return errors, removed_background, removed_objects
+
+
+def _shares(removed, n):
+    """Removed share(s) of a group of ``n`` rows, 0.0 when the group is empty (as :func:`filter_removal_rates`)."""
+    removed = np.asarray(removed, dtype=np.int64)
+    return removed / n if n else np.zeros(removed.shape)
 
 
 def _measure(tasks, target, windows, dt, causal, ratios, n_min, min_kept, n_jobs):
@@ -399,17 +423,19 @@ def _measure(tasks, target, windows, dt, causal, ratios, n_min, min_kept, n_jobs
 
     Yields
     ------
-    (k, errors, background_removed, objects_removed)
-        Per finished task k (in completion order), arrays over its thresholds.
+    (k, errors, removed_background, removed_objects)
+        Per finished task k (in completion order), int64 arrays over its
+        thresholds: error windows, background rows and object rows removed.
     """
     cap = int(n_min.max())
+    background = target == -1
 
     def measure(k):
         c, d_xy, vr_thresholds = tasks[k]
         counts = _counts(c, d_xy, dt, causal, cap)
-        cells = [_scores(c, counts, vr, target, ratios, n_min, windows, min_kept) for vr in vr_thresholds]
-        errors, background, objects = (np.array(values) for values in zip(*cells, strict=True))
-        return k, errors, background, objects
+        cells = [_scores(c, counts, vr, background, windows, min_kept, ratios, n_min) for vr in vr_thresholds]
+        errors, background_removed, objects_removed = (np.array(v, dtype=np.int64) for v in zip(*cells, strict=True))
+        return k, errors, background_removed, objects_removed
 
     yield from Parallel(n_jobs=n_jobs, prefer="threads", return_as="generator_unordered")(
         delayed(measure)(k) for k in range(len(tasks))
@@ -522,33 +548,91 @@ def filter_grid(
     (2, 2)
     """
     start = time.perf_counter()
+    counts = _grid_counts(
+        X,
+        target,
+        vr_thresholds,
+        d_xys,
+        frame,
+        dt,
+        causal,
+        threshold_ratios,
+        min_neighbors,
+        window,
+        min_kept,
+        n_jobs,
+        verbose,
+    )
+    return _grid_result(counts, frame, time.perf_counter() - start)
+
+
+def _grid_counts(
+    X,
+    target,
+    vr_thresholds,
+    d_xys,
+    frame,
+    dt,
+    causal,
+    threshold_ratios,
+    min_neighbors,
+    window,
+    min_kept,
+    n_jobs,
+    verbose,
+    time_eps=None,
+):
+    """The integer counts behind Table I: a Bunch that :func:`_grid_result` turns into shares.
+
+    ``errors``, ``removed_background`` and ``removed_objects`` are int64
+    arrays of shape (n_vr, n_d); ``vr_thresholds`` and ``d_xys`` the checked
+    axes; ``n_background``, ``n_objects`` ints; ``windows`` the error
+    windows (their ``t_abs_max`` and ``time_eps``); ``sequence`` the working
+    sequence column (None without one).
+    """
     target, ratios, n_min = _check_common(X, target, threshold_ratios, min_neighbors)
     vr_values = _check_grid(vr_thresholds, "vr_thresholds", allow_zero=True)
     d_values = _check_grid(d_xys, "d_xys", allow_zero=False)
     c = _working_columns(X, frame)
-    windows = _Windows(target, c["t"], window)  # independent of the filter setting
+    windows = _Windows(target, c["t"], window, time_eps)  # independent of the filter setting
 
     errors = np.zeros((len(vr_values), len(d_values)), dtype=np.int64)
-    background = np.zeros(errors.shape)
-    objects = np.zeros(errors.shape)
+    background = np.zeros(errors.shape, dtype=np.int64)
+    objects = np.zeros(errors.shape, dtype=np.int64)
     tasks = [(c, d_xy, vr_values) for d_xy in d_values]
     results = _measure(tasks, target, windows, dt, causal, ratios, n_min, min_kept, n_jobs)
     for done, (j, cell_errors, cell_background, cell_objects) in enumerate(results, start=1):
         errors[:, j], background[:, j], objects[:, j] = cell_errors, cell_background, cell_objects
         if verbose > 0:
             print(f"filter grid [{frame}] d_xy={d_values[j]:.2f} m: {done}/{len(d_values)} done", flush=True)
-
-    index = pd.Index(vr_values, name="vr_threshold")
-    columns = pd.Index(d_values, name="d_xy")
-    rates = _filter_removal_rates(np.ones(len(target), bool), target)
+    n_background = int(np.count_nonzero(target == -1))
     return Bunch(
-        errors=pd.DataFrame(errors, index=index, columns=columns),
-        background_removed=pd.DataFrame(background, index=index, columns=columns),
-        objects_removed=pd.DataFrame(objects, index=index, columns=columns),
+        vr_thresholds=vr_values,
+        d_xys=d_values,
+        errors=errors,
+        removed_background=background,
+        removed_objects=objects,
+        n_background=n_background,
+        n_objects=len(target) - n_background,
+        windows=windows,
+        sequence=c["sequence"],
+    )
+
+
+def _grid_result(counts, frame, elapsed_s):
+    """:func:`filter_grid`'s Bunch from the counts of :func:`_grid_counts` (or their sums over sequences)."""
+    index = pd.Index(counts.vr_thresholds, name="vr_threshold")
+    columns = pd.Index(counts.d_xys, name="d_xy")
+    return Bunch(
+        errors=pd.DataFrame(counts.errors, index=index, columns=columns),
+        background_removed=pd.DataFrame(
+            _shares(counts.removed_background, counts.n_background), index=index, columns=columns
+        ),
+        objects_removed=pd.DataFrame(_shares(counts.removed_objects, counts.n_objects), index=index, columns=columns),
         frame=frame,
-        n_background=rates["n_background"],
-        n_objects=rates["n_objects"],
-        elapsed_s=time.perf_counter() - start,
+        n_background=counts.n_background,
+        n_objects=counts.n_objects,
+        elapsed_s=elapsed_s,
     )
 
 
@@ -614,7 +698,24 @@ def filter_settings_table(
     >>> list(table.columns)[-3:]
     ['removal_rate', 'object_removal_rate', 'errors']
     """
-    target, ratios, n_min = _check_common(X, target, threshold_ratios, min_neighbors)
+    counts = _settings_counts(
+        X,
+        target,
+        _settings_rows(settings, frame),
+        dt,
+        causal,
+        threshold_ratios,
+        min_neighbors,
+        window,
+        min_kept,
+        n_jobs,
+        verbose,
+    )
+    return _settings_result(counts)
+
+
+def _settings_rows(settings, frame):
+    """The checked settings table, with a ``frame`` column."""
     table = (PAPER_TABLE_II if settings is None else settings).copy().reset_index(drop=True)
     missing = [name for name in ("vr_threshold", "d_xy") if name not in table.columns]
     if missing:
@@ -626,27 +727,55 @@ def filter_settings_table(
         raise ValueError(f"settings: frame must be 'frame' or 'car', got {unknown}")
     _check_grid(table["vr_threshold"].unique(), "settings vr_threshold", allow_zero=True)
     _check_grid(table["d_xy"].unique(), "settings d_xy", allow_zero=False)
+    return table
 
+
+def _settings_counts(
+    X, target, table, dt, causal, threshold_ratios, min_neighbors, window, min_kept, n_jobs, verbose, time_eps=None
+):
+    """The integer counts behind Table II, one per row of the checked settings ``table``.
+
+    A Bunch with ``table``, int64 arrays ``errors``, ``removed_background``
+    and ``removed_objects`` of shape (n_settings,), ``n_background``,
+    ``n_objects``, ``windows`` and ``sequence`` as in :func:`_grid_counts`.
+    """
+    target, ratios, n_min = _check_common(X, target, threshold_ratios, min_neighbors)
     working = {name: _working_columns(X, name) for name in table["frame"].unique()}
     # t does not depend on the frame, so neither do the error windows.
-    windows = _Windows(target, next(iter(working.values()))["t"], window)
+    first = next(iter(working.values()))
+    windows = _Windows(target, first["t"], window, time_eps)
     groups = list(table.groupby(["frame", "d_xy"], sort=False).groups.items())
     tasks = [
         (working[frame_name], d_xy, table.loc[rows, "vr_threshold"].to_numpy(dtype=np.float64))
         for (frame_name, d_xy), rows in groups
     ]
-    table["removal_rate"] = np.nan
-    table["object_removal_rate"] = np.nan
-    table["errors"] = 0
+    errors, background, objects = (np.zeros(len(table), dtype=np.int64) for _ in range(3))
     results = _measure(tasks, target, windows, dt, causal, ratios, n_min, min_kept, n_jobs)
-    for done, (k, errors, background, objects) in enumerate(results, start=1):
+    for done, (k, cell_errors, cell_background, cell_objects) in enumerate(results, start=1):
         (frame_name, d_xy), rows = groups[k]
-        table.loc[rows, "removal_rate"] = 100.0 * background
-        table.loc[rows, "object_removal_rate"] = 100.0 * objects
-        table.loc[rows, "errors"] = errors
+        positions = table.index.get_indexer(rows)
+        errors[positions], background[positions], objects[positions] = cell_errors, cell_background, cell_objects
         if verbose > 0:
             print(f"filter settings [{frame_name}] d_xy={d_xy:.2f} m: {done}/{len(groups)} done", flush=True)
-    table["errors"] = table["errors"].astype(np.int64)
+    n_background = int(np.count_nonzero(target == -1))
+    return Bunch(
+        table=table,
+        errors=errors,
+        removed_background=background,
+        removed_objects=objects,
+        n_background=n_background,
+        n_objects=len(target) - n_background,
+        windows=windows,
+        sequence=first["sequence"],
+    )
+
+
+def _settings_result(counts):
+    """:func:`filter_settings_table`'s table from the counts of :func:`_settings_counts` (or their sums)."""
+    table = counts.table.copy()
+    table["removal_rate"] = 100.0 * _shares(counts.removed_background, counts.n_background)
+    table["object_removal_rate"] = 100.0 * _shares(counts.removed_objects, counts.n_objects)
+    table["errors"] = counts.errors.astype(np.int64)
     return table
 
 
