@@ -207,3 +207,30 @@ def test_bad_parts(scenes):
         combine_error_windows(windows)
     with pytest.raises(ValueError, match="time_eps"):
         filter_grid_parts(*pieces[0], time_eps=0.0)
+
+
+@pytest.fixture(scope="module")
+def small():
+    return make_scenes(n_sequences=4, duration=1.0, random_state=5)
+
+
+@settings(max_examples=20, deadline=None)
+@given(
+    st.lists(st.integers(0, 2), min_size=4, max_size=4),
+    st.lists(st.booleans(), min_size=4, max_size=4),
+    st.sampled_from(["frame", "car"]),
+    st.booleans(),
+)
+def test_grid_and_settings_parts_on_random_blocks(small, blocks, wiped, frame, causal):
+    """Any grouping of whole sequences into parts, some sequences without objects, either frame, causal or not."""
+    X = small.data
+    sequence = X["sequence"].to_numpy()
+    target = np.where(np.isin(sequence, [s + 1 for s in range(4) if wiped[s]]), -1, small.target)
+    grouping = [[s + 1 for s in range(4) if blocks[s] == b] for b in range(3)]
+    pieces = _pieces(X, target, [block for block in grouping if block])
+    options = {"frame": frame, "causal": causal, "dt": 0.1}
+    whole = filter_grid(X, target, **GRID, **options)
+    _assert_same_grid(whole, combine_filter_grid([filter_grid_parts(Xs, ts, **GRID, **options) for Xs, ts in pieces]))
+    table = filter_settings_table(X, target, causal=causal, dt=0.1)
+    parts = [filter_settings_table_parts(Xs, ts, causal=causal, dt=0.1) for Xs, ts in pieces]
+    pd.testing.assert_frame_equal(combine_filter_settings_table(parts), table, check_exact=True)
