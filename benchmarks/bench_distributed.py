@@ -222,6 +222,40 @@ print(json.dumps({"peak": peak_rss(), "seconds":
 """
 
 
+REPRODUCE_PEAK = """
+import io, json, sys, time
+from sklearn_radar._distributed import peak_rss
+from sklearn_radar.reproduce import reproduce
+workers, data, out, steps = int(sys.argv[1]), sys.argv[2], sys.argv[3], sys.argv[4]
+start = time.perf_counter()
+reproduce(data, out, n_iter=2, experiments=steps, stream=io.StringIO(), workers=workers or None)
+print(json.dumps({"peak": peak_rss(), "seconds": time.perf_counter() - start}))
+"""
+
+
+def reproduce_memory(work, data, detections, steps="filter,1,3,filter-effect"):
+    """Part 2b: peak memory of the command's process of ``reproduce`` on the same folder, 1 process and 2 workers."""
+    env = {**os.environ, "PYTHONPATH": os.pathsep.join([str(ROOT), os.environ.get("PYTHONPATH", "")])}
+    mb = 1 / 2**20
+    print(f"\n## 2b. Peak memory of reproduce's own process on the same {detections:,} detections ({steps}, n-iter 2)")
+    for workers in (0, 2):
+        done = subprocess.run(
+            [sys.executable, "-c", REPRODUCE_PEAK, str(workers), str(data), str(work / f"r-{workers}"), steps],
+            capture_output=True,
+            text=True,
+            env=env,
+            check=True,
+        )
+        row = json.loads(done.stdout.strip().splitlines()[-1])
+        where = "1 process" if not workers else f"--workers {workers} (the command's process: client and scheduler)"
+        print(f"  {where}: peak RSS {row['peak'] * mb:7.0f} MB, {row['seconds']:.0f} s", flush=True)
+    one, two = (_figures(work / f"r-{w}") for w in (0, 2))
+    for figures in (one, two):  # the filter effect's measured clustering times differ from run to run
+        for side in ("filtered", "unfiltered"):
+            figures["filter_effect"][side].pop("clustering_s")
+    print(f"  same results.json (but the filter effect's clustering clock): {one == two}")
+
+
 def memory(work, scale):
     import dask.distributed as distributed
 
@@ -292,6 +326,7 @@ def memory(work, scale):
         f"  per-sequence tasks: {len(tasks)}, compute {busy:.1f} s in total = {per_detection * 1e6:.2f} µs per "
         f"detection (load + stages 0-2)"
     )
+    reproduce_memory(work, data, detections)
     return {"per_detection_cluster": per_detection, "detections": detections}
 
 

@@ -34,6 +34,22 @@ class Optimizer(_SkoptOptimizer):
             return [self._ask()]
         return super().ask(n_points=n_points, strategy=strategy)
 
+    @property
+    def n_random_left(self):
+        """Random points still to come before the Gaussian process guides (0 when it guides)."""
+        return max(self._n_initial_points, 0) if self.base_estimator_ is not None else 0
+
+    def ask_random(self, n_points):
+        """The next ``n_points`` random points: those ``n_points`` single-point ``ask``/``tell`` rounds would get.
+
+        Random points depend on the random state only, and ``tell`` draws
+        nothing from it before the Gaussian process is fitted: so they can be
+        evaluated all at once, then told one by one in this order.
+        """
+        if self._initial_samples is not None or n_points > self.n_random_left:
+            raise ValueError(f"n_points={n_points} random points are not ahead (only {self.n_random_left})")
+        return [self._ask() for _ in range(n_points)]
+
 
 class BayesSearchCV(_SkoptBayesSearchCV):
     """skopt's BayesSearchCV whose optimisers are :class:`Optimizer` (one GP fit per single-candidate step)."""

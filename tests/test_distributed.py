@@ -164,6 +164,44 @@ def test_search_on_the_cluster_equals_the_single_process_run(local_cluster, tiny
     assert (out / "params.json").read_text() == (single_process_run / "params.json").read_text()
 
 
+#: Every step that reads the data: statistics (always), filter evaluation, an untuned, a tuned, a derived and a
+#: stage-2 experiment, the filter effect and the baselines.
+EVERY_STEP = {"n_iter": 2, "experiments": "filter,1,8,10,13,filter-effect,baselines", "seed": 0}
+
+
+def _without_clock(figures):
+    """:func:`_figures` without the filter effect's measured clustering times (all else must be equal)."""
+    effect = figures.get("filter_effect")
+    if effect:
+        for side in ("filtered", "unfiltered"):
+            effect[side].pop("clustering_s")
+    return figures
+
+
+def test_a_cluster_run_never_loads_a_sequence_here_and_equals_one_process(
+    local_cluster, tiny_folder, tmp_path, monkeypatch
+):
+    from sklearn_radar.reproduce import _sequences
+
+    alone = tmp_path / "alone"
+    reproduce(tiny_folder, alone, stream=open(os.devnull, "w"), **EVERY_STEP)
+
+    def no_loading_here(*args, **kwargs):
+        raise AssertionError("a sequence was loaded in the command's process")
+
+    # The workers are other processes: they load the sequences with the real function.
+    monkeypatch.setattr(_sequences, "load_radarscenes", no_loading_here)
+    on_cluster = tmp_path / "cluster"
+    reproduce(
+        tiny_folder, on_cluster, stream=open(os.devnull, "w"), scheduler=local_cluster.scheduler_address, **EVERY_STEP
+    )
+    assert _without_clock(_figures(on_cluster)) == _without_clock(_figures(alone))
+    assert (on_cluster / "report.md").is_file()
+    assert sorted(p.name for p in on_cluster.glob("*.png")) == sorted(p.name for p in alone.glob("*.png"))
+    with pytest.raises(AssertionError, match="command's process"):
+        reproduce(tiny_folder, tmp_path / "here", stream=open(os.devnull, "w"), **{**EVERY_STEP, "experiments": "1"})
+
+
 def test_independent_searches_run_concurrently_and_equal_one_after_the_other(local_cluster, tiny_folder, tmp_path):
     # #3 and #5 (stage 1) need nothing from each other: on a cluster they start at once, each in a thread of
     # this process.  The progress goes to an open file, which must never have to travel to a worker.

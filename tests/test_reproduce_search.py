@@ -4,6 +4,8 @@ import pickle
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from sklearn.base import clone
 from sklearn.model_selection import GroupKFold
 
@@ -17,6 +19,7 @@ from sklearn_radar.reproduce._search import (
     candidate_parts,
     candidate_scores,
     sequence_folds,
+    sized_sequence_folds,
 )
 
 SCORERS = {"v1": radar_v_measure_scorer, "pq": panoptic_quality_scorer}
@@ -100,3 +103,20 @@ def test_blocks_are_balanced_and_hold_every_sequence_once():
     assert totals == [75, 80]  # largest first, each to the lightest block: 40+30+5 and 50+20+10
     assert all(block == sorted(block) for block in blocks)
     assert balanced_blocks([3, 4], 5) == [[1], [0]]  # never more blocks than sequences
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    sizes=st.lists(st.integers(1, 6), min_size=1, max_size=12),
+    n_folds=st.integers(2, 5),
+)
+def test_folds_from_sizes_equal_group_k_fold(sizes, n_folds):
+    # Small sizes give many ties: GroupKFold's order of equal sequences must be kept too.
+    ids = np.arange(len(sizes)) * 3 + 1
+    groups = np.repeat(ids, sizes)
+    folds = sized_sequence_folds(ids, sizes, n_folds)
+    if len(ids) < 2:
+        assert [list(f) for f in folds] == [list(ids)]
+        return
+    expected = [np.unique(groups[rows]) for _, rows in GroupKFold(min(n_folds, len(ids))).split(groups, groups=groups)]
+    assert [list(f) for f in folds] == [list(f) for f in expected]

@@ -76,13 +76,39 @@ def sequence_train_test_split(groups, *, test_size=0.5, random_state=None):
     sequences, codes, sizes = np.unique(groups, return_inverse=True, return_counts=True)
     if len(sequences) < 2:
         raise ValueError(f"groups must hold at least 2 sequences to split by sequence, got {len(sequences)}")
+    side = sequence_sides(sizes, test_size, random_state)
+    test_rows = side[codes.ravel()] == 1
+    return np.flatnonzero(~test_rows).astype(np.int64), np.flatnonzero(test_rows).astype(np.int64)
+
+
+def sequence_sides(sizes, test_size=0.5, random_state=None):
+    """The side of each sequence in :func:`sequence_train_test_split`, from the sequences' sizes alone.
+
+    A run whose data lives on several machines splits it without a row per
+    detection in one place; :func:`sequence_train_test_split` is this applied
+    to the counts of its ``groups``.
+
+    Parameters
+    ----------
+    sizes : ndarray of int of shape (n_sequences,)
+        Detections per sequence, in increasing sequence id (at least 2).
+    test_size : float, default=0.5
+    random_state : int, RandomState instance or None, default=None
+
+    Returns
+    -------
+    side : ndarray of int64 of shape (n_sequences,)
+        0 for the training side, 1 for the test side.
+    """
+    sizes = np.asarray(sizes)
     rng = check_random_state(random_state)
     # Largest first; a random permutation before the stable sort orders equal sizes.
-    shuffled = rng.permutation(len(sequences))
+    shuffled = rng.permutation(len(sizes))
     order = shuffled[np.argsort(-sizes[shuffled], kind="stable")]
-    target = np.array([(1.0 - test_size) * len(groups), test_size * len(groups)])
+    total = sizes.sum()
+    target = np.array([(1.0 - test_size) * total, test_size * total])
     totals = np.zeros(2)
-    side = np.empty(len(sequences), dtype=np.int64)  # 0 = train, 1 = test
+    side = np.empty(len(sizes), dtype=np.int64)  # 0 = train, 1 = test
     for k in order:
         shortfall = target - totals
         if shortfall[0] == shortfall[1]:
@@ -95,5 +121,4 @@ def sequence_train_test_split(groups, *, test_size=0.5, random_state=None):
         if not np.any(side == empty):  # extreme test_size: give the empty side the smallest sequence
             smallest = order[::-1][0]
             side[smallest] = empty
-    test_rows = side[codes.ravel()] == 1
-    return np.flatnonzero(~test_rows).astype(np.int64), np.flatnonzero(test_rows).astype(np.int64)
+    return side

@@ -1,4 +1,4 @@
-"""What a reproduce run keeps in memory beside its results: the data, the split, labels and intermediate tables."""
+"""What a reproduce run keeps beside its results: where the data is, the split, labels and intermediate tables."""
 
 from __future__ import annotations
 
@@ -6,7 +6,6 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
-import pandas as pd
 
 
 @dataclass(slots=True, kw_only=True)
@@ -18,21 +17,17 @@ class RunContext:
 
     Attributes
     ----------
-    scenes : Bunch
-        The data (:func:`~sklearn_radar.datasets.make_scenes` or
-        :func:`~sklearn_radar.datasets.load_radarscenes`): ``data``,
-        ``target``, ``groups``.
-    X : DataFrame
-        The estimators' input: the measured columns of ``scenes.data`` (no
-        labels, no strings: cheap to hash for caching).
-    train, test : ndarray of int
-        Row indices of the training and the test half.
-    target : ndarray of int
-        The pre-clustered target of every detection.
+    sequences : RunSequences
+        The data, one table per sequence, where the run's tasks run
+        (:class:`._sequences.RunSequences`: here, or on the cluster's
+        workers).
+    train, test : list of int
+        The training and the test sequences.
     cache : str or None, default=None
         Pipeline cache folder of the run.
     labels : dict of int to ndarray, default={}
-        Test-half cluster labels by experiment number.
+        Cluster labels of the test sequence the figures draw (the first),
+        by experiment number.
     filter_grids : dict of str to Bunch or None, default=None
         :func:`~sklearn_radar.evaluation.filter_grid` per coordinate system
         (``"frame"``, ``"car"``), once the filter evaluation ran.
@@ -55,11 +50,9 @@ class RunContext:
         ``{repeat: concurrent future}``.
     """
 
-    scenes: Any
-    X: pd.DataFrame
-    train: np.ndarray
-    test: np.ndarray
-    target: np.ndarray
+    sequences: Any
+    train: list[int]
+    test: list[int]
     cache: str | None = None
     labels: dict[int, np.ndarray] = field(default_factory=dict)
     filter_grids: dict[str, Any] | None = None

@@ -28,7 +28,6 @@ from dataclasses import dataclass
 import numpy as np
 from joblib import Parallel, delayed
 from sklearn.base import clone
-from sklearn.model_selection import GroupKFold
 from sklearn.utils import check_random_state
 
 from .._skopt import Optimizer, dimensions_aslist
@@ -41,6 +40,7 @@ __all__ = [
     "search_and_score_start",
     "search_on_a_worker",
     "sequence_folds",
+    "sized_sequence_folds",
 ]
 
 
@@ -182,6 +182,30 @@ class SearchData:
         n = len(self.blocks)
         return [[part for block in per_block[i * n : (i + 1) * n] for part in block] for i in range(len(candidates))]
 
+    def iter_parts(self, estimator, candidates, objective):
+        """:meth:`parts` of each candidate in turn, yielded as soon as it and those before it are done.
+
+        On a cluster every candidate's tasks are queued at once (the workers
+        never wait for this process between candidates); here each candidate
+        is evaluated when the caller asks for it.
+        """
+        if self.cluster is None:
+            for params in candidates:
+                yield self.parts(estimator, [params], objective)[0]
+            return
+        client = self.cluster.client
+        queued = [
+            [client.submit(block_parts, estimator, params, block, objective, pure=False) for block in self.blocks]
+            for params in candidates
+        ]
+        try:
+            for futures in queued:
+                yield [part for block in client.gather(futures) for part in block]
+        finally:  # a search that stops early drops the candidates it no longer needs
+            for futures in queued:
+                for future in futures:
+                    future.release()
+
     def _map(self, function, calls):
         if self.n_jobs in (None, 1) or len(calls) < 2:
             return [function(*call) for call in calls]
@@ -204,11 +228,42 @@ def sequence_folds(groups, n_folds):
     -------
     folds : list of ndarray
     """
-    groups = np.asarray(groups)
-    n_folds = min(n_folds, len(np.unique(groups)))
+    ids, sizes = np.unique(np.asarray(groups), return_counts=True)
+    return sized_sequence_folds(ids, sizes, n_folds)
+
+
+def sized_sequence_folds(ids, sizes, n_folds):
+    """:func:`sequence_folds` from the sequences' sizes alone (no row per detection needed).
+
+    ``GroupKFold``'s assignment: the largest sequence first (ties: the
+    later id first), each to the fold with the fewest detections so far
+    (ties: the first such fold).
+
+    Parameters
+    ----------
+    ids : array-like of shape (n_sequences,)
+        Sequence ids, increasing.
+    sizes : array-like of int of shape (n_sequences,)
+        Detections per sequence.
+    n_folds : int
+
+    Returns
+    -------
+    folds : list of ndarray
+        The ids of each fold, increasing.
+    """
+    ids, sizes = np.asarray(ids), np.asarray(sizes)
+    n_folds = min(n_folds, len(ids))
     if n_folds < 2:
-        return [np.unique(groups)]
-    return [np.unique(groups[rows]) for _, rows in GroupKFold(n_splits=n_folds).split(groups, groups=groups)]
+        return [ids]
+    order = np.argsort(sizes, kind="stable")[::-1]
+    totals = np.zeros(n_folds)
+    fold_of = np.empty(len(ids), dtype=np.int64)
+    for position in order:
+        lightest = int(np.argmin(totals))
+        totals[lightest] += sizes[position]
+        fold_of[position] = lightest
+    return [ids[fold_of == f] for f in range(n_folds)]
 
 
 @dataclass
@@ -234,6 +289,19 @@ class SearchResult:
 def candidate_scores(data, estimator, candidates, folds, objective):
     """Mean fold score of each candidate; a fold with a failed sequence scores 0.0.
 
+    Parameters
+    ----------
+    data : SearchData
+    estimator : estimator with ``fit_predict``
+    candidates : list of dict
+    folds : list of ndarray
+        Sequence ids per fold (:func:`sequence_folds`).
+    objective : {"v1", "pq"}
+
+    Returns
+    -------
+    scores : list of float
+
     Raises
     ------
     ValueError
@@ -241,15 +309,20 @@ def candidate_scores(data, estimator, candidates, folds, objective):
         than bad candidates (scikit-learn's searches raise then, too).
     """
     parts = data.parts(estimator, candidates, objective)
+    _check_not_all_failed(parts)
+    return [_mean_fold_score(data, row, folds, objective) for row in parts]
+
+
+def _check_not_all_failed(parts):
     failures = [p for row in parts for p in row if isinstance(p, FailedPart)]
     if failures and len(failures) == sum(len(row) for row in parts):
-        raise ValueError(f"every fit of {len(candidates)} candidate(s) failed, e.g. {failures[0].error}")
+        raise ValueError(f"every fit of {len(parts)} candidate(s) failed, e.g. {failures[0].error}")
+
+
+def _mean_fold_score(data, row, folds, objective):
+    """A candidate's mean fold score from its parts (in :attr:`SearchData.sequence_ids` order)."""
     position = {sequence_id: i for i, sequence_id in enumerate(data.sequence_ids)}
-    scores = []
-    for row in parts:
-        fold_scores = [combine_parts(objective, [row[position[s]] for s in fold]) for fold in folds]
-        scores.append(float(np.mean(fold_scores)))
-    return scores
+    return float(np.mean([combine_parts(objective, [row[position[s]] for s in fold]) for fold in folds]))
 
 
 def bayes_search(
@@ -298,18 +371,37 @@ def bayes_search(
     candidates, scores = [], []
     remaining = n_iter
     while remaining > 0:
-        points = optimizer.ask(n_points=min(remaining, n_points))
+        # The random candidates do not depend on any score: with one candidate per step they are all asked (on a
+        # cluster, queued) at once and told one by one in the same order: the same search as one at a time.
+        batched = n_points == 1 and optimizer.n_random_left > 1
+        if batched:
+            points = optimizer.ask_random(min(remaining, optimizer.n_random_left))
+        else:
+            points = optimizer.ask(n_points=min(remaining, n_points))
         points = [[np.array(value).item() for value in point] for point in points]
         step = [dict(zip(names, point, strict=True)) for point in points]
-        step_scores = candidate_scores(data, estimator, step, folds, objective)
-        result = optimizer.tell(points, [-score for score in step_scores])
-        candidates += step
-        scores += step_scores
-        remaining -= n_points
-        if callback is not None and callback(result):
-            break
+        done = 0
+        for told in _step_scores(data, estimator, step, batched, folds, objective):
+            result = optimizer.tell(points[done : done + len(told)], [-score for score in told])
+            candidates += step[done : done + len(told)]
+            scores += told
+            done += len(told)
+            if callback is not None and callback(result):
+                remaining = 0
+                break
+        remaining -= len(points)
     best = int(np.argmax(scores))
     return SearchResult(candidates=candidates, scores=scores, best_params=candidates[best], best_score=scores[best])
+
+
+def _step_scores(data, estimator, step, batched, folds, objective):
+    """The scores of a step's candidates, per ``tell``: all at once, or (``batched``) one candidate at a time."""
+    if not batched:
+        yield candidate_scores(data, estimator, step, folds, objective)
+        return
+    for row in data.iter_parts(estimator, step, objective):
+        _check_not_all_failed([row])
+        yield [_mean_fold_score(data, row, folds, objective)]
 
 
 def search_and_score_start(estimator, space, data, folds, start_from=None, *, callback=None, **options):

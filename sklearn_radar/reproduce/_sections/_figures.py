@@ -228,25 +228,23 @@ def _scene_figure(plt, path, results, context):
     """Raw data, target, the FCS baseline (#3, or the first experiment run) and the best experiment, one sequence."""
     from ...preprocessing import FrameTransform
 
-    scenes, test = context.scenes, context.test
-    data = FrameTransform().fit_transform(scenes.data.iloc[test])
-    sequence = scenes.groups[test]
-    first = sequence == sequence[0]
+    sequence = context.sequences.fetch(context.test[0])
+    data = FrameTransform().fit_transform(sequence.X)
     baseline, best = scene_panels(results)
     panels = [
         ("raw data", None),
-        ("target (pre-clustered ground truth)", context.target[test]),
+        ("target (pre-clustered ground truth)", sequence.target),
         (f"baseline #{baseline}", context.labels[baseline]),
         (f"best: #{best}", context.labels[best]),
     ]
     fig, axes = plt.subplots(1, 4, figsize=(20, 5.5), sharex=True, sharey=True)
-    x, y = data["x"].to_numpy()[first], data["y"].to_numpy()[first]
-    target = np.asarray(context.target[test])[first]
+    x, y = data["x"].to_numpy(), data["y"].to_numpy()
+    target = np.asarray(sequence.target)
     for k, (ax, (title, labels)) in enumerate(zip(axes, panels, strict=True)):
         if labels is None:
             ax.scatter(x, y, s=0.5, c="0.3")
         else:
-            labels = np.asarray(labels)[first]
+            labels = np.asarray(labels)
             noise = labels < 0
             background = _background_only(labels, target) if k >= 2 else np.zeros(len(labels), dtype=bool)
             coloured = ~noise & ~background
@@ -261,7 +259,7 @@ def _scene_figure(plt, path, results, context):
         ax.set(title=title, xlabel="x (m, FCS)", aspect="equal")
     axes[0].set_ylabel("y (m, FCS)")
     fig.suptitle(
-        f"test sequence {sequence[0]}: each cluster its own colour, background-only clusters black x, "
+        f"test sequence {sequence.id}: each cluster its own colour, background-only clusters black x, "
         "noise and static background grey"
     )
     save_figure(fig, path)

@@ -172,14 +172,12 @@ def _filter_scene(plt, path, context):
     """One test sequence in FCS: kept, removed background and removed object detections at the chosen setting."""
     from ...preprocessing import DopplerDensityFilter, FrameTransform
 
-    scenes = context.scenes
-    groups = np.asarray(scenes.groups)
-    sequence = groups[context.test][0] if len(context.test) else groups[0]
-    rows = np.flatnonzero(groups == sequence)
-    prepared = FrameTransform(frame="frame").fit_transform(scenes.data.iloc[rows])
+    drawn = context.sequences.fetch(context.test[0])
+    sequence = drawn.id
+    prepared = FrameTransform(frame="frame").fit_transform(drawn.scenes.data)
     keep = DopplerDensityFilter(vr_threshold=CHOSEN[0], d_xy=CHOSEN[1]).fit_transform(prepared)["keep"]
     keep = keep.to_numpy(dtype=bool)
-    is_object = np.asarray(scenes.target)[rows] >= 0
+    is_object = np.asarray(drawn.scenes.target) >= 0
     x, y = prepared["x"].to_numpy(), prepared["y"].to_numpy()
     kinds = [  # in drawing order: what the filter keeps on top of the background it removes
         (~keep & ~is_object, "removed background", {"s": 0.8, "c": "lightskyblue"}),

@@ -1,0 +1,104 @@
+"""The run's data per sequence (sklearn_radar.reproduce._sequences): the same tables, split and searches as the whole."""
+
+import numpy as np
+import pandas as pd
+import pytest
+from sklearn.metrics.cluster import contingency_matrix
+
+from sklearn_radar.datasets import load_radarscenes, make_scenes
+from sklearn_radar.experiments import experiment_pipeline
+from sklearn_radar.metrics import precluster_target
+from sklearn_radar.model_selection import sequence_train_test_split
+from sklearn_radar.reproduce._search import SearchData, candidate_scores, sequence_folds
+from sklearn_radar.reproduce._sequences import LABEL_COLUMNS, RunSequences
+
+
+@pytest.fixture(scope="module")
+def scenes():
+    return make_scenes(n_sequences=4, duration=3.0, random_state=5)
+
+
+def _same_partition(a, b):
+    """Whether two labellings group the rows alike (ids may differ), -1 being the same class in both."""
+    table = contingency_matrix(a, b)
+    return np.all((table > 0).sum(axis=0) == 1) and np.all((table > 0).sum(axis=1) == 1)
+
+
+def test_sequences_hold_every_row_once_with_the_whole_tables_values(scenes):
+    sequences = RunSequences.from_scenes(scenes)
+    groups = np.asarray(scenes.groups)
+    assert sequences.ids == sorted(np.unique(groups).tolist())
+    assert sequences.sizes == [int((groups == i).sum()) for i in sequences.ids]
+    assert sequences.n_detections == len(scenes.data)
+    joined = pd.concat([sequences.fetch(i).scenes.data for i in sequences.ids], ignore_index=True)
+    pd.testing.assert_frame_equal(joined, scenes.data.reset_index(drop=True))
+    whole_target = precluster_target(scenes.data, scenes.target)
+    for i in sequences.ids:
+        rows = groups == i
+        sequence = sequences.fetch(i)
+        np.testing.assert_array_equal(sequence.scenes.target, np.asarray(scenes.target)[rows])
+        assert _same_partition(sequence.target, whole_target[rows])
+        assert not set(LABEL_COLUMNS) & set(sequence.X.columns)
+        assert (sequence.scenes.odometry["sequence"] == i).all() and len(sequence.scenes.odometry)
+
+
+@pytest.mark.parametrize("seed", [0, 1, 7])
+def test_split_equals_sequence_train_test_split(scenes, seed):
+    train, test = RunSequences.from_scenes(scenes).split(random_state=seed)
+    train_rows, test_rows = sequence_train_test_split(scenes.groups, random_state=seed)
+    assert train == sorted(np.unique(scenes.groups[train_rows]).tolist())
+    assert test == sorted(np.unique(scenes.groups[test_rows]).tolist())
+
+
+def test_one_sequence_cannot_be_split():
+    one = make_scenes(n_sequences=1, duration=1.0, random_state=0)
+    with pytest.raises(ValueError, match="at least 2 sequences"):
+        RunSequences.from_scenes(one).split(random_state=0)
+
+
+def test_a_folder_loads_per_sequence_as_the_whole_folder_does(tiny_folder):
+    sequences = RunSequences.from_folder(tiny_folder)
+    whole = load_radarscenes(tiny_folder)
+    joined = pd.concat([sequences.fetch(i).scenes.data for i in sequences.ids], ignore_index=True)
+    pd.testing.assert_frame_equal(joined, whole.data.reset_index(drop=True))
+    assert sequences.sizes == [int((whole.groups == i).sum()) for i in sequences.ids]
+    objects = set()
+    for i in sequences.ids:
+        target = sequences.fetch(i).scenes.target
+        assert _same_partition(target, whole.target[whole.groups == i])
+        ids = set(np.unique(target[target >= 0]).tolist())
+        assert ids and not ids & objects  # unique across sequences, as in the whole folder's load
+        objects |= ids
+
+
+def test_a_folder_without_sequences_is_named(tmp_path, tiny_folder):
+    for name in ("sensors.json",):
+        (tmp_path / name).write_bytes((tiny_folder / name).read_bytes())
+    (tmp_path / "sequences.json").write_text('{"sequences": {}}')
+    with pytest.raises(ValueError, match="sequences.json"):
+        RunSequences.from_folder(tmp_path)
+
+
+def test_search_data_scores_candidates_as_the_whole_table_does(scenes):
+    sequences = RunSequences.from_scenes(scenes)
+    train = sequences.ids[:3]
+    rows = np.isin(scenes.groups, train)
+    X = scenes.data.loc[rows, [c for c in scenes.data.columns if c not in LABEL_COLUMNS]]
+    target = precluster_target(scenes.data, scenes.target)[rows]
+    folds = sequence_folds(scenes.groups[rows], 3)
+    pipeline = experiment_pipeline(8)
+    candidates = [{}, {"cluster__eps_xyv": 0.6}]
+    expected = candidate_scores(SearchData.place(X, target, scenes.groups[rows]), pipeline, candidates, folds, "v1")
+    found = candidate_scores(sequences.search_data(train), pipeline, candidates, folds, "v1")
+    np.testing.assert_allclose(found, expected, rtol=0, atol=1e-12)
+
+
+def _sizes_and_ids(sequence, extra):
+    return sequence.id, len(sequence), extra
+
+
+def test_map_runs_in_order_on_the_sequences_asked_for(scenes):
+    sequences = RunSequences.from_scenes(scenes)
+    asked = [sequences.ids[2], sequences.ids[0]]
+    found = sequences.map(_sizes_and_ids, asked, "x")
+    assert found == [(i, sequences.size([i]), "x") for i in asked]
