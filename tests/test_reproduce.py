@@ -572,6 +572,7 @@ def test_tune_searches_exactly_as_the_plain_pipeline_search(number):
     from sklearn_radar.model_selection import make_bayes_search
     from sklearn_radar.reproduce._results import Budget
     from sklearn_radar.reproduce._run import _BASELINES, _tune
+    from sklearn_radar.reproduce._sequences import RunSequences
 
     scenes = make_scenes(n_sequences=4, duration=3.0, random_state=5)
     X = scenes.data[[c for c in scenes.data.columns if c not in ("uuid", "track_id", "label_id")]]
@@ -592,7 +593,8 @@ def test_tune_searches_exactly_as_the_plain_pipeline_search(number):
         stream=io.StringIO(),
         results=SimpleNamespace(meta=SimpleNamespace(objective="v1")),
     )
-    context = SimpleNamespace(X=X, target=target, train=train, scenes=scenes)
+    sequences = RunSequences.from_scenes(scenes)
+    context = SimpleNamespace(sequences=sequences, train=sequences.ids[:3])
     best, record = _tune(run, context, pipeline, space, "test")
 
     groups = scenes.groups[train]

@@ -71,3 +71,40 @@ def test_a_single_candidate_step_fits_one_gaussian_process(monkeypatch):
     # Each guided candidate is the point the previous tell chose, so none is evaluated twice.
     points = [tuple(p.values()) for p in search.cv_results_["params"]]
     assert len(set(points)) == len(points)
+
+
+def _objective(point):
+    return float(np.sin(3 * point[0]) + 0.1 * point[1])
+
+
+@pytest.mark.parametrize("n_initial", [2, 5])
+def test_random_points_asked_at_once_are_those_of_one_at_a_time(n_initial):
+    from sklearn_radar._skopt import Optimizer
+
+    space = [Real(0.0, 2.0), Integer(1, 9)]
+    one_at_a_time = Optimizer(space, n_initial_points=n_initial, random_state=3)
+    asked = []
+    for _ in range(n_initial + 2):  # the random points, then two guided ones
+        point = one_at_a_time.ask(n_points=1)[0]
+        asked.append(point)
+        one_at_a_time.tell([point], [_objective(point)])
+
+    at_once = Optimizer(space, n_initial_points=n_initial, random_state=3)
+    assert at_once.n_random_left == n_initial
+    points = at_once.ask_random(n_initial)
+    for point in points:
+        at_once.tell([point], [_objective(point)])
+    assert at_once.n_random_left == 0
+    for _ in range(2):
+        point = at_once.ask(n_points=1)[0]
+        points.append(point)
+        at_once.tell([point], [_objective(point)])
+    assert points == asked
+
+
+def test_more_random_points_than_are_ahead_is_an_error():
+    from sklearn_radar._skopt import Optimizer
+
+    optimizer = Optimizer([Real(0.0, 1.0)], n_initial_points=3, random_state=0)
+    with pytest.raises(ValueError, match="n_points=4"):
+        optimizer.ask_random(4)
