@@ -1,4 +1,4 @@
-"""The run's data per sequence (sklearn_radar.reproduce._sequences): the same tables, split and searches as the whole."""
+"""The run's data per sequence (reproduce._sequences): the same tables, split and searches as the whole."""
 
 import numpy as np
 import pandas as pd
