@@ -75,7 +75,7 @@ def test_a_folder_without_sequences_is_named(tmp_path, tiny_folder):
     for name in ("sensors.json",):
         (tmp_path / name).write_bytes((tiny_folder / name).read_bytes())
     (tmp_path / "sequences.json").write_text('{"sequences": {}}')
-    with pytest.raises(ValueError, match=r"sequences\.json: lists no sequence"):
+    with pytest.raises(ValueError, match=r"sequences\.json: field 'sequences' lists no sequence"):
         RunSequences.from_folder(tmp_path)
 
 

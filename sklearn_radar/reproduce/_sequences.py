@@ -176,9 +176,7 @@ class RunSequences:
         """A RadarScenes folder, loaded sequence by sequence: on a cluster by the workers (same path there)."""
         data_dir = _resolve_data_dir(Path(path))
         _read_sensors_json(data_dir / "sensors.json")  # a malformed folder fails here, before any task
-        ids = sorted(_read_sequences_json(data_dir / "sequences.json"))
-        if not ids:
-            raise ValueError(f"{data_dir / 'sequences.json'}: lists no sequence")
+        ids = sorted(_read_sequences_json(data_dir / "sequences.json"))  # a ValueError naming it when empty
         if cluster is None:
             items = [load_sequence(data_dir, number) for number in ids]
             return cls(ids, [len(s) for s in items], items, None, n_jobs)
