@@ -202,6 +202,23 @@ def test_a_cluster_run_never_loads_a_sequence_here_and_equals_one_process(
         reproduce(tiny_folder, tmp_path / "here", stream=open(os.devnull, "w"), **{**EVERY_STEP, "experiments": "1"})
 
 
+def test_simulated_data_is_simulated_on_the_workers_and_equals_one_process(local_cluster, tmp_path, monkeypatch):
+    from sklearn_radar.reproduce import _sequences
+
+    run = {"n_iter": 2, "experiments": "filter,3", "seed": 1}
+    alone = tmp_path / "alone"
+    reproduce(None, alone, stream=open(os.devnull, "w"), **run)
+
+    def no_simulation_here(*args, **kwargs):
+        raise AssertionError("a sequence was simulated in the command's process")
+
+    monkeypatch.setattr(_sequences, "simulate_sequences", no_simulation_here)
+    on_cluster = tmp_path / "cluster"
+    reproduce(None, on_cluster, stream=open(os.devnull, "w"), scheduler=local_cluster.scheduler_address, **run)
+    assert _figures(on_cluster) == _figures(alone)
+    assert _figures(alone)["meta"]["data"]["n_sequences"] > 1
+
+
 def test_independent_searches_run_concurrently_and_equal_one_after_the_other(local_cluster, tiny_folder, tmp_path):
     # #3 and #5 (stage 1) need nothing from each other: on a cluster they start at once, each in a thread of
     # this process.  The progress goes to an open file, which must never have to travel to a worker.

@@ -102,3 +102,24 @@ def test_map_runs_in_order_on_the_sequences_asked_for(scenes):
     asked = [sequences.ids[2], sequences.ids[0]]
     found = sequences.map(_sizes_and_ids, asked, "x")
     assert found == [(i, sequences.size([i]), "x") for i in asked]
+
+
+@pytest.mark.parametrize("difficulty", ["easy", "realistic"])
+def test_sequences_simulated_one_by_one_are_make_scenes_ones(difficulty):
+    whole = make_scenes(n_sequences=3, duration=2.0, random_state=11, difficulty=difficulty)
+    sequences = RunSequences.simulated(3, 2.0, 11, difficulty)
+    assert sequences.ids == [1, 2, 3]
+    joined = pd.concat([sequences.fetch(i).scenes.data for i in sequences.ids], ignore_index=True)
+    pd.testing.assert_frame_equal(joined, whole.data)
+    objects = set()
+    for i in sequences.ids:
+        sequence = sequences.fetch(i)
+        rows = whole.groups == i
+        assert _same_partition(sequence.scenes.target, whole.target[rows])
+        assert _same_partition(sequence.target, precluster_target(whole.data, whole.target)[rows])
+        pd.testing.assert_frame_equal(
+            sequence.scenes.odometry, whole.odometry[whole.odometry["sequence"] == i].reset_index(drop=True)
+        )
+        ids = set(np.unique(sequence.scenes.target[sequence.scenes.target >= 0]).tolist())
+        assert not ids & objects
+        objects |= ids

@@ -245,16 +245,36 @@ def make_scenes(
     """
     low, high = _check_n_objects(n_objects)
     knobs = _check_knobs(difficulty, knobs)
-    rng = check_random_state(random_state)
-    seeds = rng.randint(0, 2**31 - 1, size=n_sequences)
+    numbers_ = np.arange(first_sequence, first_sequence + n_sequences, dtype=np.int64)
+    description = (
+        f"Simulated RadarScenes-layout data: {n_sequences} sequence(s) of {duration:g} s "
+        f"(sklearn_radar.datasets.make_scenes, random_state={random_state!r}, difficulty={difficulty!r}"
+        + (f", knobs={dict(sorted(_overrides(difficulty, knobs).items()))!r}" if _overrides(difficulty, knobs) else "")
+        + ")."
+    )
+    seeds = sequence_seeds(random_state, n_sequences)
+    return simulate_sequences(numbers_, seeds, duration, (low, high), static_density, knobs, description)
+
+
+def sequence_seeds(random_state, n_sequences):
+    """The seed of each sequence of :func:`make_scenes` (drawn first: any sequence can be simulated alone)."""
+    return check_random_state(random_state).randint(0, 2**31 - 1, size=n_sequences)
+
+
+def simulate_sequences(numbers, seeds, duration, n_objects, static_density, knobs, description):
+    """The sequences ``numbers`` with their ``seeds`` (:func:`sequence_seeds`): :func:`make_scenes`'s Bunch of them.
+
+    ``knobs`` are checked ones (``_check_knobs``); ``n_objects`` is
+    ``(low, high)``.  A sequence's rows do not depend on the others
+    simulated with it; its instances are numbered from 0 in the Bunch.
+    """
     data, odometry = [], []
-    for i, seed in enumerate(seeds):
-        number = first_sequence + i
+    for number, seed in zip(numbers, seeds, strict=True):
         # The phenomena draw from a stream of their own, so that both presets share the world of a seed.
         det, odo = _simulate_sequence(
-            number,
+            int(number),
             duration,
-            (low, high),
+            n_objects,
             static_density,
             np.random.default_rng(seed),
             knobs,
@@ -264,7 +284,7 @@ def make_scenes(
         odometry.append(odo)
     data = pd.concat(data, ignore_index=True)
     odometry = pd.concat(odometry, ignore_index=True)
-    numbers_ = np.arange(first_sequence, first_sequence + n_sequences, dtype=np.int64)
+    numbers = np.asarray(numbers, dtype=np.int64)
     return Bunch(
         data=data,
         target=instance_target(data["track_id"], data["sequence"]),
@@ -273,15 +293,12 @@ def make_scenes(
         sensors=mounting_frame(RADARSCENES_MOUNTING),
         sequences=pd.DataFrame(
             {
-                "sequence": numbers_,
-                "name": pd.array([f"sequence_{n}" for n in numbers_], dtype="str"),
-                "category": pd.array(["train"] * n_sequences, dtype="str"),
+                "sequence": numbers,
+                "name": pd.array([f"sequence_{n}" for n in numbers], dtype="str"),
+                "category": pd.array(["train"] * len(numbers), dtype="str"),
             }
         ),
-        DESCR=f"Simulated RadarScenes-layout data: {n_sequences} sequence(s) of {duration:g} s "
-        f"(sklearn_radar.datasets.make_scenes, random_state={random_state!r}, difficulty={difficulty!r}"
-        + (f", knobs={dict(sorted(_overrides(difficulty, knobs).items()))!r}" if _overrides(difficulty, knobs) else "")
-        + ").",
+        DESCR=description,
     )
 
 

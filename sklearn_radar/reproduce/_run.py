@@ -51,7 +51,7 @@ from .. import __version__
 from .._distributed import connect_cluster
 from .._skopt import Integer, Real
 from ..cluster import SequenceDBSCAN, SequenceHDBSCAN, WindowedDBSCAN, WindowedHDBSCAN
-from ..datasets import format_statistics, make_scenes
+from ..datasets import format_statistics
 from ..datasets._statistics import combine_statistics, statistics_parts
 from ..evaluation._filter_parts import (
     combine_error_windows,
@@ -544,10 +544,8 @@ def _sha256(path):
 def _data(data, budget, seed, difficulty="realistic", cluster=None, n_jobs=None):
     """The run's sequences (:class:`._sequences.RunSequences`; on a cluster: on its workers) and their source."""
     if data is None:
-        scenes = make_scenes(
-            n_sequences=budget.n_sequences, duration=budget.duration, random_state=seed, difficulty=difficulty
-        )
-        return RunSequences.from_scenes(scenes, cluster, n_jobs), (
+        sequences = RunSequences.simulated(budget.n_sequences, budget.duration, seed, difficulty, cluster, n_jobs)
+        return sequences, (
             f"simulated ({budget.n_sequences} sequences x {budget.duration:g} s, seed {seed}, difficulty {difficulty})"
         )
     # The source goes into report.md (UTF-8): an undecodable byte of the path is shown as \xff.

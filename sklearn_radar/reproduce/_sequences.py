@@ -27,6 +27,7 @@ from sklearn.utils import Bunch
 
 from ..datasets import load_radarscenes
 from ..datasets._radarscenes import _read_sensors_json, _read_sequences_json, _resolve_data_dir
+from ..datasets._simulator import _check_knobs, sequence_seeds, simulate_sequences
 from ..metrics import precluster_target
 from ..model_selection._split import sequence_sides
 from ._search import SearchData, balanced_blocks
@@ -98,6 +99,9 @@ def as_sequence(number, scenes):
     return Sequence(id=int(number), scenes=scenes, target=precluster_target(scenes.data, scenes.target))
 
 
+#: make_scenes' default number of road users per sequence (low, high), which the run simulates with.
+SIMULATED_OBJECTS = (3, 12)
+
 #: Instance ids of a sequence loaded alone start at 0; the run numbers them ``sequence * INSTANCE_STRIDE + id``,
 #: unique across sequences as a whole folder's load numbers them (the filter's error windows name objects by id).
 INSTANCE_STRIDE = 2**32
@@ -105,10 +109,26 @@ INSTANCE_STRIDE = 2**32
 
 def load_sequence(data_dir, number):
     """Load sequence ``number`` of a RadarScenes folder: on a worker of a cluster, the worker reads it."""
-    scenes = load_radarscenes(data_dir, sequences=int(number))
+    return as_sequence(number, _unique_instances(number, load_radarscenes(data_dir, sequences=int(number))))
+
+
+def simulate_sequence(number, seed, duration, difficulty):
+    """Sequence ``number`` of :func:`~sklearn_radar.datasets.make_scenes` (its seed given), simulated where it runs.
+
+    Its rows are those of the same sequence in ``make_scenes`` with the
+    random state that gave ``seed`` (:func:`sequence_seeds`).
+    """
+    knobs = _check_knobs(difficulty, None)
+    description = f"Simulated RadarScenes-layout sequence {number} of {duration:g} s (difficulty {difficulty!r})."
+    scenes = simulate_sequences([number], [seed], duration, SIMULATED_OBJECTS, 1.0, knobs, description)
+    return as_sequence(number, _unique_instances(number, scenes))
+
+
+def _unique_instances(number, scenes):
+    """``scenes`` (one sequence, instances numbered from 0) with instance ids unique across sequences."""
     target = np.asarray(scenes.target, dtype=np.int64)
     scenes.target = np.where(target >= 0, int(number) * INSTANCE_STRIDE + target, -1)
-    return as_sequence(number, scenes)
+    return scenes
 
 
 def _size(sequence):
@@ -170,6 +190,27 @@ class RunSequences:
             warnings.filterwarnings("ignore", message="Sending large graph", category=UserWarning)
             items = [client.submit(as_sequence, number, part, pure=False) for number, part in parts]
         return cls(ids, sizes, items, cluster, n_jobs)
+
+    @classmethod
+    def simulated(cls, n_sequences, duration, random_state, difficulty="realistic", cluster=None, n_jobs=None):
+        """:func:`~sklearn_radar.datasets.make_scenes`'s sequences, each simulated where it lives (on a worker).
+
+        The same detections as ``make_scenes(n_sequences, duration,
+        random_state, difficulty=difficulty)``: each sequence has a seed of
+        its own, drawn first.
+        """
+        numbers = list(range(1, n_sequences + 1))
+        calls = [
+            (number, int(seed), duration, difficulty)
+            for number, seed in zip(numbers, sequence_seeds(random_state, n_sequences), strict=True)
+        ]
+        if cluster is None:
+            items = [simulate_sequence(*call) for call in calls]
+            return cls(numbers, [len(s) for s in items], items, None, n_jobs)
+        client = cluster.client
+        items = [client.submit(simulate_sequence, *call, pure=False) for call in calls]
+        sizes = client.gather([client.submit(_size, item, pure=False) for item in items])
+        return cls(numbers, sizes, items, cluster, n_jobs)
 
     @classmethod
     def from_folder(cls, path, cluster=None, n_jobs=None):
