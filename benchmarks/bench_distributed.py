@@ -224,12 +224,18 @@ print(json.dumps({"peak": peak_rss(), "seconds":
 
 REPRODUCE_PEAK = """
 import io, json, sys, time
-from sklearn_radar._distributed import peak_rss
+from sklearn_radar._distributed import connect_cluster, peak_rss
 from sklearn_radar.reproduce import reproduce
 workers, data, out, steps = int(sys.argv[1]), sys.argv[2], sys.argv[3], sys.argv[4]
 start = time.perf_counter()
-reproduce(data, out, n_iter=2, experiments=steps, stream=io.StringIO(), workers=workers or None)
-print(json.dumps({"peak": peak_rss(), "seconds": time.perf_counter() - start}))
+peaks = {}
+if workers:  # as --workers starts them, the scheduler in this process
+    with connect_cluster(workers=workers) as cluster:
+        reproduce(data, out, n_iter=2, experiments=steps, stream=io.StringIO(), scheduler=cluster.address)
+        peaks = cluster.client.run(peak_rss)
+else:
+    reproduce(data, out, n_iter=2, experiments=steps, stream=io.StringIO())
+print(json.dumps({"peak": peak_rss(), "seconds": time.perf_counter() - start, "workers": peaks}))
 """
 
 
@@ -249,6 +255,8 @@ def reproduce_memory(work, data, detections, steps="filter,1,3,filter-effect"):
         row = json.loads(done.stdout.strip().splitlines()[-1])
         where = "1 process" if not workers else f"--workers {workers} (the command's process: client and scheduler)"
         print(f"  {where}: peak RSS {row['peak'] * mb:7.0f} MB, {row['seconds']:.0f} s", flush=True)
+        for address, peak in sorted(row["workers"].items()):
+            print(f"    worker {address}: peak RSS {peak * mb:7.0f} MB")
     one, two = (_figures(work / f"r-{w}") for w in (0, 2))
     for figures in (one, two):  # the filter effect's measured clustering times differ from run to run
         for side in ("filtered", "unfiltered"):
