@@ -17,6 +17,8 @@ Run: ``python benchmarks/bench_distributed.py`` (about 25 min on 2 idle cores; `
    ``sklearn-radar simulate`` (4 sequences x 30 s), with the saved setting of #8: the whole table in one
    process (what ``cluster`` did before), the stream in one process, and the stream on 2 local workers.
    Peak RSS is each process's ``VmHWM``; the per-sequence task times give the per-detection cost.
+2b. **Memory of reproduce.**  ``reproduce`` (``filter,1,3,filter-effect``, 2 iterations) on the same folder in one
+   process and on 2 local workers: peak RSS of the command's process and of each worker, same results.
 3. **Projection** of ``reproduce --full`` and ``cluster`` on the real RadarScenes data set (158 sequences,
    ~100 M detections) for 8, 32 and 128 workers, from the measured costs, with the arithmetic printed.
 """

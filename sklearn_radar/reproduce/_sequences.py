@@ -215,7 +215,7 @@ class RunSequences:
     @classmethod
     def from_folder(cls, path, cluster=None, n_jobs=None):
         """A RadarScenes folder, loaded sequence by sequence: on a cluster by the workers (same path there)."""
-        data_dir = _resolve_data_dir(Path(path))
+        data_dir = _resolve_data_dir(Path(path)).resolve()  # absolute: the workers' working folder may differ
         _read_sensors_json(data_dir / "sensors.json")  # a malformed folder fails here, before any task
         ids = sorted(_read_sequences_json(data_dir / "sequences.json"))  # a ValueError naming it when empty
         if cluster is None:
