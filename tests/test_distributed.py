@@ -10,12 +10,15 @@ import os
 import socket
 import subprocess
 import sys
+import time
+from pathlib import Path
 
 import numpy as np
 import pytest
 
 from sklearn_radar._cli import main
-from sklearn_radar.datasets import load_radarscenes
+from sklearn_radar._distributed import connect_cluster
+from sklearn_radar.datasets import load_radarscenes, make_scenes
 from sklearn_radar.experiments import experiment_pipeline
 from sklearn_radar.reproduce import cluster_radarscenes, load_params, reproduce, write_predictions
 
@@ -420,3 +423,53 @@ def test_a_worker_killed_mid_search_loses_nothing(tiny_folder, single_process_ru
     assert len(json.loads(done.stdout.strip().splitlines()[-1])) == 1, "no worker was killed during the search"
     assert _figures(out) == _figures(reference)
     assert json.loads((out / "run.json").read_text())["complete"] is True
+
+
+def _nap(seconds, folder, k, *data):
+    time.sleep(seconds)
+    (Path(folder) / f"nap-{k}").touch()  # the naps done so far, for the test to count
+
+
+def _block(k):
+    return k
+
+
+def _search_like(n_tasks, seconds, folder):
+    """Queue ``n_tasks`` naps from a worker, as a search's loop queues its candidates, and wait for them.
+
+    Like the candidates, the naps work on data placed on the workers, more
+    than 5 pieces (dask would otherwise hold them back as root tasks).
+    """
+    from distributed import worker_client
+
+    with worker_client() as client:
+        blocks = [client.submit(_block, k, pure=False) for k in range(6)]
+        naps = [client.submit(_nap, seconds, folder, k, *blocks, pure=False) for k in range(n_tasks)]
+        (Path(folder) / "queued").touch()
+        client.gather(naps)
+    return n_tasks
+
+
+def _sequence_length(sequence):
+    return len(sequence)
+
+
+def test_a_steps_tasks_go_ahead_of_queued_search_tasks(local_cluster, tmp_path):
+    # The run's steps wait for their per-sequence tasks one after the other, while the concurrent searches keep
+    # the workers' queue full: a step's tasks must not wait for that whole queue.
+    from sklearn_radar.reproduce._sequences import RunSequences
+
+    scenes = make_scenes(n_sequences=2, duration=1.0, random_state=0)
+    with connect_cluster(scheduler=local_cluster.scheduler_address) as cluster:
+        sequences = RunSequences.from_scenes(scenes, cluster)
+        sequences.map(_sequence_length)  # placed before the queue fills
+        # Queued from a task, as the concurrent searches queue their candidates: dask ranks such sub-tasks ahead of
+        # anything the command submits later, unless the command's tasks have a higher priority.
+        search = cluster.client.submit(_search_like, 30, 0.2, str(tmp_path), pure=False)
+        while not (tmp_path / "queued").exists():
+            time.sleep(0.05)
+        lengths = sequences.map(_sequence_length)
+        waiting = 30 - len(list(tmp_path.glob("nap-*")))
+        assert search.result() == 30
+    assert lengths == sequences.sizes
+    assert waiting > 10  # most of the queue (3 s of naps on 2 workers) was still ahead when the step finished

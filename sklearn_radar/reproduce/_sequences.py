@@ -99,6 +99,9 @@ def as_sequence(number, scenes):
     return Sequence(id=int(number), scenes=scenes, target=precluster_target(scenes.data, scenes.target))
 
 
+#: dask priority of a step's per-sequence tasks (:meth:`RunSequences.map`); a search's candidates have 0.
+STEP_PRIORITY = 10
+
 #: make_scenes' default number of road users per sequence (low, high), which the run simulates with.
 SIMULATED_OBJECTS = (3, 12)
 
@@ -262,7 +265,11 @@ class RunSequences:
             # joblib's processes would cost as much as it saves on 2 cores.
             return [function(self.items[i], *args) for i in ids]
         client = self.cluster.client
-        return client.gather([client.submit(_apply, function, self.items[i], args, pure=False) for i in ids])
+        # Ahead of the searches' queued candidates: the run's steps wait for these, one after the other.
+        futures = [
+            client.submit(_apply, function, self.items[i], args, pure=False, priority=STEP_PRIORITY) for i in ids
+        ]
+        return client.gather(futures)
 
     def fetch(self, number):
         """Sequence ``number`` here (from its worker on a cluster), e.g. to draw it."""
