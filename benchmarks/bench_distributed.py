@@ -4,8 +4,8 @@ Run: ``python benchmarks/bench_distributed.py`` (about 25 min on 2 idle cores; `
 ``concurrent``, ``memory`` or ``projection`` run parts; ``--repeats``, ``--n-iter``, ``--search-scales``,
 ``--scale`` change the sizes).  Needs the ``[distributed]`` extra.
 
-1. **Speed-up of one search.**  The search of #8 (``--n-iter`` 100 candidates, 30 random, 3 grouped folds,
-   ``n_points`` 1) as ``reproduce`` runs it (:mod:`sklearn_radar.reproduce._search`), on the default run's
+1. **Speed-up of one search.**  The search of #8 (or ``--search-experiment``; ``--n-iter`` 100 candidates, 30
+   random, 3 grouped folds, ``n_points`` 1) as ``reproduce`` runs it (:mod:`sklearn_radar.reproduce._search`), on the default run's
    training half (2 simulated sequences x 20 s) times each of ``--search-scales``: in one process and on 2
    local worker processes (``--workers 2``), interleaved ``--repeats`` times.  The clock runs from the first
    candidate to the last (stage 0 done before; no cluster start-up, no data placement).  Both must find the
@@ -108,8 +108,8 @@ def _timed_search(data, searched, space, folds, n_iter):
     return time.perf_counter() - start, clock.times, found.scores
 
 
-def speedup(scales, n_iter, repeats):
-    """Part 1: a search of #8 in one process and on 2 local workers, at several data sizes."""
+def speedup(scales, n_iter, repeats, number=8):
+    """Part 1: a search of ``number`` (#8) in one process and on 2 local workers, at several data sizes."""
     from distributed import wait
     from threadpoolctl import threadpool_limits
 
@@ -119,7 +119,7 @@ def speedup(scales, n_iter, repeats):
     from sklearn_radar.reproduce._search import SearchData, sequence_folds
 
     print(
-        f"## 1. Speed-up: a {n_iter}-iteration search of #8 (30 random candidates, then guided), "
+        f"## 1. Speed-up: a {n_iter}-iteration search of #{number} (30 random candidates, then guided), "
         "1 process against 2 local worker processes"
     )
     print("  the training half of the default run (2 sequences x 20 s) times the scale; 3 grouped folds\n")
@@ -129,8 +129,8 @@ def speedup(scales, n_iter, repeats):
     with connect_cluster(workers=2) as cluster, threadpool_limits(limits=1, user_api="blas"):
         for scale in scales:
             X, target, groups = _training_half(scale)
-            stage0, searched, prefix = _fixed_stage0(experiment_pipeline(8), search_space(8))
-            space = {key[len(prefix) :]: dimension for key, dimension in search_space(8).items()}
+            stage0, searched, prefix = _fixed_stage0(experiment_pipeline(number), search_space(number))
+            space = {key[len(prefix) :]: dimension for key, dimension in search_space(number).items()}
             folds = sequence_folds(groups, 3)
             times = {"1 process": [], "2 workers": []}
             steps, scores = {}, {}
@@ -430,6 +430,9 @@ def main():
         "--search-scales", default="1,4,16,64", help="data sizes of the speed-up part, x the default training half"
     )
     parser.add_argument(
+        "--search-experiment", type=int, default=8, help="the stage-1 experiment the speed-up part searches"
+    )
+    parser.add_argument(
         "--search-row",
         help="JSON of a speed-up row printed by an earlier run ('row: {...}'): the projection uses it instead of "
         "measuring again (e.g. with --parts memory,projection)",
@@ -442,7 +445,8 @@ def main():
         if args.search_row:
             rows = [json.loads(args.search_row)]
         if "speedup" in parts or ("projection" in parts and not args.search_row):
-            rows = speedup([int(text) for text in args.search_scales.split(",")], args.n_iter, args.repeats)
+            scales = [int(text) for text in args.search_scales.split(",")]
+            rows = speedup(scales, args.n_iter, args.repeats, args.search_experiment)
         if "concurrent" in parts:
             concurrent(work, args.n_iter)
         if parts & {"memory", "projection"}:
