@@ -5,12 +5,12 @@ Run: ``python benchmarks/bench_distributed.py`` (about 25 min on 2 idle cores; `
 ``--scale`` change the sizes).  Needs the ``[distributed]`` extra.
 
 1. **Speed-up of one search.**  The search of #8 (or ``--search-experiment``; ``--n-iter`` 100 candidates, 30
-   random, 3 grouped folds, ``n_points`` 1) as ``reproduce`` runs it (:mod:`sklearn_radar.reproduce._search`),
-   on the default run's training half (2 simulated sequences x 20 s) times each of ``--search-scales``: in one
-   process and on 2 local worker processes (``--workers 2``), interleaved ``--repeats`` times.  The clock runs from the first
-   candidate to the last (stage 0 done before; no cluster start-up, no data placement).  Both must find the
-   same scores (checked).  The step times give E (a candidate's evaluation: the random steps) and g (the
-   Gaussian process: guided steps minus E), hence Amdahl's bound.
+   random, 3 grouped folds, ``n_points`` 1) as ``reproduce`` runs it (:mod:`sklearn_radar.reproduce._search`), on
+   the default run's training half (2 simulated sequences x 20 s) times each of ``--search-scales``: in one process
+   and on 2 local worker processes (``--workers 2``), interleaved ``--repeats`` times.  The clock runs from the
+   first candidate to the last (stage 0 done before; no cluster start-up, no data placement).  Both must find the
+   same scores (checked).  The step times give E (a candidate's evaluation: the random steps) and g (the Gaussian
+   process: guided steps minus E), hence Amdahl's bound.
 1b. **Concurrent searches.**  ``reproduce --experiments 2-9`` on the default data, 1 process against
    ``--workers 2``, where the 8 independent searches run at once: whole-run wall time, same figures.
 2. **Memory.**  ``cluster`` of a simulated data set ``--scale`` (10) times the default size of
