@@ -18,7 +18,7 @@ import pytest
 
 from sklearn_radar._cli import main
 from sklearn_radar._distributed import connect_cluster
-from sklearn_radar.datasets import load_radarscenes, make_scenes
+from sklearn_radar.datasets import load_radarscenes
 from sklearn_radar.experiments import experiment_pipeline
 from sklearn_radar.reproduce import cluster_radarscenes, load_params, reproduce, write_predictions
 
@@ -459,9 +459,8 @@ def test_a_steps_tasks_go_ahead_of_queued_search_tasks(local_cluster, tmp_path):
     # the workers' queue full: a step's tasks must not wait for that whole queue.
     from sklearn_radar.reproduce._sequences import RunSequences
 
-    scenes = make_scenes(n_sequences=2, duration=1.0, random_state=0)
     with connect_cluster(scheduler=local_cluster.scheduler_address) as cluster:
-        sequences = RunSequences.from_scenes(scenes, cluster)
+        sequences = RunSequences.simulated(2, 1.0, 0, cluster=cluster)
         sequences.map(_sequence_length)  # placed before the queue fills
         # Queued from a task, as the concurrent searches queue their candidates: dask ranks such sub-tasks ahead of
         # anything the command submits later, unless the command's tasks have a higher priority.

@@ -593,7 +593,7 @@ def test_tune_searches_exactly_as_the_plain_pipeline_search(number):
         stream=io.StringIO(),
         results=SimpleNamespace(meta=SimpleNamespace(objective="v1")),
     )
-    sequences = RunSequences.from_scenes(scenes)
+    sequences = RunSequences.simulated(4, 3.0, 5)  # the sequences of scenes, simulated one by one
     context = SimpleNamespace(sequences=sequences, train=sequences.ids[:3])
     best, record = _tune(run, context, pipeline, space, "test")
 

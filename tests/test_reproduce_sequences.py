@@ -12,10 +12,19 @@ from sklearn_radar.model_selection import sequence_train_test_split
 from sklearn_radar.reproduce._search import SearchData, candidate_scores, sequence_folds
 from sklearn_radar.reproduce._sequences import LABEL_COLUMNS, RunSequences
 
+#: The fixtures' simulation: make_scenes(n_sequences=4, duration=3.0, random_state=5), whole and per sequence.
+SIMULATION = (4, 3.0, 5)
+
 
 @pytest.fixture(scope="module")
 def scenes():
-    return make_scenes(n_sequences=4, duration=3.0, random_state=5)
+    n_sequences, duration, seed = SIMULATION
+    return make_scenes(n_sequences=n_sequences, duration=duration, random_state=seed)
+
+
+@pytest.fixture(scope="module")
+def sequences():
+    return RunSequences.simulated(*SIMULATION)
 
 
 def _same_partition(a, b):
@@ -24,36 +33,17 @@ def _same_partition(a, b):
     return np.all((table > 0).sum(axis=0) == 1) and np.all((table > 0).sum(axis=1) == 1)
 
 
-def test_sequences_hold_every_row_once_with_the_whole_tables_values(scenes):
-    sequences = RunSequences.from_scenes(scenes)
-    groups = np.asarray(scenes.groups)
-    assert sequences.ids == sorted(np.unique(groups).tolist())
-    assert sequences.sizes == [int((groups == i).sum()) for i in sequences.ids]
-    assert sequences.n_detections == len(scenes.data)
-    joined = pd.concat([sequences.fetch(i).scenes.data for i in sequences.ids], ignore_index=True)
-    pd.testing.assert_frame_equal(joined, scenes.data.reset_index(drop=True))
-    whole_target = precluster_target(scenes.data, scenes.target)
-    for i in sequences.ids:
-        rows = groups == i
-        sequence = sequences.fetch(i)
-        np.testing.assert_array_equal(sequence.scenes.target, np.asarray(scenes.target)[rows])
-        assert _same_partition(sequence.target, whole_target[rows])
-        assert not set(LABEL_COLUMNS) & set(sequence.X.columns)
-        assert (sequence.scenes.odometry["sequence"] == i).all() and len(sequence.scenes.odometry)
-
-
 @pytest.mark.parametrize("seed", [0, 1, 7])
-def test_split_equals_sequence_train_test_split(scenes, seed):
-    train, test = RunSequences.from_scenes(scenes).split(random_state=seed)
+def test_split_equals_sequence_train_test_split(scenes, sequences, seed):
+    train, test = sequences.split(random_state=seed)
     train_rows, test_rows = sequence_train_test_split(scenes.groups, random_state=seed)
     assert train == sorted(np.unique(scenes.groups[train_rows]).tolist())
     assert test == sorted(np.unique(scenes.groups[test_rows]).tolist())
 
 
 def test_one_sequence_cannot_be_split():
-    one = make_scenes(n_sequences=1, duration=1.0, random_state=0)
     with pytest.raises(ValueError, match="at least 2 sequences"):
-        RunSequences.from_scenes(one).split(random_state=0)
+        RunSequences.simulated(1, 1.0, 0).split(random_state=0)
 
 
 def test_a_folder_loads_per_sequence_as_the_whole_folder_does(tiny_folder):
@@ -79,8 +69,7 @@ def test_a_folder_without_sequences_is_named(tmp_path, tiny_folder):
         RunSequences.from_folder(tmp_path)
 
 
-def test_search_data_scores_candidates_as_the_whole_table_does(scenes):
-    sequences = RunSequences.from_scenes(scenes)
+def test_search_data_scores_candidates_as_the_whole_table_does(scenes, sequences):
     train = sequences.ids[:3]
     rows = np.isin(scenes.groups, train)
     X = scenes.data.loc[rows, [c for c in scenes.data.columns if c not in LABEL_COLUMNS]]
@@ -97,8 +86,7 @@ def _sizes_and_ids(sequence, extra):
     return sequence.id, len(sequence), extra
 
 
-def test_map_runs_in_order_on_the_sequences_asked_for(scenes):
-    sequences = RunSequences.from_scenes(scenes)
+def test_map_runs_in_order_on_the_sequences_asked_for(sequences):
     asked = [sequences.ids[2], sequences.ids[0]]
     found = sequences.map(_sizes_and_ids, asked, "x")
     assert found == [(i, sequences.size([i]), "x") for i in asked]
@@ -120,6 +108,9 @@ def test_sequences_simulated_one_by_one_are_make_scenes_ones(difficulty):
         pd.testing.assert_frame_equal(
             sequence.scenes.odometry, whole.odometry[whole.odometry["sequence"] == i].reset_index(drop=True)
         )
+        assert not set(LABEL_COLUMNS) & set(sequence.X.columns)
         ids = set(np.unique(sequence.scenes.target[sequence.scenes.target >= 0]).tolist())
         assert not ids & objects
         objects |= ids
+    assert sequences.sizes == [int((whole.groups == i).sum()) for i in sequences.ids]
+    assert sequences.n_detections == len(whole.data)

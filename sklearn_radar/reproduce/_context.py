@@ -62,5 +62,10 @@ class RunContext:
     prepared: dict[str, Any] = field(default_factory=dict)
     pending: dict[Any, Any] = field(default_factory=dict)
 
+    @property
+    def drawn_sequence(self):
+        """The test sequence the figures draw (the first), and whose labels :attr:`labels` keeps."""
+        return self.test[0]
+
 
 __all__ = ["RunContext"]

@@ -695,7 +695,7 @@ def _score(context, pipeline):
     sequences = context.sequences
     if sequences.cluster is not None:
         pipeline = _without_cache(pipeline)
-    drawn = _drawn_sequence(context)
+    drawn = context.drawn_sequence
     parts = sequences.map(_score_sequence, context.test, pipeline, drawn)
     v1 = combine_parts("v1", [p["v1"] for p in parts])
     scores = combine_instance_parts([p["instance"] for p in parts])
@@ -703,11 +703,6 @@ def _score(context, pipeline):
     found = {name: _sum_or_none([p[name] for p in parts]) for name in ("n_clusters", "n_merges", "n_stage1")}
     found["labels"] = next(p["labels"] for p in parts if p["labels"] is not None)
     return v1, found, instance
-
-
-def _drawn_sequence(context):
-    """The test sequence the figures draw: the first."""
-    return context.test[0]
 
 
 def _sum_or_none(values):

@@ -18,7 +18,6 @@ the whole data set in one place:
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -70,30 +69,6 @@ class Sequence:
         return len(self.scenes.data)
 
 
-def split_scenes(scenes):
-    """The Bunch ``scenes`` as one Bunch per sequence, in increasing sequence number."""
-    groups = np.asarray(scenes.groups)
-    odometry = scenes.get("odometry")
-    table = scenes.get("sequences")
-    parts = []
-    for number in np.unique(groups):
-        rows = np.flatnonzero(groups == number)
-        part = Bunch(
-            data=scenes.data.iloc[rows].reset_index(drop=True),
-            target=np.asarray(scenes.target)[rows],
-            groups=groups[rows],
-        )
-        if odometry is not None:
-            part.odometry = odometry[odometry["sequence"] == number].reset_index(drop=True)
-        if table is not None:
-            part.sequences = table[table["sequence"] == number].reset_index(drop=True)
-        for key in ("sensors", "DESCR"):
-            if key in scenes:
-                part[key] = scenes[key]
-        parts.append((int(number), part))
-    return parts
-
-
 def as_sequence(number, scenes):
     """:class:`Sequence` of one sequence's Bunch (its target pre-clustered here: where the data is)."""
     return Sequence(id=int(number), scenes=scenes, target=precluster_target(scenes.data, scenes.target))
@@ -138,10 +113,6 @@ def _size(sequence):
     return len(sequence)
 
 
-def _identity(value):
-    return value
-
-
 def _apply(function, sequence, args):
     return function(sequence, *args)
 
@@ -174,25 +145,6 @@ class RunSequences:
         self.items = dict(zip(self.ids, items, strict=True))
         self.cluster = cluster
         self.n_jobs = n_jobs
-
-    @classmethod
-    def from_scenes(cls, scenes, cluster=None, n_jobs=None):
-        """A data Bunch held here (simulated data), split by sequence; on a cluster placed on the workers.
-
-        The caller should drop ``scenes`` afterwards: on a cluster the
-        sequences then live on the workers only.
-        """
-        parts = split_scenes(scenes)
-        ids = [number for number, _ in parts]
-        sizes = [len(part.data) for _, part in parts]
-        if cluster is None:
-            return cls(ids, sizes, [as_sequence(number, part) for number, part in parts], None, n_jobs)
-        client = cluster.client
-        with warnings.catch_warnings():
-            # The data travels once, as a task's input (not scattered), so that a lost worker loses nothing.
-            warnings.filterwarnings("ignore", message="Sending large graph", category=UserWarning)
-            items = [client.submit(as_sequence, number, part, pure=False) for number, part in parts]
-        return cls(ids, sizes, items, cluster, n_jobs)
 
     @classmethod
     def simulated(cls, n_sequences, duration, random_state, difficulty="realistic", cluster=None, n_jobs=None):

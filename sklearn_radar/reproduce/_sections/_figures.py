@@ -228,7 +228,7 @@ def _scene_figure(plt, path, results, context):
     """Raw data, target, the FCS baseline (#3, or the first experiment run) and the best experiment, one sequence."""
     from ...preprocessing import FrameTransform
 
-    sequence = context.sequences.fetch(context.test[0])
+    sequence = context.sequences.fetch(context.drawn_sequence)
     data = FrameTransform().fit_transform(sequence.X)
     baseline, best = scene_panels(results)
     panels = [

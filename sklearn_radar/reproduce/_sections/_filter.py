@@ -172,7 +172,7 @@ def _filter_scene(plt, path, context):
     """One test sequence in FCS: kept, removed background and removed object detections at the chosen setting."""
     from ...preprocessing import DopplerDensityFilter, FrameTransform
 
-    drawn = context.sequences.fetch(context.test[0])
+    drawn = context.sequences.fetch(context.drawn_sequence)
     sequence = drawn.id
     prepared = FrameTransform(frame="frame").fit_transform(drawn.scenes.data)
     keep = DopplerDensityFilter(vr_threshold=CHOSEN[0], d_xy=CHOSEN[1]).fit_transform(prepared)["keep"]
