@@ -449,6 +449,11 @@ def _check_common(X, target, threshold_ratios, min_neighbors):
     return target, ratios, n_min
 
 
+#: Table I's axes: Doppler thresholds eta_1 (m/s) and radii d_xy (m), the defaults of :func:`filter_grid`.
+TABLE_I_VR_THRESHOLDS = (0.05, 0.10, 0.15, 0.20, 0.25, 0.30, 0.35)
+TABLE_I_D_XYS = (0.8, 1.0, 1.2, 1.4, 1.6, 1.8, 2.0)
+
+
 @validate_params(
     {"vr_thresholds": ["array-like"], "d_xys": ["array-like"]} | _EVALUATION_CONSTRAINTS,
     prefer_skip_nested_validation=True,
@@ -456,8 +461,8 @@ def _check_common(X, target, threshold_ratios, min_neighbors):
 def filter_grid(
     X,
     target,
-    vr_thresholds=(0.05, 0.10, 0.15, 0.20, 0.25, 0.30, 0.35),
-    d_xys=(0.8, 1.0, 1.2, 1.4, 1.6, 1.8, 2.0),
+    vr_thresholds=TABLE_I_VR_THRESHOLDS,
+    d_xys=TABLE_I_D_XYS,
     *,
     frame="frame",
     dt=0.25,

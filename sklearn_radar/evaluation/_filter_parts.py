@@ -49,6 +49,8 @@ from sklearn.utils._param_validation import Interval, validate_params
 from ._filter import (
     _EVALUATION_CONSTRAINTS,
     _WINDOW_CONSTRAINTS,
+    TABLE_I_D_XYS,
+    TABLE_I_VR_THRESHOLDS,
     _as_keep,
     _as_target,
     _grid_counts,
@@ -179,12 +181,6 @@ def _sequences(sequence):
     return None if sequence is None else np.unique(sequence)
 
 
-_GRID_DEFAULTS = {
-    "vr_thresholds": (0.05, 0.10, 0.15, 0.20, 0.25, 0.30, 0.35),
-    "d_xys": (0.8, 1.0, 1.2, 1.4, 1.6, 1.8, 2.0),
-}
-
-
 @validate_params(
     {"vr_thresholds": ["array-like"], "d_xys": ["array-like"]} | _EVALUATION_CONSTRAINTS | _TIME_EPS_CONSTRAINT,
     prefer_skip_nested_validation=True,
@@ -192,8 +188,8 @@ _GRID_DEFAULTS = {
 def filter_grid_parts(
     X,
     target,
-    vr_thresholds=_GRID_DEFAULTS["vr_thresholds"],
-    d_xys=_GRID_DEFAULTS["d_xys"],
+    vr_thresholds=TABLE_I_VR_THRESHOLDS,
+    d_xys=TABLE_I_D_XYS,
     *,
     frame="frame",
     dt=0.25,
