@@ -65,32 +65,8 @@ def scene_statistics(bunch, range_bins=RANGE_BINS):
     >>> summary["n_sequences"]
     1
     """
-    data, target = bunch.data, np.asarray(bunch.target)
-    spans = data.groupby("sequence")["timestamp"].agg(["min", "max"])
-    duration = float(((spans["max"] - spans["min"]) * 1e-6).sum())
-    scans = data.groupby(["sequence", "timestamp"]).ngroups
-    is_object = target >= 0
-    objects, per_scan = _object_scans(data, target, range_bins)
-    table = per_scan.pivot_table(index="class", columns="range_bin", values="count", aggfunc="mean", observed=False)
-    per_sequence = objects.groupby("sequence")["instance"].nunique()
-    n_instances = len(np.unique(target[is_object]))
-    mix = objects["label_id"].map(LABELS).value_counts(normalize=True).sort_index()
-    summary = {
-        "n_detections": len(data),
-        "n_sequences": int(data["sequence"].nunique()),
-        "duration_s": duration,
-        "detections_per_second": len(data) / duration if duration > 0 else float("nan"),
-        "scans": int(scans),
-        "detections_per_scan": len(data) / max(scans, 1),
-        "static_share": float(np.mean(target == -1)) if len(target) else float("nan"),
-        "annotated_per_scan": int(is_object.sum()) / max(scans, 1),
-        "instances": n_instances,
-        "objects_per_sequence": float(per_sequence.mean()) if len(objects) else 0.0,
-        "instances_per_minute": 60 * n_instances / duration if duration > 0 else float("nan"),
-        "annotated_per_instance": int(is_object.sum()) / n_instances if n_instances else float("nan"),
-        "class_mix": {str(name): float(share) for name, share in mix.items()},
-    }
-    return summary, table
+    # The whole data set as one part: one implementation of the figures for it and for merged parts.
+    return combine_statistics([statistics_parts(bunch, range_bins)])
 
 
 @validate_params({"summary": [dict], "table": [pd.DataFrame]}, prefer_skip_nested_validation=True)
