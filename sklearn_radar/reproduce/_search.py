@@ -173,12 +173,10 @@ class SearchData:
 
     def parts(self, estimator, candidates, objective):
         """``candidate_parts`` of every candidate on every sequence: per candidate, in :attr:`sequence_ids` order."""
-        calls = [(estimator, params, block, objective) for params in candidates for block in self.blocks]
         if self.cluster is not None:
-            client = self.cluster.client
-            per_block = client.gather([client.submit(block_parts, *call, pure=False) for call in calls])
-        else:
-            per_block = self._map(block_parts, calls)
+            return list(self.iter_parts(estimator, candidates, objective))
+        calls = [(estimator, params, block, objective) for params in candidates for block in self.blocks]
+        per_block = self._map(block_parts, calls)
         n = len(self.blocks)
         return [[part for block in per_block[i * n : (i + 1) * n] for part in block] for i in range(len(candidates))]
 
