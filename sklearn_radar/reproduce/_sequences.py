@@ -159,13 +159,7 @@ class RunSequences:
             (number, int(seed), duration, difficulty)
             for number, seed in zip(numbers, sequence_seeds(random_state, n_sequences), strict=True)
         ]
-        if cluster is None:
-            items = [simulate_sequence(*call) for call in calls]
-            return cls(numbers, [len(s) for s in items], items, None, n_jobs)
-        client = cluster.client
-        items = [client.submit(simulate_sequence, *call, pure=False) for call in calls]
-        sizes = client.gather([client.submit(_size, item, pure=False) for item in items])
-        return cls(numbers, sizes, items, cluster, n_jobs)
+        return cls._made(numbers, simulate_sequence, calls, cluster, n_jobs)
 
     @classmethod
     def from_folder(cls, path, cluster=None, n_jobs=None):
@@ -173,11 +167,16 @@ class RunSequences:
         data_dir = _resolve_data_dir(Path(path)).resolve()  # absolute: the workers' working folder may differ
         _read_sensors_json(data_dir / "sensors.json")  # a malformed folder fails here, before any task
         ids = sorted(_read_sequences_json(data_dir / "sequences.json"))  # a ValueError naming it when empty
+        return cls._made(ids, load_sequence, [(str(data_dir), number) for number in ids], cluster, n_jobs)
+
+    @classmethod
+    def _made(cls, ids, make, calls, cluster, n_jobs):
+        """The sequences ``make(*call)``, here or each as a task's result on a worker (computed again if it is lost)."""
         if cluster is None:
-            items = [load_sequence(data_dir, number) for number in ids]
+            items = [make(*call) for call in calls]
             return cls(ids, [len(s) for s in items], items, None, n_jobs)
         client = cluster.client
-        items = [client.submit(load_sequence, str(data_dir), number, pure=False) for number in ids]
+        items = [client.submit(make, *call, pure=False) for call in calls]
         sizes = client.gather([client.submit(_size, item, pure=False) for item in items])
         return cls(ids, sizes, items, cluster, n_jobs)
 
@@ -238,8 +237,7 @@ class RunSequences:
         ids = sorted(int(i) for i in ids)
         if self.cluster is None:
             return SearchData([_search_block([self.items[i]]) for i in ids], [[i] for i in ids], None, self.n_jobs)
-        sizes = dict(zip(self.ids, self.sizes, strict=True))
-        positions = balanced_blocks([sizes[i] for i in ids], self.cluster.n_threads)
+        positions = balanced_blocks([self.size([i]) for i in ids], self.cluster.n_threads)
         client = self.cluster.client
         blocks = [client.submit(_search_block, [self.items[ids[p]] for p in block], pure=False) for block in positions]
         return SearchData(blocks, [[ids[p] for p in block] for block in positions], self.cluster, self.n_jobs)
