@@ -823,8 +823,11 @@ class ClusteringCost:
     Attributes
     ----------
     clustering_s : float
-        Best of three clustering times, s.
+        Clustering time of the test half, s: each test sequence's best of
+        three clustering runs (stage 0 done before), summed over the
+        sequences.
     n_clusters : int
+        Clusters, summed over the test sequences.
     """
 
     clustering_s: float
