@@ -11,6 +11,14 @@ from sklearn.utils.validation import check_is_fitted
 
 from .._schema import FRAME_TRANSFORM_READS
 from .._validation import read_columns, write_columns
+from ._output_names import feature_names_out, work_array_width
+
+#: The working columns added to a DataFrame, in the order they are appended.
+WORKING_COLUMNS = ("x", "y", "v_r", "t", "heading")
+#: Raw columns copied into the working-layout array (Eq. 2 needs the range, Eq. 6 the line of sight).
+_LINE_OF_SIGHT = ("range_sc", "azimuth_sc", "sensor_yaw")
+#: The columns written into the working-layout array returned for an array.
+_ARRAY_COLUMNS = (*WORKING_COLUMNS, "sequence", *_LINE_OF_SIGHT)
 
 
 class FrameTransform(TransformerMixin, BaseEstimator):
@@ -124,10 +132,35 @@ class FrameTransform(TransformerMixin, BaseEstimator):
             work = self._working_columns(c)
         _check_finite(work, c)
         if hasattr(X, "columns"):
-            return write_columns(X, work)
+            return write_columns(X, {name: work[name] for name in WORKING_COLUMNS})
         sequence = c["sequence"] if c["sequence"] is not None else np.zeros(len(work["x"]))
-        line_of_sight = {"range_sc": c["range_sc"], "azimuth_sc": c["azimuth_sc"], "sensor_yaw": c["sensor_yaw"]}
+        line_of_sight = {name: c[name] for name in _LINE_OF_SIGHT}
         return write_columns(np.empty((len(work["x"]), 0)), {**work, "sequence": sequence, **line_of_sight})
+
+    def get_feature_names_out(self, input_features=None):
+        """Names of the columns :meth:`transform` returns, as ``set_output`` uses them.
+
+        Parameters
+        ----------
+        input_features : array-like of str or None, default=None
+            The input columns.  None: those seen in :meth:`fit`
+            (``feature_names_in_``), or ``x0, x1, ...`` for an array.  If
+            given, they must equal ``feature_names_in_`` (DataFrame fit) or
+            number ``n_features_in_`` (array fit).
+
+        Returns
+        -------
+        feature_names_out : ndarray of str objects
+            Fitted on a DataFrame: its columns, then those of ``x, y, v_r, t,
+            heading`` it did not hold.  Fitted on an array:
+            :data:`~sklearn_radar._schema.WORK_LAYOUT`, ``x, y, v_r, t,
+            sequence, keep, range_sc, heading, azimuth_sc, sensor_yaw``,
+            whatever ``input_features`` are.
+        """
+        check_is_fitted(self)
+        return feature_names_out(
+            self, input_features, added=WORKING_COLUMNS, array_width=work_array_width(0, _ARRAY_COLUMNS)
+        )
 
     def _working_columns(self, c):
         """x, y (m), v_r (m/s), t (s) and heading (rad) from the raw columns ``c``."""
