@@ -236,6 +236,12 @@ class DopplerDensityFilter(TransformerMixin, BaseEstimator):
     (absent columns: y = v_r = t = sequence = 0) and the result carries
     ``keep`` (1.0 or 0.0) at its position there, 5.
 
+    Output containers follow scikit-learn's ``set_output`` API as for
+    :class:`FrameTransform`: under ``"default"`` a DataFrame comes back as a
+    DataFrame (``keep`` boolean) and an array as an array (``keep`` 1.0 or
+    0.0); under ``"pandas"`` an array result becomes a DataFrame with the
+    columns of :meth:`get_feature_names_out` and a ``RangeIndex``.
+
     Examples
     --------
     >>> from sklearn.pipeline import make_pipeline

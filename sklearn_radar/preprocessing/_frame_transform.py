@@ -76,6 +76,20 @@ class FrameTransform(TransformerMixin, BaseEstimator):
     range_sc, heading, azimuth_sc, sensor_yaw]`` (keep = 1) that the later
     stages read by position (:data:`~sklearn_radar._schema.WORK_LAYOUT`).
 
+    The output container follows scikit-learn's ``set_output`` API.  Under
+    ``"default"`` (also when nothing is set) the result is what
+    :meth:`transform` makes: a DataFrame for a DataFrame, an array for an
+    array.  ``set_output(transform="pandas")``, or
+    ``sklearn.set_config(transform_output="pandas")``, also returns the array
+    result as a DataFrame, with the columns of :meth:`get_feature_names_out`
+    and a ``RangeIndex``; the later stages read it by name.  A DataFrame
+    result is the same under both settings.  ``"polars"`` needs polars
+    (without it, scikit-learn raises an ImportError); the later stages read
+    pandas DataFrames by name, anything else by position.  Fit and transform
+    the same kind of container: :meth:`get_feature_names_out` names the
+    result of the kind seen in :meth:`fit`, and the pandas wrapper raises a
+    ValueError when the widths differ.
+
     Examples
     --------
     >>> from sklearn_radar import FrameTransform
@@ -84,6 +98,15 @@ class FrameTransform(TransformerMixin, BaseEstimator):
     >>> Xt = FrameTransform(frame="frame").fit_transform(X)
     >>> bool(abs(Xt["x"] - X["x_seq"]).max() < 1e-3)
     True
+
+    A plain array comes back as a DataFrame of the working columns under
+    pandas output:
+
+    >>> import numpy as np
+    >>> raw = np.array([[10.0, 0.0, -1.0, 0.0], [20.0, 0.5, 2.0, 60_000.0]])
+    >>> ft = FrameTransform().set_output(transform="pandas")
+    >>> ft.fit_transform(raw).columns.tolist()
+    ['x', 'y', 'v_r', 't', 'sequence', 'keep', 'range_sc', 'heading', 'azimuth_sc', 'sensor_yaw']
     """
 
     _parameter_constraints: ClassVar[dict] = {"frame": [StrOptions({"frame", "car"})]}

@@ -317,3 +317,14 @@ def test_a_column_transformer_limitations_default_output_and_prefixed_names(raw_
     assert "frame__x" in prefixed.fit_transform(raw_frame)
     with pytest.raises(ValueError, match="missing the column"):
         make_pipeline(prefixed, DopplerDensityFilter()).fit_transform(raw_frame)
+
+
+def test_fitting_and_transforming_different_containers_never_mislabels_columns(raw_frame, raw_array):
+    # Documented: the names describe the container seen in fit.  A different one at transform (scikit-learn warns)
+    # gives a result of another width, which the pandas wrapper refuses to rename rather than mislabel.
+    fitted_on_frame = FrameTransform().set_output(transform="pandas").fit(raw_frame[list(RAW_LAYOUT.columns)])
+    with pytest.warns(UserWarning, match="feature names"), pytest.raises(ValueError):
+        fitted_on_frame.transform(raw_array)
+    fitted_on_array = FrameTransform().set_output(transform="pandas").fit(raw_array)
+    with pytest.warns(UserWarning, match="feature names"), pytest.raises(ValueError):
+        fitted_on_array.transform(raw_frame)
