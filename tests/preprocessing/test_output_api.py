@@ -19,7 +19,7 @@ import importlib.util
 import numpy as np
 import pandas as pd
 import pytest
-from sklearn import config_context
+from sklearn import clone, config_context
 from sklearn.compose import ColumnTransformer
 from sklearn.exceptions import NotFittedError
 from sklearn.pipeline import make_pipeline
@@ -275,6 +275,12 @@ def test_the_baselines_read_the_working_columns_as_a_dataframe(baseline, raw_arr
     as_frame = stage0.set_output(transform="pandas").fit_transform(raw_array)
     assert isinstance(as_frame, pd.DataFrame) and "range_sc" in as_frame and "vr" not in as_frame
     np.testing.assert_array_equal(baseline.fit_predict(as_frame), baseline.fit_predict(as_array))
+
+
+def test_a_cloned_pipeline_keeps_its_pandas_output(raw_array):
+    # Search objects and cross-validation fit clones: the setting must survive clone (scikit-learn copies it).
+    pipeline = clone(make_pipeline(FrameTransform(), DopplerDensityFilter()).set_output(transform="pandas"))
+    assert isinstance(pipeline.fit_transform(raw_array), pd.DataFrame)
 
 
 def test_a_pipeline_transforms_to_the_named_working_columns(raw_array):
