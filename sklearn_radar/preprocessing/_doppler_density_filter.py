@@ -14,6 +14,7 @@ from sklearn.utils.validation import check_is_fitted
 from .._neighbors import build_grid, count_neighbors
 from .._schema import FILTER_READS
 from .._validation import check_filter_rule, read_columns, sequence_slices, write_columns
+from ._output_names import feature_names_out, work_array_width
 
 
 @validate_params(
@@ -235,6 +236,12 @@ class DopplerDensityFilter(TransformerMixin, BaseEstimator):
     (absent columns: y = v_r = t = sequence = 0) and the result carries
     ``keep`` (1.0 or 0.0) at its position there, 5.
 
+    Output containers follow scikit-learn's ``set_output`` API as for
+    :class:`FrameTransform`: under ``"default"`` a DataFrame comes back as a
+    DataFrame (``keep`` boolean) and an array as an array (``keep`` 1.0 or
+    0.0); under ``"pandas"`` an array result becomes a DataFrame with the
+    columns of :meth:`get_feature_names_out` and a ``RangeIndex``.
+
     Examples
     --------
     >>> from sklearn.pipeline import make_pipeline
@@ -324,6 +331,30 @@ class DopplerDensityFilter(TransformerMixin, BaseEstimator):
         )
         keep = _doppler_density_keep(c["v_r"], counts, self.vr_threshold, ratios, min_neighbors)
         return write_columns(X, {"keep": keep if hasattr(X, "columns") else keep.astype(np.float64)})
+
+    def get_feature_names_out(self, input_features=None):
+        """Names of the columns :meth:`transform` returns, as ``set_output`` uses them.
+
+        Parameters
+        ----------
+        input_features : array-like of str or None, default=None
+            The input columns.  None: those seen in :meth:`fit`
+            (``feature_names_in_``), or ``x0, x1, ...`` for an array.  If
+            given, they must equal ``feature_names_in_`` (DataFrame fit) or
+            number ``n_features_in_`` (array fit).
+
+        Returns
+        -------
+        feature_names_out : ndarray of str objects
+            Fitted on a DataFrame: its columns, then ``keep`` if it did not
+            hold one.  Fitted on an array: the names of
+            :data:`~sklearn_radar._schema.WORK_LAYOUT` up to the output width
+            (at least 6, to ``keep``; a column beyond the layout keeps its
+            name from ``input_features``).
+        """
+        check_is_fitted(self)
+        width = work_array_width(self.n_features_in_, ("keep",))
+        return feature_names_out(self, input_features, added=("keep",), array_width=width)
 
     def _rule(self):
         """The thresholds of Eq. 1 as arrays, validated."""

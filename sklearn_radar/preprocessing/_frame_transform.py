@@ -11,6 +11,14 @@ from sklearn.utils.validation import check_is_fitted
 
 from .._schema import FRAME_TRANSFORM_READS
 from .._validation import read_columns, write_columns
+from ._output_names import feature_names_out, work_array_width
+
+#: The working columns added to a DataFrame, in the order they are appended.
+WORKING_COLUMNS = ("x", "y", "v_r", "t", "heading")
+#: Raw columns copied into the working-layout array (Eq. 2 needs the range, Eq. 6 the line of sight).
+_LINE_OF_SIGHT = ("range_sc", "azimuth_sc", "sensor_yaw")
+#: The columns written into the working-layout array returned for an array.
+_ARRAY_COLUMNS = (*WORKING_COLUMNS, "sequence", *_LINE_OF_SIGHT)
 
 
 class FrameTransform(TransformerMixin, BaseEstimator):
@@ -68,6 +76,20 @@ class FrameTransform(TransformerMixin, BaseEstimator):
     range_sc, heading, azimuth_sc, sensor_yaw]`` (keep = 1) that the later
     stages read by position (:data:`~sklearn_radar._schema.WORK_LAYOUT`).
 
+    The output container follows scikit-learn's ``set_output`` API.  Under
+    ``"default"`` (also when nothing is set) the result is what
+    :meth:`transform` makes: a DataFrame for a DataFrame, an array for an
+    array.  ``set_output(transform="pandas")``, or
+    ``sklearn.set_config(transform_output="pandas")``, also returns the array
+    result as a DataFrame, with the columns of :meth:`get_feature_names_out`
+    and a ``RangeIndex``; the later stages read it by name.  A DataFrame
+    result is the same under both settings.  ``"polars"`` needs polars
+    (without it, scikit-learn raises an ImportError); the later stages read
+    pandas DataFrames by name, anything else by position.  Fit and transform
+    the same kind of container: :meth:`get_feature_names_out` names the
+    result of the kind seen in :meth:`fit`, and the pandas wrapper raises a
+    ValueError when the widths differ.
+
     Examples
     --------
     >>> from sklearn_radar import FrameTransform
@@ -76,6 +98,15 @@ class FrameTransform(TransformerMixin, BaseEstimator):
     >>> Xt = FrameTransform(frame="frame").fit_transform(X)
     >>> bool(abs(Xt["x"] - X["x_seq"]).max() < 1e-3)
     True
+
+    A plain array comes back as a DataFrame of the working columns under
+    pandas output:
+
+    >>> import numpy as np
+    >>> raw = np.array([[10.0, 0.0, -1.0, 0.0], [20.0, 0.5, 2.0, 60_000.0]])
+    >>> ft = FrameTransform().set_output(transform="pandas")
+    >>> ft.fit_transform(raw).columns.tolist()
+    ['x', 'y', 'v_r', 't', 'sequence', 'keep', 'range_sc', 'heading', 'azimuth_sc', 'sensor_yaw']
     """
 
     _parameter_constraints: ClassVar[dict] = {"frame": [StrOptions({"frame", "car"})]}
@@ -124,10 +155,35 @@ class FrameTransform(TransformerMixin, BaseEstimator):
             work = self._working_columns(c)
         _check_finite(work, c)
         if hasattr(X, "columns"):
-            return write_columns(X, work)
+            return write_columns(X, {name: work[name] for name in WORKING_COLUMNS})
         sequence = c["sequence"] if c["sequence"] is not None else np.zeros(len(work["x"]))
-        line_of_sight = {"range_sc": c["range_sc"], "azimuth_sc": c["azimuth_sc"], "sensor_yaw": c["sensor_yaw"]}
+        line_of_sight = {name: c[name] for name in _LINE_OF_SIGHT}
         return write_columns(np.empty((len(work["x"]), 0)), {**work, "sequence": sequence, **line_of_sight})
+
+    def get_feature_names_out(self, input_features=None):
+        """Names of the columns :meth:`transform` returns, as ``set_output`` uses them.
+
+        Parameters
+        ----------
+        input_features : array-like of str or None, default=None
+            The input columns.  None: those seen in :meth:`fit`
+            (``feature_names_in_``), or ``x0, x1, ...`` for an array.  If
+            given, they must equal ``feature_names_in_`` (DataFrame fit) or
+            number ``n_features_in_`` (array fit).
+
+        Returns
+        -------
+        feature_names_out : ndarray of str objects
+            Fitted on a DataFrame: its columns, then those of ``x, y, v_r, t,
+            heading`` it did not hold.  Fitted on an array:
+            :data:`~sklearn_radar._schema.WORK_LAYOUT`, ``x, y, v_r, t,
+            sequence, keep, range_sc, heading, azimuth_sc, sensor_yaw``,
+            whatever ``input_features`` are.
+        """
+        check_is_fitted(self)
+        return feature_names_out(
+            self, input_features, added=WORKING_COLUMNS, array_width=work_array_width(0, _ARRAY_COLUMNS)
+        )
 
     def _working_columns(self, c):
         """x, y (m), v_r (m/s), t (s) and heading (rad) from the raw columns ``c``."""
