@@ -803,7 +803,7 @@ def _foreign_entry(path: Path):
     if not isinstance(listed, list):
         return f"exists and was not written by sklearn-radar (it has no {MANIFEST})"
     listed = {*(name for name in listed if isinstance(name, str)), MANIFEST}
-    folders = {str(Path(name).parent) for name in listed}
+    folders = {folder.as_posix() for name in listed for folder in Path(name).parents}
     for entry in sorted(path.rglob("*")):
         name = entry.relative_to(path).as_posix()
         ours = name in folders if entry.is_dir() and not entry.is_symlink() else name in listed and entry.is_file()
