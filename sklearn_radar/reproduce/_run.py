@@ -86,6 +86,7 @@ from ._constants import (
 )
 from ._context import RunContext
 from ._io import (
+    RUN_TOOL,
     atomic_write_text,
     check_run_folder,
     check_writable,
@@ -539,7 +540,7 @@ def _write_marker(run, status, error=None):
         names = ["report.md", "results.json", "params.json", *sorted(set(run.results.figures.drawn.values()))]
         files = {name: sha256(run.out / name) for name in names if (run.out / name).is_file()}
     marker = {
-        "tool": "sklearn-radar reproduce",
+        "tool": RUN_TOOL,  # what run_marker recognises
         "version": __version__,
         "run_id": run.run_id,
         "started": run.started_utc,
