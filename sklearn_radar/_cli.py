@@ -3,32 +3,35 @@
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import sys
 import time
-from pathlib import Path
 
 from . import __version__
 
 
 def main(argv=None) -> int:
     try:
-        _import_the_estimators()
-    except KeyboardInterrupt:  # Ctrl-C during start-up: a one-line message, not a traceback from an import
+        parser = _parser()
+        args = parser.parse_args(argv)  # --help and --version end here, before any heavy import
+        if args.command is None:
+            parser.print_help()
+            return 0
+        return _run(args)
+    except KeyboardInterrupt:  # Ctrl-C during start-up or a run: a one-line message, not a traceback
         print("sklearn-radar: interrupted", file=sys.stderr)
         return 130
-    parser = _parser()
-    args = parser.parse_args(argv)
-    if args.command is None:
-        parser.print_help()
-        return 0
+
+
+def _run(args) -> int:
+    """Check every option, import the estimators, then run the command; errors as one line."""
     try:
+        _check_options(args)  # before anything is imported or written
+        _import_the_estimators()
         code = args.run(args)
         sys.stdout.flush()  # a closed pipe shows here, inside the try, rather than at exit
         return code
-    except KeyboardInterrupt:
-        print("sklearn-radar: interrupted", file=sys.stderr)
-        return 130
     except BrokenPipeError:
         # The reader left (``sklearn-radar stats | head -2``): not an error. Nothing more can be written.
         _silence_stdout()
@@ -41,8 +44,9 @@ def main(argv=None) -> int:
 def _import_the_estimators():
     """The heavy imports every command needs (numpy, pandas, scikit-learn, numba, the estimators; about 1.5 s).
 
-    ``sklearn_radar/__init__.py`` imports them lazily, so they happen here,
-    inside :func:`main`, where an interrupt is caught.
+    ``sklearn_radar/__init__.py`` imports them lazily, and so does this
+    module: ``--help`` and ``--version`` never import them.  A command
+    imports them here, inside :func:`main`, where an interrupt is caught.
     """
     from . import cluster, datasets, preprocessing  # noqa: F401
 
@@ -75,13 +79,18 @@ def _parser():
         help="write a simulated data set in the RadarScenes layout",
         description="Simulate urban radar recordings and write them as a RadarScenes data folder.",
     )
+    simulate.set_defaults(run=_simulate, parser=simulate)
     simulate.add_argument(
         "--out", required=True, help="data folder to create (sensors.json, sequences.json, sequence_N/)"
     )
-    simulate.add_argument("--n-sequences", type=int, default=4, help="number of recordings (default: 4)")
-    simulate.add_argument("--duration", type=float, default=30.0, help="length of each recording in s (default: 30)")
-    simulate.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
-    simulate.add_argument("--overwrite", action="store_true", help="replace an existing data folder")
+    _add_checked(simulate, "--n-sequences", _at_least(1), default=4, help="number of recordings (default: 4)")
+    _add_checked(simulate, "--duration", _duration, default=30.0, help="length of each recording in s (default: 30)")
+    _add_checked(simulate, "--seed", _seed, default=0, help="random seed (default: 0)")
+    simulate.add_argument(
+        "--overwrite",
+        action="store_true",
+        help="replace a data folder that sklearn-radar wrote before (other folders and files are never replaced)",
+    )
     simulate.add_argument(
         "--difficulty",
         choices=("easy", "realistic"),
@@ -89,15 +98,14 @@ def _parser():
         help="phenomena of real radar data: realistic (ego-motion errors, multipath, clutter, dense traffic, "
         "sensing limits) or easy (none) (default: realistic)",
     )
-    simulate.set_defaults(run=_simulate)
 
     stats = commands.add_parser(
         "stats",
         help="print statistics of a RadarScenes data folder",
         description="Print detections per second, static share and detections per object per scan.",
     )
+    stats.set_defaults(run=_stats, parser=stats)
     stats.add_argument("--data", required=True, help="RadarScenes data folder (or its parent)")
-    stats.set_defaults(run=_stats)
 
     reproduce = commands.add_parser(
         "reproduce",
@@ -105,15 +113,22 @@ def _parser():
         description="Re-run the experiments #1-#13 of Scheiner et al. (ITSC 2019), the filter evaluation and "
         "scikit-learn baselines; write report.md, results.json, params.json and figures.",
     )
+    reproduce.set_defaults(run=_reproduce, parser=reproduce)
     reproduce.add_argument("--data", help="RadarScenes data folder (default: simulate one)")
     reproduce.add_argument(
-        "--out", default="sklearn-radar-report", help="output folder (default: sklearn-radar-report)"
+        "--out",
+        default="sklearn-radar-report",
+        help="output folder (default: sklearn-radar-report); a previous run's files there are replaced, other "
+        "files stay, and a folder holding a file of the same name that no run wrote is refused",
     )
-    reproduce.add_argument(
-        "--n-iter", type=int, help="Bayesian-optimisation iterations per experiment (default 10; 100 with --full)"
+    _add_checked(
+        reproduce,
+        "--n-iter",
+        _at_least(1),
+        help="Bayesian-optimisation iterations per experiment (default 10; 100 with --full)",
     )
-    reproduce.add_argument(
-        "--n-jobs", type=int, help="candidates evaluated in parallel (default: one at a time; -1: all cores)"
+    _add_checked(
+        reproduce, "--n-jobs", _n_jobs, help="candidates evaluated in parallel (default: one at a time; -1: all cores)"
     )
     reproduce.add_argument(
         "--experiments", help="comma-separated: filter, 1-13 (ranges like 2-9), filter-effect, baselines"
@@ -121,10 +136,11 @@ def _parser():
     reproduce.add_argument(
         "--full", action="store_true", help="the paper's budget (100 iterations, 30 random) on ~1M detections"
     )
-    reproduce.add_argument("--seed", type=int, default=0, help="random seed (default: 0)")
-    reproduce.add_argument(
+    _add_checked(reproduce, "--seed", _seed, default=0, help="random seed (default: 0)")
+    _add_checked(
+        reproduce,
         "--repeats",
-        type=int,
+        _at_least(1),
         help="searches per tuned experiment and baseline, with the seeds seed, seed+1, ... on the same split; the "
         "report gives mean +- sd and checks the findings beyond the noise (default: 1; 3 with --full)",
     )
@@ -142,13 +158,14 @@ def _parser():
         "road users per 0.5 s frame (default: v1)",
     )
     _add_cluster_flags(reproduce)
-    reproduce.add_argument(
+    _add_checked(
+        reproduce,
         "--n-points",
+        _at_least(1),
         metavar="K",
         help="candidates each search step evaluates at a time (default 1, with or without a cluster); "
         "the results depend on it, not on where the fits run",
     )
-    reproduce.set_defaults(run=_reproduce)
 
     cluster = commands.add_parser(
         "cluster",
@@ -156,12 +173,16 @@ def _parser():
         description="Apply a setting saved by 'sklearn-radar reproduce' (params.json) and write the devkit's "
         "per-point predictions JSON (schema 2), keyed by detection uuid.",
     )
+    cluster.set_defaults(run=_cluster, parser=cluster)
     cluster.add_argument("--data", required=True, help="RadarScenes data folder (or its parent)")
     cluster.add_argument("--params", required=True, help="params.json written by 'sklearn-radar reproduce'")
-    cluster.add_argument("--out", required=True, help="predictions file to write (JSON)")
-    cluster.add_argument("--experiment", type=int, help="which saved experiment (default: the best)")
+    cluster.add_argument(
+        "--out",
+        required=True,
+        help="predictions file to write (JSON); an existing file is replaced only if it is such a predictions file",
+    )
+    _add_checked(cluster, "--experiment", _at_least(1), help="which saved experiment (default: the best)")
     _add_cluster_flags(cluster)
-    cluster.set_defaults(run=_cluster)
     return parser
 
 
@@ -173,47 +194,93 @@ def _add_cluster_flags(command):
         metavar="ADDRESS",
         help="run on an existing dask scheduler, e.g. tcp://host:8786 (needs the [distributed] extra)",
     )
-    # Parsed here rather than by argparse, so that a bad value is a one-line error like the others.
-    where.add_argument("--workers", metavar="N", help="run on a local dask cluster of N worker processes")
+    _add_checked(
+        where, "--workers", _at_least(1), metavar="N", help="run on a local dask cluster of N worker processes"
+    )
 
 
-def _cluster_args(args):
-    """``(scheduler, workers)`` of the command line; ValueError for a bad ``--workers``."""
-    return args.scheduler, _positive_int(args.workers, "--workers", "a whole number of worker processes")
+def _add_checked(command, flag, check, **kwargs):
+    """Add ``flag``, read as text and turned into its value by ``check(text, flag)`` in :func:`_check_options`.
+
+    Not argparse's ``type=``: a bad value is then a one-line error like every other (exit code 1).
+    """
+    action = command.add_argument(flag, **kwargs)
+    action.check = check
+    return action
 
 
-def _positive_int(text, flag, what):
+def _check_options(args):
+    """Replace each checked option's text by its value; ValueError names the first bad option."""
+    for action in args.parser._actions:
+        check = getattr(action, "check", None)
+        if check is not None:
+            setattr(args, action.dest, check(getattr(args, action.dest), action.option_strings[0]))
+
+
+def _at_least(low):
+    """The check of a whole number ``>= low`` (None stays None: the option's default applies)."""
+
+    def check(text, flag):
+        return _whole(text, flag, low, None)
+
+    return check
+
+
+def _seed(text, flag):
+    return _whole(text, flag, 0, SEED_MAX)
+
+
+#: The largest seed numpy's random generators take (2**32 - 1).
+SEED_MAX = 2**32 - 1
+
+
+def _n_jobs(text, flag):
+    """joblib's ``n_jobs``: a whole number other than 0 (-1: all cores)."""
+    value = _whole(text, flag, None, None)
+    if value == 0:
+        raise ValueError(f"{flag} must be a whole number other than 0 (-1: all cores), got {text!r}")
+    return value
+
+
+def _whole(text, flag, low, high):
     if text is None:
         return None
     try:
-        value = int(text)
+        value = int(str(text).strip())
     except ValueError:
-        value = 0
-    if value < 1:
-        raise ValueError(f"{flag} must be {what} >= 1, got {text!r}")
+        value = None
+    if value is None or (low is not None and value < low) or (high is not None and value > high):
+        bounds = {(True, True): f"from {low} to {high}", (True, False): f">= {low}", (False, True): f"<= {high}"}
+        what = bounds.get((low is not None, high is not None), "")
+        raise ValueError(f"{flag} must be a whole number {what}".rstrip() + f", got {text!r}")
+    return value
+
+
+#: The shortest recording make_scenes simulates, s.
+MIN_DURATION_S = 0.5
+
+
+def _duration(text, flag):
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (math.isfinite(value) and value >= MIN_DURATION_S):
+        raise ValueError(f"{flag} must be a finite number of seconds >= {MIN_DURATION_S}, got {text!r}")
     return value
 
 
 def _simulate(args) -> int:
     from .datasets import format_statistics, make_scenes, scene_statistics, write_radarscenes
+    from .datasets._radarscenes import check_output_folder
 
+    check_output_folder(args.out, args.overwrite, flag="--overwrite")  # before the simulation, which takes a while
     start = time.perf_counter()
     scenes = make_scenes(
         n_sequences=args.n_sequences, duration=args.duration, random_state=args.seed, difficulty=args.difficulty
     )
     simulated = time.perf_counter() - start
-    try:
-        path = write_radarscenes(scenes, args.out, overwrite=args.overwrite)
-    except FileExistsError:
-        from .reproduce._io import blocking_file
-
-        blocking = blocking_file(args.out)
-        if blocking is not None and blocking != Path(args.out):
-            raise FileExistsError(
-                f"cannot create {_shown(args.out)}: {_shown(blocking)} is a file, not a folder"
-            ) from None
-        what = "is a file, not a data folder" if blocking is not None else "exists and is not empty"
-        raise FileExistsError(f"{_shown(args.out)} {what}; pass --overwrite to replace it") from None
+    path = write_radarscenes(scenes, args.out, overwrite=args.overwrite)
     print(f"simulated {len(scenes.data)} detections in {simulated:.2f} s; wrote {_shown(path)}")
     print(format_statistics(*scene_statistics(scenes)))
     return 0
@@ -228,13 +295,18 @@ def _stats(args) -> int:
 
 def _reproduce(args) -> int:
     from .reproduce import reproduce
+    from .reproduce._run import parse_experiments
 
-    if args.n_iter is not None and args.n_iter < 1:
-        raise ValueError(f"--n-iter must be at least 1, got {args.n_iter}")
-    scheduler, workers = _cluster_args(args)
-    n_points = _positive_int(args.n_points, "--n-points", "a whole number of candidates")
-    if args.repeats is not None and args.repeats < 1:
-        raise ValueError(f"--repeats must be at least 1, got {args.repeats}")
+    try:
+        parse_experiments(args.experiments)
+    except ValueError as error:
+        raise ValueError(f"--experiments: {error}") from None
+    repeats = args.repeats or (3 if args.full else 1)
+    if args.seed + repeats - 1 > SEED_MAX:
+        raise ValueError(
+            f"--seed {args.seed} with {repeats} repeats uses seeds up to {args.seed + repeats - 1}; "
+            f"the largest is {SEED_MAX}"
+        )
     start = time.perf_counter()
     reproduce(
         args.data,
@@ -246,9 +318,9 @@ def _reproduce(args) -> int:
         seed=args.seed,
         objective=args.objective,
         difficulty=args.difficulty,
-        scheduler=scheduler,
-        workers=workers,
-        n_points=n_points,
+        scheduler=args.scheduler,
+        workers=args.workers,
+        n_points=args.n_points,
         repeats=args.repeats,
     )
     print(
@@ -261,12 +333,16 @@ def _reproduce(args) -> int:
 def _cluster(args) -> int:
     from .reproduce import cluster_radarscenes
 
-    scheduler, workers = _cluster_args(args)
     summary = cluster_radarscenes(
-        args.data, args.params, args.out, experiment=args.experiment, scheduler=scheduler, workers=workers
+        args.data, args.params, args.out, experiment=args.experiment, scheduler=args.scheduler, workers=args.workers
     )
-    print(
-        f"experiment #{summary['experiment']}: {summary['n_detections']} detections in "
-        f"{summary['n_clusters']} clusters; wrote {_shown(summary['out'])}"
-    )
+    print(f"applied experiment #{summary['experiment']} of {_shown(args.params)}: {_setting(summary['params'])}")
+    if summary["stage1_params"] is not None:
+        print(f"  with stage 1: {_setting(summary['stage1_params'])}")
+    print(f"{summary['n_detections']} detections in {summary['n_clusters']} clusters; wrote {_shown(summary['out'])}")
     return 0
+
+
+def _setting(params):
+    """``{"cluster__eps_xy": 0.6, ...}`` -> ``"cluster__eps_xy=0.6, ..."``, every key and exact value."""
+    return ", ".join(f"{key}={value!r}" for key, value in params.items()) or "the paper's setting"

@@ -62,3 +62,11 @@ def remove_entry(entry: Path) -> bool:
     except OSError:  # removed meanwhile by another process, or not ours to remove
         return False
     return True
+
+
+def blocking_file(folder):
+    """``folder`` or its first ancestor that exists and is not a folder (so ``folder`` cannot be made); else None."""
+    for candidate in (Path(folder), *Path(folder).parents):
+        if candidate.exists() or candidate.is_symlink():
+            return None if candidate.is_dir() else candidate
+    return None

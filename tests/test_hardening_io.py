@@ -261,7 +261,7 @@ def test_simulate_onto_a_file_says_it_is_a_file_and_names_the_option(tmp_path, c
     (full / "x").mkdir(parents=True)
     assert main(["simulate", "--out", str(full), "--n-sequences", "1", "--duration", "1"]) == 1
     err = _one_line_error(capsys)
-    assert "not empty" in err and "--overwrite" in err and "overwrite=True" not in err
+    assert "not written by sklearn-radar" in err and "--overwrite" in err and "overwrite=True" not in err
     assert main(["simulate", "--out", str(afile / "sim"), "--n-sequences", "1", "--duration", "1"]) == 1
     err = _one_line_error(capsys)
     assert f"{afile} is a file" in err and "Errno" not in err
@@ -337,14 +337,16 @@ def test_an_interrupt_during_the_start_up_imports_is_one_line(monkeypatch, capsy
         raise KeyboardInterrupt
 
     monkeypatch.setattr(cli, "_import_the_estimators", interrupted)
-    assert cli.main(["--version"]) == 130
+    assert cli.main(["stats", "--data", "anywhere"]) == 130  # --version no longer imports them
     assert capsys.readouterr().err == "sklearn-radar: interrupted\n"
 
 
 @pytest.mark.slow  # timing-dependent: on a loaded machine the signal can land in Python's own start-up
-def test_sigint_during_the_start_up_imports_prints_no_traceback(tmp_path):
+def test_sigint_during_the_start_up_imports_prints_no_traceback(small_folder):
     process = subprocess.Popen(
-        [sys.executable, "-m", "sklearn_radar", "--version"], stdout=subprocess.PIPE, stderr=subprocess.PIPE
+        [sys.executable, "-m", "sklearn_radar", "stats", "--data", str(small_folder)],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
     )
     time.sleep(0.4)
     process.send_signal(signal.SIGINT)

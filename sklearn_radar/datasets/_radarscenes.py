@@ -34,7 +34,7 @@ import pandas as pd
 from sklearn.utils import Bunch
 from sklearn.utils._param_validation import validate_params
 
-from .._files import TEMPORARY_PREFIX, folder_mode, process_alive, remove_entry
+from .._files import TEMPORARY_PREFIX, blocking_file, folder_mode, process_alive, remove_entry
 from .._schema import (
     CONTEXT_COLUMNS,
     DETECTION_COLUMNS,
@@ -484,9 +484,13 @@ def write_radarscenes(bunch, path, overwrite=False) -> Path:
         ``odometry``, ``sensors`` and ``sequences``.  Timestamps are in µs,
         positions in m, angles in rad, velocities in m/s.
     path : str or path-like
-        The data folder to create.
+        The data folder to create (an empty folder is used as it is).
     overwrite : bool, default=False
-        Replace ``path`` if it exists and is not empty.
+        Replace ``path`` if it is a data folder that this function wrote
+        before: one whose manifest (``sklearn_radar_manifest.json``) lists
+        every file in it.  Anything else (a file, a symbolic link, a folder
+        without the manifest or holding a file it does not list, such as a
+        real RadarScenes download or notes of your own) is never replaced.
 
     Returns
     -------
@@ -499,7 +503,9 @@ def write_radarscenes(bunch, path, overwrite=False) -> Path:
         If the bunch lacks a key or column, two sensors share one timestamp
         in a sequence, or a string is not ASCII or longer than 32 bytes.
     FileExistsError
-        If ``path`` exists, is not empty and ``overwrite`` is False.
+        If ``path`` exists and is not empty, and ``overwrite`` is False or
+        ``path`` is not a data folder this function wrote; checked before
+        anything is written.
 
     See Also
     --------
@@ -508,11 +514,13 @@ def write_radarscenes(bunch, path, overwrite=False) -> Path:
     Notes
     -----
     The write is atomic: everything goes to a temporary sibling folder that
-    is renamed to ``path`` at the end and removed on any error.
+    is renamed to ``path`` at the end and removed on any error.  The folder
+    also holds ``sklearn_radar_manifest.json``, the list of the files
+    written, by which ``overwrite`` recognises it.
     """
     path = Path(path)
     data, odometry, sensors, sequences = _bunch_tables(bunch)
-    _refuse_occupied(path, overwrite)
+    check_output_folder(path, overwrite)
     prepared = [
         _prepare_sequence(number, category, data, odometry)
         for number, category in zip(sequences["sequence"], sequences["category"], strict=True)
@@ -522,6 +530,7 @@ def write_radarscenes(bunch, path, overwrite=False) -> Path:
         for sensor_id, row in sensors.iterrows()
     }
     sequences_json = {"sequences": {p.name: p.summary for p in prepared}}
+    written = ["sensors.json", "sequences.json"]
     path.parent.mkdir(parents=True, exist_ok=True)
     _remove_stale_temporaries(path)
     prefix = f"{TEMPORARY_PREFIX}{os.getpid()}-{path.name}."
@@ -535,6 +544,8 @@ def write_radarscenes(bunch, path, overwrite=False) -> Path:
             h5_file = staging / sequence.name / "radar_data.h5"
             _write_radar_data_h5(h5_file, sequence.radar_data, sequence.odometry)
             _write_json(staging / sequence.name / "scenes.json", sequence.scenes)
+            written += [f"{sequence.name}/radar_data.h5", f"{sequence.name}/scenes.json"]
+        _write_json(staging / MANIFEST, {"tool": _MANIFEST_TOOL, "files": written})
         _move_into_place(staging, path, overwrite)
     except BaseException:
         shutil.rmtree(staging, ignore_errors=True)
@@ -727,14 +738,78 @@ def _write_radar_data_h5(file: Path, radar_data: np.ndarray, odometry: np.ndarra
         h5.create_dataset("odometry", data=odometry)
 
 
+#: The file by which ``write_radarscenes(..., overwrite=True)`` knows a folder it wrote: the files it wrote.
+MANIFEST = "sklearn_radar_manifest.json"
+_MANIFEST_TOOL = "sklearn_radar.datasets.write_radarscenes"
+
+
+def check_output_folder(path, overwrite, flag="overwrite=True"):
+    """Refuse ``path`` as the output of :func:`write_radarscenes` unless writing there deletes nothing of others.
+
+    ``path`` may be absent or an empty folder; with ``overwrite`` it may
+    also be a data folder that :func:`write_radarscenes` wrote (see
+    :func:`_foreign_entry`).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The data folder to write.
+    overwrite : bool
+        Whether a folder written before may be replaced.
+    flag : str, default="overwrite=True"
+        How the error names the overwrite option (the command line's is ``--overwrite``).
+
+    Raises
+    ------
+    FileExistsError
+        In one line, naming ``path`` and why it is not replaced.
+    """
+    path = Path(path)
+    blocking = blocking_file(path)
+    if blocking is not None and blocking != path:
+        raise FileExistsError(f"cannot create {path}: {blocking} is a file, not a folder")
+    if not _is_occupied(path):
+        return
+    foreign = _foreign_entry(path)
+    if foreign is not None:
+        raise FileExistsError(f"{path} {foreign}; it is not replaced, even with {flag}: choose another folder")
+    if not overwrite:
+        raise FileExistsError(f"{path} exists and is not empty (data written before); pass {flag} to replace it")
+
+
 def _is_occupied(path: Path) -> bool:
+    """Whether anything is at ``path`` but an empty folder (a symbolic link counts, whatever it points to)."""
+    if path.is_symlink():
+        return True
     return path.exists() and (not path.is_dir() or any(path.iterdir()))
 
 
-def _refuse_occupied(path: Path, overwrite: bool) -> None:
-    if _is_occupied(path) and not overwrite:
-        what = "exists and is not empty" if path.is_dir() else "is a file, not a folder"
-        raise FileExistsError(f"{path} {what}; pass overwrite=True to replace it")
+def _foreign_entry(path: Path):
+    """Why ``path`` is not a data folder that the writer wrote (a phrase), or None if it is one.
+
+    It is one if its manifest names the writer and lists every file below
+    it; it may lack listed files (deleted since), but holds nothing else
+    and no symbolic link (the writer makes none).
+    """
+    if path.is_symlink():
+        return "is a symbolic link"
+    if not path.is_dir():
+        return "is a file, not a data folder"
+    try:
+        manifest = json.loads((path / MANIFEST).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        manifest = None
+    listed = manifest.get("files") if isinstance(manifest, dict) and manifest.get("tool") == _MANIFEST_TOOL else None
+    if not isinstance(listed, list):
+        return f"exists and was not written by sklearn-radar (it has no {MANIFEST})"
+    listed = {*(name for name in listed if isinstance(name, str)), MANIFEST}
+    folders = {folder.as_posix() for name in listed for folder in Path(name).parents}
+    for entry in sorted(path.rglob("*")):
+        name = entry.relative_to(path).as_posix()
+        ours = name in folders if entry.is_dir() and not entry.is_symlink() else name in listed and entry.is_file()
+        if not ours or entry.is_symlink():
+            return f"holds {name}, which sklearn-radar did not write"
+    return None
 
 
 def _remove_stale_temporaries(path: Path) -> None:
@@ -762,12 +837,12 @@ def _remove_stale_temporaries(path: Path) -> None:
 
 def _move_into_place(staging: Path, path: Path, overwrite: bool) -> None:
     """Rename ``staging`` to ``path``; an existing ``path`` is swapped out, then deleted."""
+    check_output_folder(path, overwrite)  # again: the folder may have changed while the data were written
     if not _is_occupied(path):
         if path.exists():
             path.rmdir()
         os.rename(staging, path)
         return
-    _refuse_occupied(path, overwrite)
     aside = path.with_name(f"{TEMPORARY_PREFIX}{os.getpid()}-{path.name}.{uuid_module.uuid4().hex}.old")
     os.rename(path, aside)
     try:

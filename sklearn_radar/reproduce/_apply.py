@@ -98,13 +98,38 @@ def _checked_setting(saved, path, experiment):
         get_experiment(number)
     except ValueError:
         raise bad(f"the key 'experiment' of {where}", f"must be one of the paper's experiments, got {number}") from None
-    for key in ("params", "stage1_params"):
-        value = setting.get(key)
-        if key == "stage1_params" and value is None:
-            continue
-        if not isinstance(value, dict):
-            raise bad(f"the key {key!r} of {where}", f"must be an object of parameters, got {type(value).__name__}")
+    if not isinstance(setting["params"], dict):
+        got = _json_type(setting["params"])
+        raise bad(f"the key 'params' of {where}", f"must be an object of parameters, got {got}")
+    _check_stage1_params(setting.get("stage1_params", _ABSENT), get_experiment(number).stage, f"{path}: {where}")
     return setting
+
+
+_ABSENT = object()
+
+
+def _check_stage1_params(value, stage, where):
+    """A stage-2 setting fixes its stage 1 (an object); a stage-1 setting has none (null).
+
+    A stage-2 experiment without it would fall back to the paper's #8
+    setting: another clustering than the one tuned, so it is refused.
+    """
+    if stage == 2 and not isinstance(value, dict):
+        got = "lacks it" if value is _ABSENT else f"got {_json_type(value)}"
+        raise ValueError(
+            f"{where}: the key 'stage1_params' must be an object of stage-1 parameters for a stage-2 experiment "
+            f"(without them the pipeline would fall back to the paper's stage 1), {got}"
+        )
+    if stage == 1 and value not in (None, _ABSENT):
+        raise ValueError(
+            f"{where}: the key 'stage1_params' must be null for a stage-1 experiment, got {_json_type(value)}"
+        )
+
+
+def _json_type(value):
+    """The JSON name of a parsed value's type: null, object, array, ..."""
+    names = {type(None): "null", dict: "an object", list: "an array", str: "a string", bool: "a boolean"}
+    return names.get(type(value), "a number" if isinstance(value, (int, float)) else type(value).__name__)
 
 
 @validate_params(
@@ -150,11 +175,20 @@ def cluster_radarscenes(data, params, out, experiment=None, *, scheduler=None, w
     Returns
     -------
     summary : dict
-        Experiment, detections, clusters and the output path.
+        ``experiment`` (its number), ``params`` and ``stage1_params`` (the
+        setting applied), ``n_detections``, ``n_clusters`` and ``out``.
+
+    Raises
+    ------
+    FileExistsError
+        If ``out`` exists and is neither empty nor a predictions file that
+        this package wrote (checked before the data are read and again
+        before the file is replaced).
     """
     setting = load_params(params, experiment)
     number = setting["experiment"]
     pipeline = _pipeline(setting, params)
+    check_predictions_file(out)
     data_dir = _resolve_data_dir(Path(data))
     _read_sensors_json(data_dir / "sensors.json")  # a malformed folder fails here, before any worker starts
     numbers = sorted(_read_sequences_json(data_dir / "sequences.json"))
@@ -177,10 +211,45 @@ def cluster_radarscenes(data, params, out, experiment=None, *, scheduler=None, w
     with connect_cluster(scheduler, workers) as cluster:
         tasks = [(str(data_dir), n, pipeline) for n in numbers]
         try:
-            atomic_write(Path(out), write)
+            atomic_write(Path(out), write, replaceable=check_predictions_file)
         except _ReadFailed:
             raise failed[0] from None
-    return {"experiment": number, **counts, "out": str(out)}
+    applied = {"params": setting["params"], "stage1_params": setting.get("stage1_params")}
+    return {"experiment": number, **applied, **counts, "out": str(out)}
+
+
+def check_predictions_file(out):
+    """Refuse to replace ``out`` unless it is absent, empty, or a predictions file this package wrote.
+
+    A predictions file is recognised by its first bytes, the document head
+    that :func:`write_predictions` writes (schema 2 with this package's
+    ``NOISE``/``CLUSTERED`` classes): any other file (``params.json``, a
+    devkit file, a typo) is another's work and is kept.
+
+    Parameters
+    ----------
+    out : str or path-like
+        The predictions file to write.
+
+    Raises
+    ------
+    FileExistsError
+        Naming ``out``.
+    """
+    out = Path(out)
+    if out.is_symlink():
+        problem = "is a symbolic link"
+    elif not out.is_file() or out.stat().st_size == 0:
+        return  # absent, or a folder (atomic_write says so), or empty: nothing is lost
+    else:
+        try:
+            with open(out, "rb") as stream:
+                if stream.read(len(_PREDICTIONS_HEAD)) == _PREDICTIONS_HEAD:
+                    return
+        except OSError as error:
+            raise OSError(f"cannot read {out}: {error.strerror or error}") from None
+        problem = "exists and is not a predictions file written by sklearn-radar"
+    raise FileExistsError(f"{out} {problem}; it is not replaced: choose another output file")
 
 
 class _ReadFailed(Exception):
@@ -234,7 +303,14 @@ def write_predictions(uuids, labels, out):
     labels : array-like of int
         Cluster per detection, -1 for noise.
     out : str or path-like
-        File to write (atomically).
+        File to write (atomically).  An existing file is replaced only if it
+        is empty or a predictions file written by this package
+        (:func:`check_predictions_file`).
+
+    Raises
+    ------
+    FileExistsError
+        If ``out`` is another file.
     """
     labels = np.asarray(labels)
     uuids = np.asarray(uuids)
@@ -246,7 +322,8 @@ def write_predictions(uuids, labels, out):
         _write_entries(stream, uuids, labels, first=True)
         stream.write(_PREDICTIONS_TAIL if len(labels) else _PREDICTIONS_EMPTY_TAIL)
 
-    atomic_write(Path(out), write)
+    check_predictions_file(out)
+    atomic_write(Path(out), write, replaceable=check_predictions_file)
 
 
 def _predictions_frame():

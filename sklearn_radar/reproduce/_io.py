@@ -1,15 +1,85 @@
-"""Atomic output: a file appears whole or not at all; what a killed process leaves is removed next time."""
+"""Atomic output: a file appears whole or not at all; what a killed process leaves is removed next time.
+
+Nothing is deleted or replaced that this package did not write: a run's
+output folder is recognised by the marker a run writes first
+(:func:`run_marker`), and a folder that holds a file of a run's name
+without such a marker is refused (:func:`check_run_folder`).
+"""
 
 from __future__ import annotations
 
+import hashlib
+import json
 import os
 import re
 import tempfile
 from pathlib import Path
 
-from .._files import TEMPORARY_PREFIX, file_mode, process_alive, remove_entry
+from .._files import TEMPORARY_PREFIX, blocking_file, file_mode, process_alive, remove_entry
 
 _TEMPORARY = re.compile(re.escape(TEMPORARY_PREFIX) + r"(\d+)-")
+#: The ``tool`` of a run marker: the marker of a folder that a reproduce run wrote.
+RUN_TOOL = "sklearn-radar reproduce"
+
+
+def run_marker(file):
+    """The run marker at ``file`` as a dict if a reproduce run wrote it (its ``tool`` and ``run_id``); else None."""
+    try:
+        marker = json.loads(Path(file).read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return None
+    if not isinstance(marker, dict) or marker.get("tool") != RUN_TOOL or not isinstance(marker.get("run_id"), str):
+        return None
+    return marker
+
+
+def check_run_folder(folder, marker_name, run_files):
+    """Refuse an output folder where a run would replace a file that no run wrote.
+
+    A run may write into any folder; it replaces the files named
+    ``marker_name`` and ``run_files`` there, so they must be absent or the
+    folder must be a run's (its marker written by a run).  Other files
+    stay either way.
+
+    Raises
+    ------
+    FileExistsError
+        Naming the folder and the first such file.
+    """
+    folder = Path(folder)
+    if not folder.is_dir() or run_marker(folder / marker_name) is not None:
+        return  # absent (created later), a file (check_writable says so), or a run's folder
+    clashes = [name for name in (marker_name, *run_files) if os.path.lexists(folder / name)]
+    if clashes:
+        raise FileExistsError(
+            f"{folder} holds {clashes[0]}, which no sklearn-radar run wrote (the folder has no {marker_name} of a "
+            f"run), so a run there would replace it; choose another output folder or move the file"
+        )
+
+
+def previous_run_files(folder, marker):
+    """The names a previous run's marker lists whose files are unchanged (same SHA-256): safe to remove."""
+    files = marker.get("files") if isinstance(marker, dict) else None
+    if not isinstance(files, dict):
+        return []
+    folder = Path(folder)
+    return [
+        name
+        for name, digest in files.items()
+        if isinstance(name, str)
+        and Path(name).name == name
+        and (folder / name).is_file()
+        and sha256(folder / name) == digest
+    ]
+
+
+def sha256(path):
+    """The SHA-256 of a file, hex."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as stream:
+        for block in iter(lambda: stream.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
 
 
 def temporary_prefix(name=""):
@@ -44,14 +114,6 @@ def check_writable(folder):
             reason = error.strerror or str(error)
         raise OSError(f"cannot write to the output folder {folder}: {reason}") from None
     return created
-
-
-def blocking_file(folder):
-    """``folder`` or its first ancestor that exists and is not a folder (so ``folder`` cannot be made); else None."""
-    for candidate in (Path(folder), *Path(folder).parents):
-        if candidate.exists() or candidate.is_symlink():
-            return None if candidate.is_dir() else candidate
-    return None
 
 
 def remove_empty_folders(folders):
@@ -98,8 +160,12 @@ def atomic_write_text(path, text):
     atomic_write(path, lambda stream: stream.write(text.encode("utf-8")))
 
 
-def atomic_write(path, write):
-    """Call ``write(binary stream)`` on a temporary sibling of ``path``, then rename it into place."""
+def atomic_write(path, write, replaceable=None):
+    """Call ``write(binary stream)`` on a temporary sibling of ``path``, then rename it into place.
+
+    ``replaceable(path)``, if given, is called just before the rename and
+    raises to keep what is at ``path`` (the temporary file is removed).
+    """
     path = Path(path)
     if path.is_dir():
         raise IsADirectoryError(f"cannot write {path}: it is a folder; give a file name")
@@ -111,10 +177,12 @@ def atomic_write(path, write):
         os.chmod(temporary, file_mode())  # mkstemp creates 0600 whatever the umask
         with os.fdopen(handle, "wb") as stream:
             write(stream)
+        if replaceable is not None:
+            replaceable(path)
         os.replace(temporary, path)
     except BaseException as error:
         Path(temporary).unlink(missing_ok=True)
-        if isinstance(error, OSError):
+        if isinstance(error, OSError) and error.errno is not None:  # not a refusal of ``replaceable``
             raise _write_error(error, path) from None
         raise
 

@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import contextlib
 import datetime
-import hashlib
 import io
 import json
 import os
@@ -87,10 +86,15 @@ from ._constants import (
 )
 from ._context import RunContext
 from ._io import (
+    RUN_TOOL,
     atomic_write_text,
+    check_run_folder,
     check_writable,
+    previous_run_files,
     remove_empty_folders,
     remove_stale_temporaries,
+    run_marker,
+    sha256,
     temporary_prefix,
 )
 from ._progress import REPORT_S, RunProgress, duration, rough, step_cost
@@ -121,6 +125,8 @@ from ._sections._figures import CONVERGENCE, SCENE, V1_BARS
 from ._sections._filter import FILTER_SCENE, HEATMAP
 from ._sequences import RunSequences
 
+#: The largest seed numpy's random generators take; a run uses the seeds seed ... seed + repeats - 1.
+SEED_MAX = 2**32 - 1
 #: The run marker: which run the folder holds and whether it is complete.
 RUN_MARKER = "run.json"
 #: Every file a run may write besides the marker (a previous run's are removed when a new one starts).
@@ -214,15 +220,15 @@ def parse_experiments(text):
         "data": [str, os.PathLike, None],
         "out": [str, os.PathLike],
         "n_iter": [Interval(Integral, 1, None, closed="left"), None],
-        "n_jobs": [Integral, None],
+        "n_jobs": [Interval(Integral, None, -1, closed="right"), Interval(Integral, 1, None, closed="left"), None],
         "experiments": [str, None],
         "full": ["boolean"],
-        "seed": [Interval(Integral, 0, None, closed="left")],
+        "seed": [Interval(Integral, 0, SEED_MAX, closed="both")],
         "stream": [HasMethods(["write"]), None],
         "objective": [StrOptions(set(OBJECTIVES))],
         "difficulty": [StrOptions({"easy", "realistic"})],
         "scheduler": [str, None],
-        "workers": [Integral, None],
+        "workers": [Interval(Integral, 1, None, closed="left"), None],
         "n_points": [Interval(Integral, 1, None, closed="left"), None],
         "repeats": [Interval(Integral, 1, None, closed="left"), None],
     },
@@ -253,21 +259,25 @@ def reproduce(
         A RadarScenes data folder; None simulates one (:func:`make_scenes`).
     out : str or path-like, default="sklearn-radar-report"
         Output folder (created).  It holds one run: a previous run's files
-        there are removed when this one starts (other files are left
-        alone), and ``run.json`` says ``"complete": true`` only once every
+        there (a folder whose ``run.json`` a run wrote) are removed when
+        this one starts, other files are left alone, and a folder that
+        holds a file of a run's name (``report.md``, ``run.json``, ...)
+        that no run wrote is refused (FileExistsError) before anything is
+        written.  ``run.json`` says ``"complete": true`` only once every
         file of the run is written.
     n_iter : int, default=None
         Bayesian-optimisation iterations per tuned experiment; None: 10, or
         100 with ``full`` (30 % of them random, as the paper's 30 + 70).
     n_jobs : int, default=None
-        Candidates evaluated in parallel.
+        Candidates evaluated in parallel (-1: all cores; 0 is refused).
     experiments : str, default=None
         Comma-separated keys (``filter``, ``1``-``13``, ranges such as
         ``2-9``, ``filter-effect``, ``baselines``); None runs all.
     full : bool, default=False
         The paper's budget on about a million simulated detections.
     seed : int, default=0
-        Random seed of the simulated data, the split and the searches.
+        Random seed of the simulated data, the split and the searches
+        (``seed + repeats - 1`` at most ``2**32 - 1``).
     stream : file-like, default=None
         Progress output; None: standard output.  Plain lines (no carriage
         returns): first an estimate of the run's length (and of ``full``'s),
@@ -311,6 +321,12 @@ def reproduce(
     results : dict
         What ``results.json`` holds, and ``figures``: the figures drawn.
     """
+    # Every argument is checked before a cluster starts or anything is written.
+    parse_experiments(experiments)
+    last_seed = seed + (repeats or (3 if full else 1)) - 1
+    if last_seed > SEED_MAX:
+        raise ValueError(f"seed {seed} with its repeats uses seeds up to {last_seed}; the largest is {SEED_MAX}")
+    check_run_folder(out, RUN_MARKER, RUN_FILES)
     with connect_cluster(scheduler, workers) as cluster:
         return _reproduce(
             data,
@@ -499,15 +515,21 @@ def _read_marker(out):
 
 
 def _start_folder(run):
-    """Claim the output folder for this run: the marker first ("running"), then the previous run's files go."""
+    """Claim the output folder for this run: the marker first ("running"), then the previous run's files go.
+
+    Only files a run wrote go: the run's file names in a folder that a run
+    marked (:func:`check_run_folder`, checked again as the folder may have
+    changed while the data were made), and the names the old marker lists
+    whose contents are unchanged.
+    """
     out = run.out
+    check_run_folder(out, RUN_MARKER, RUN_FILES)
     remove_stale_temporaries(out, legacy=(*RUN_FILES, RUN_MARKER))
-    previous = _read_marker(out).get("files")
-    previous = [name for name in previous if isinstance(name, str)] if isinstance(previous, dict) else []
+    previous = previous_run_files(out, run_marker(out / RUN_MARKER))
     _write_marker(run, "running")
     for name in {*RUN_FILES, *previous}:
         file = out / name
-        if Path(name).name == name and name != RUN_MARKER and (file.is_file() or file.is_symlink()):
+        if name != RUN_MARKER and (file.is_file() or file.is_symlink()):
             file.unlink()
 
 
@@ -516,9 +538,9 @@ def _write_marker(run, status, error=None):
     files = {}
     if status in ("complete", "interrupted"):
         names = ["report.md", "results.json", "params.json", *sorted(set(run.results.figures.drawn.values()))]
-        files = {name: _sha256(run.out / name) for name in names if (run.out / name).is_file()}
+        files = {name: sha256(run.out / name) for name in names if (run.out / name).is_file()}
     marker = {
-        "tool": "sklearn-radar reproduce",
+        "tool": RUN_TOOL,  # what run_marker recognises
         "version": __version__,
         "run_id": run.run_id,
         "started": run.started_utc,
@@ -531,14 +553,6 @@ def _write_marker(run, status, error=None):
     if error is not None:
         marker["error"] = error
     atomic_write_text(run.out / RUN_MARKER, json.dumps(marker, indent=1))
-
-
-def _sha256(path):
-    digest = hashlib.sha256()
-    with open(path, "rb") as stream:
-        for block in iter(lambda: stream.read(1 << 20), b""):
-            digest.update(block)
-    return digest.hexdigest()
 
 
 def _data(data, budget, seed, difficulty="realistic", cluster=None, n_jobs=None):
