@@ -432,6 +432,11 @@ MAX_SCAN_SPACING = 5.0
 #: The spacing is judged only over at least this many distinct scan times of one sequence (or sensor): over a
 #: few hand-made rows, or a sparse subset such as one object's detections, a median says little.
 MIN_SCANS_FOR_SPACING = 10
+#: A scan is one measurement of many detections at one time (RadarScenes: tens to hundreds, the simulator about
+#: 35).  A group whose rows are on average fewer than 2 per distinct time is not scan-structured (synthetic
+#: data with a time per detection, per-detection times of some sensors): its spacing says nothing about a scan
+#: rate and is not judged.
+MIN_DETECTIONS_PER_SCAN = 2
 #: s, the typical spacing per sequence (4 sensors of about 60 ms) and per sensor: the unit whose typical
 #: spacing is nearest (in ratio) to the one seen is named as the likely unit.
 TYPICAL_SCAN_SPACING = 0.015
@@ -456,11 +461,14 @@ class ScanSpacing:
         The column's unit, a key of :data:`TIME_UNITS`.
     convention : str
         The right unit, as the error message states it.
+    too_dense : str
+        The likely cause of a spacing below the limit that no other unit explains.
     """
 
     column: str
     unit: str
     convention: str
+    too_dense: str = "no radar scans at that rate"
 
     @property
     def low(self) -> float:
@@ -481,7 +489,12 @@ class ScanSpacing:
 #: {column: ScanSpacing} of the time columns.
 SCAN_SPACING = {
     "timestamp": ScanSpacing("timestamp", "µs", "RadarScenes uses µs"),
-    "t": ScanSpacing("t", "s", "t is in s (FrameTransform writes t = timestamp * 1e-6 s)"),
+    "t": ScanSpacing(
+        "t",
+        "s",
+        "t is in s (FrameTransform writes t = timestamp * 1e-6 s)",
+        too_dense="the timestamps it came from look like seconds (FrameTransform's t = timestamp * 1e-6 needs µs)",
+    ),
 }
 
 

@@ -16,6 +16,7 @@ from sklearn.utils.validation import validate_data
 
 from ._config import get_config
 from ._schema import (
+    MIN_DETECTIONS_PER_SCAN,
     MIN_SCANS_FOR_SPACING,
     PLAUSIBLE_VALUES,
     SCAN_SPACING,
@@ -191,7 +192,7 @@ def sequence_slices(sequence):
 # --------------------------------------------------------------------------
 
 
-def check_plausible(columns, where, *, sequence=None, sensor=None, layout=None, n_columns=None):
+def check_plausible(columns, where, *, sequence=None, sensor=None, layout=None, n_columns=None, bounds=None):
     """Raise a ValueError when a column holds a physically implausible value (unless switched off).
 
     Every column of ``columns`` with a bound in
@@ -216,6 +217,8 @@ def check_plausible(columns, where, *, sequence=None, sensor=None, layout=None, 
         The layout the columns were read by, for array input: the message then says so.
     n_columns : int, default=None
         Width of that array.
+    bounds : dict of str to str, default=None
+        The bound of a column stored under another name, e.g. ``{"vx": "ego_vx"}`` for the odometry.
 
     Raises
     ------
@@ -231,7 +234,10 @@ def check_plausible(columns, where, *, sequence=None, sensor=None, layout=None, 
         problem
         for name, values in columns.items()
         if values is not None and len(values)
-        for problem in (_range_problem(name, values), _spacing_problem(name, values, sequence, sensor))
+        for problem in (
+            _range_problem(name, values, (bounds or {}).get(name, name)),
+            _spacing_problem(name, values, sequence, sensor),
+        )
         if problem is not None
     ]
     if problems:
@@ -261,8 +267,8 @@ def plausibility_message(where, problems, layout=None, n_columns=None):
     return text + " If the data is right, sklearn_radar.set_config(check_plausibility=False) turns these checks off."
 
 
-def _range_problem(name, values):
-    bound = PLAUSIBLE_VALUES.get(name)
+def _range_problem(name, values, bound_name):
+    bound = PLAUSIBLE_VALUES.get(bound_name)
     if bound is None:
         return None
     low, high = values.min(), values.max()
@@ -301,8 +307,8 @@ def _spacing_problem(name, times, sequence, sensor):
         else f"above the plausible {spacing_rule.high:g}"
     )
     unit = spacing_rule.likely_unit(spacing, per_sensor=sensors is not None)
-    if unit == spacing_rule.unit:  # the unit is right for a typical spacing: then the spacing itself is odd
-        cause = "no radar scans at that rate"
+    if unit == spacing_rule.unit:  # no other unit makes it a typical spacing
+        cause = spacing_rule.too_dense if spacing < spacing_rule.low else "no radar scans that seldom"
     else:
         cause = f"{name} looks like {TIME_UNIT_NAMES[unit]}; {spacing_rule.convention}"
     return (
@@ -324,7 +330,8 @@ def median_scan_spacing(times, sequence=None, sensor=None):
     Returns
     -------
     medians : ndarray of float
-        One per group with at least :data:`MIN_SCANS_FOR_SPACING` distinct times.
+        One per group with at least :data:`~sklearn_radar._schema.MIN_SCANS_FOR_SPACING` distinct times
+        and on average at least :data:`~sklearn_radar._schema.MIN_DETECTIONS_PER_SCAN` rows per time.
     sequences, sensors : ndarray or None
         The keys of those groups (None when the key was not given).
     """
@@ -354,7 +361,8 @@ def median_scan_spacing(times, sequence=None, sensor=None):
     gaps, gap_group = gaps[order], gap_group[order]
     n_gaps = np.bincount(gap_group, minlength=n_groups)
     start = np.r_[0, np.cumsum(n_gaps)[:-1]]
-    judged = np.flatnonzero(n_scans >= MIN_SCANS_FOR_SPACING)
+    n_rows = np.bincount(np.cumsum(new_group) - 1, minlength=n_groups)
+    judged = np.flatnonzero((n_scans >= MIN_SCANS_FOR_SPACING) & (n_rows >= MIN_DETECTIONS_PER_SCAN * n_scans))
     lower = gaps[start[judged] + (n_gaps[judged] - 1) // 2]
     upper = gaps[start[judged] + n_gaps[judged] // 2]
     medians = 0.5 * (lower + upper)
