@@ -62,13 +62,21 @@ def read_columns(estimator, X, reads: ColumnsRead, *, reset):
         present = [column for column in reads.names if column in X.columns]
         columns = {column: None for column in reads.names}
         columns.update({column: _numeric_column(X[column], column, estimator) for column in present})
-        sensor = _numeric_column(X["sensor_id"], "sensor_id", estimator) if "sensor_id" in X.columns else None
-        check_plausible(columns, name, sensor=sensor)
+        if get_config()["check_plausibility"]:
+            check_plausible(columns, name, sensor=_sensor_of(X))
         return X, columns
     X = _validate_array(estimator, X, reads.layout, reset=reset)
     columns = _array_columns(X, reads, name)
     check_plausible(columns, name, layout=reads.layout, n_columns=X.shape[1])
     return X, columns
+
+
+def _sensor_of(X):
+    """The integer ``sensor_id`` column of a DataFrame, when it has one (for the per-sensor scan spacing)."""
+    if "sensor_id" not in X.columns:
+        return None
+    sensor = X["sensor_id"].to_numpy()
+    return sensor if sensor.dtype.kind in "iu" else None
 
 
 def _validate_array(estimator, X, layout, *, reset):
@@ -336,24 +344,29 @@ def median_scan_spacing(times, sequence=None, sensor=None):
         The keys of those groups (None when the key was not given).
     """
     keys = [key for key in (sensor, sequence) if key is not None]
+    # Rows come scan by scan in most tables: work on runs of equal (time, keys), a few per scan, not on rows.
+    run_start = np.zeros(len(times), dtype=bool)
+    run_start[:1] = True
+    for values in (times, *keys):
+        run_start[1:] |= values[1:] != values[:-1]
+    starts = np.flatnonzero(run_start)
+    run_rows = np.diff(np.r_[starts, len(times)])
+    times, keys = times[starts], [key[starts] for key in keys]
+    order = np.lexsort((times, *keys))  # by sequence, then sensor, then time
+    times, run_rows, keys = times[order], run_rows[order], [key[order] for key in keys]
     new_group = np.zeros(len(times), dtype=bool)
     new_group[:1] = True
-    if all(_constant(key) for key in keys):  # one group (the common case): sort the times alone
-        sorted_times = np.sort(times)
-        group_keys = [key[:1] for key in keys]
-    else:
-        order = np.lexsort((times, *keys))  # by sequence, then sensor, then time
-        sorted_times = times[order]
-        sorted_keys = [key[order] for key in keys]
-        for key in sorted_keys:
-            new_group[1:] |= key[1:] != key[:-1]
-        group_keys = [key[new_group] for key in sorted_keys]
+    for key in keys:
+        new_group[1:] |= key[1:] != key[:-1]
+    group_keys = [key[new_group] for key in keys]
+    group_of_run = np.cumsum(new_group) - 1
     distinct = new_group.copy()
-    distinct[1:] |= sorted_times[1:] != sorted_times[:-1]
-    scan_times = sorted_times[distinct]
-    scan_group = np.cumsum(new_group[distinct]) - 1
+    distinct[1:] |= times[1:] != times[:-1]
+    scan_times = times[distinct]
+    scan_group = group_of_run[distinct]
     n_groups = int(scan_group[-1]) + 1 if len(scan_group) else 0
     n_scans = np.bincount(scan_group, minlength=n_groups)
+    n_rows = np.bincount(group_of_run, weights=run_rows, minlength=n_groups)
     same_group = scan_group[1:] == scan_group[:-1]
     gaps = np.diff(scan_times)[same_group]
     gap_group = scan_group[1:][same_group]
@@ -361,7 +374,6 @@ def median_scan_spacing(times, sequence=None, sensor=None):
     gaps, gap_group = gaps[order], gap_group[order]
     n_gaps = np.bincount(gap_group, minlength=n_groups)
     start = np.r_[0, np.cumsum(n_gaps)[:-1]]
-    n_rows = np.bincount(np.cumsum(new_group) - 1, minlength=n_groups)
     judged = np.flatnonzero((n_scans >= MIN_SCANS_FOR_SPACING) & (n_rows >= MIN_DETECTIONS_PER_SCAN * n_scans))
     lower = gaps[start[judged] + (n_gaps[judged] - 1) // 2]
     upper = gaps[start[judged] + n_gaps[judged] // 2]
@@ -369,7 +381,3 @@ def median_scan_spacing(times, sequence=None, sensor=None):
     sequences = group_keys[-1][judged] if sequence is not None else None
     sensors = group_keys[0][judged] if sensor is not None else None
     return medians, sequences, sensors
-
-
-def _constant(values):
-    return values[0] == values[-1] and bool((values == values[0]).all())

@@ -329,6 +329,19 @@ def test_median_scan_spacing_per_group_in_any_row_order():
     np.testing.assert_array_equal(medians, [60.0, 15.0])  # sequence 9 has too few scans to be judged
     np.testing.assert_array_equal(sequences, [7, 8])
     assert sensors is None
+    in_scan_order = median_scan_spacing(times, sequence)  # rows scan by scan: the runs shortcut
+    np.testing.assert_array_equal(in_scan_order[0], medians)
+
+
+def test_median_scan_spacing_per_sensor_of_a_simulated_recording(scenes):
+    data = scenes.data
+    medians, sequences, sensors = median_scan_spacing(
+        data["timestamp"].to_numpy(np.float64), data["sequence"].to_numpy(), data["sensor_id"].to_numpy()
+    )
+    assert len(medians) == 8 and sorted(set(sensors.tolist())) == [1, 2, 3, 4]
+    assert np.all((55_000 < medians) & (medians < 65_000))  # µs: each sensor cycles in about 60 ms
+    per_sequence = median_scan_spacing(data["timestamp"].to_numpy(np.float64), data["sequence"].to_numpy())[0]
+    assert np.all((10_000 < per_sequence) & (per_sequence < 20_000))  # four unsynchronised sensors: about 15 ms
 
 
 def test_a_time_per_detection_is_not_judged_as_a_scan_rate():
