@@ -40,6 +40,15 @@ Coordinate frames and sign conventions
 * **Time**: ``timestamp`` is in microseconds with an arbitrary origin per
   sequence; one scan (one sensor's measurement cycle) shares one timestamp.
 
+Physical plausibility
+---------------------
+Every column an estimator or the RadarScenes reader reads has physical
+limits here (:data:`PLAUSIBLE_VALUES`, and :class:`ScanSpacing` for the
+spacing of scan times), each with its argument: a value beyond one is a
+wrong unit, sign or column order, and raises a ValueError naming column,
+value and likely cause.  ``sklearn_radar.set_config(check_plausibility=False)``
+turns the checks off.
+
 Labels
 ------
 ``label_id`` uses the RadarScenes classes (:data:`LABELS`); 11 (STATIC) is

@@ -13,7 +13,11 @@ field.  Values are checked where they are read: a NaN or infinite number in
 a field of ``radar_data.h5`` (``radar_data`` or ``odometry``) or in the
 mounting of ``sensors.json`` is rejected, as is a ``sequences.json`` that
 lists no sequence or a ``scenes.json`` whose ``sequence_name`` names another
-sequence than its folder.
+sequence than its folder.  Physical plausibility (units) is checked as the
+estimators check it (:func:`sklearn_radar._validation.check_plausible`):
+the measured fields of ``radar_data`` with the scan spacing per sensor, the
+odometry's speed, yaw rate and position, and the mounting of
+``sensors.json``.
 """
 
 from __future__ import annotations
@@ -108,7 +112,12 @@ def load_radarscenes(path, sequences=None) -> Bunch:
     ValueError
         If a file is malformed or inconsistent; the message names the file
         and the field.  Also if a requested sequence is not listed in
-        ``sequences.json`` or its name is not of the form ``sequence_N``.
+        ``sequences.json`` or its name is not of the form ``sequence_N``,
+        if time runs backwards in ``radar_data`` or ``odometry``, and if a
+        value is physically implausible (a range in mm, an azimuth in
+        degrees, timestamps in s, a mounting outside the car, ...; the
+        bounds of ``sklearn_radar._schema.PLAUSIBLE_VALUES``, switched off by
+        ``sklearn_radar.set_config(check_plausibility=False)``).
 
     See Also
     --------
