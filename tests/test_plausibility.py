@@ -339,6 +339,7 @@ def test_median_scan_spacing_per_sensor_of_a_simulated_recording(scenes):
         data["timestamp"].to_numpy(np.float64), data["sequence"].to_numpy(), data["sensor_id"].to_numpy()
     )
     assert len(medians) == 8 and sorted(set(sensors.tolist())) == [1, 2, 3, 4]
+    assert sequences.tolist() == [1, 1, 1, 1, 2, 2, 2, 2]
     assert np.all((55_000 < medians) & (medians < 65_000))  # µs: each sensor cycles in about 60 ms
     per_sequence = median_scan_spacing(data["timestamp"].to_numpy(np.float64), data["sequence"].to_numpy())[0]
     assert np.all((10_000 < per_sequence) & (per_sequence < 20_000))  # four unsynchronised sensors: about 15 ms
