@@ -350,6 +350,9 @@ def median_scan_spacing(times, sequence=None, sensor=None):
     for values in (times, *keys):
         run_start[1:] |= values[1:] != values[:-1]
     starts = np.flatnonzero(run_start)
+    if len(starts) < MIN_SCANS_FOR_SPACING:  # fewer runs than scans needed (one scan of a stream): nothing to judge
+        empty = np.zeros(0)
+        return empty, (empty if sequence is not None else None), (empty if sensor is not None else None)
     run_rows = np.diff(np.r_[starts, len(times)])
     times, keys = times[starts], [key[starts] for key in keys]
     order = np.lexsort((times, *keys))  # by sequence, then sensor, then time
