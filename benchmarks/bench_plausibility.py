@@ -7,7 +7,7 @@ copy a new sequence, up to about ``--n-detections`` rows.  Printed:
 * the pipeline FrameTransform + DopplerDensityFilter + RadarDBSCAN with the
   checks off (``config_context(check_plausibility=False)``), stage by stage;
 * the checks alone: what they add to each stage's reading of its input
-  (``read_columns`` with the checks on minus off, best of ``--repeat``),
+  (``read_columns`` with the checks on minus off, best of 7 or ``--repeat``),
   summed over the stages (FrameTransform reads its input in fit and in
   transform: counted twice);
 * the ratio of the two, and the pipeline once more with the checks on as a
@@ -71,8 +71,8 @@ def check_times(data, Xt, Xf, repeat):
     }
     times = {}
     for name, (estimator, X, reads, calls) in stages.items():
-        on = read_seconds(estimator, X, reads, True, repeat)
-        off = read_seconds(estimator, X, reads, False, repeat)
+        on = read_seconds(estimator, X, reads, True, max(repeat, 7))  # a small difference: more runs
+        off = read_seconds(estimator, X, reads, False, max(repeat, 7))
         times[name] = calls * max(on - off, 0.0)
     return times
 

@@ -185,6 +185,12 @@ def test_the_numeric_table_as_an_array_names_the_expected_layout(scenes, model):
         model.fit(X)
 
 
+def test_with_the_checks_off_the_neighbour_grid_still_suspects_the_layout(scenes):
+    X = scenes.data.select_dtypes("number").to_numpy()  # timestamp (1.6e11 µs) lands in 'x'
+    with config_context(check_plausibility=False), pytest.raises(ValueError, match=r"magnitude 1\.\d+e\+11 m.*layout"):
+        DopplerDensityFilter().fit_transform(X)
+
+
 def test_an_array_message_lists_the_layout_columns_in_order(working):
     X = working[["x", "y", "v_r", "t"]].to_numpy()
     X[:, 3] *= 1e6  # t in µs
