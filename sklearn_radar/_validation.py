@@ -259,7 +259,7 @@ def plausibility_message(where, problems, layout=None, n_columns=None):
         text += (
             f" Also {len(problems) - 1} more: "
             + "; ".join(problems[1:4])
-            + ("; ..." if len(problems) > 4 else "")
+            + ("; and more" if len(problems) > 4 else "")
             + "."
         )
     if layout is not None:
