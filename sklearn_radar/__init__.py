@@ -22,8 +22,11 @@ __all__ = [
     "FrameTransform",
     "RadarDBSCAN",
     "__version__",
+    "config_context",
     "describe_columns",
+    "get_config",
     "instance_target",
+    "set_config",
 ]
 
 # Public name -> the module that defines it.
@@ -32,6 +35,9 @@ _LAZY = {
     "RADARSCENES_MOUNTING": "._schema",
     "describe_columns": "._schema",
     "instance_target": "._schema",
+    "config_context": "._config",
+    "get_config": "._config",
+    "set_config": "._config",
     "ClusterMerger": ".cluster",
     "RadarDBSCAN": ".cluster",
     "DopplerDensityFilter": ".preprocessing",

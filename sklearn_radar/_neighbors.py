@@ -109,7 +109,9 @@ def _cell_coordinates(values, cell_size, name):
         worst = float(np.max(np.abs(values)))
         raise ValueError(
             f"column {name!r} holds a coordinate of magnitude {worst:.3g} m, beyond the neighbour grid's reach "
-            f"of {_MAX_CELLS * cell_size:.3g} m (2**31 cells of {cell_size:g} m); shift the data nearer the origin"
+            f"of {_MAX_CELLS * cell_size:.3g} m (2**31 cells of {cell_size:g} m); shift the data nearer the origin, "
+            f"or, if that is no position in m (another column read as {name!r}, e.g. a plain array in another "
+            f"layout than the working detection array), pass the detection table as a DataFrame"
         )
     return cells.astype(np.int64)
 

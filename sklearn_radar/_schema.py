@@ -40,6 +40,15 @@ Coordinate frames and sign conventions
 * **Time**: ``timestamp`` is in microseconds with an arbitrary origin per
   sequence; one scan (one sensor's measurement cycle) shares one timestamp.
 
+Physical plausibility
+---------------------
+Every column an estimator or the RadarScenes reader reads has physical
+limits here (:data:`PLAUSIBLE_VALUES`, and :class:`ScanSpacing` for the
+spacing of scan times), each with its argument: a value beyond one is a
+wrong unit, sign or column order, and raises a ValueError naming column,
+value and likely cause.  ``sklearn_radar.set_config(check_plausibility=False)``
+turns the checks off.
+
 Labels
 ------
 ``label_id`` uses the RadarScenes classes (:data:`LABELS`); 11 (STATIC) is
@@ -285,6 +294,217 @@ MERGER_READS = ColumnsRead(
 )
 #: The scikit-learn baselines per time window.
 WINDOWED_READS = ColumnsRead(required=_WORK, optional=("sequence", "keep"), layout=WORK_LAYOUT)
+
+
+# --------------------------------------------------------------------------
+# Physical plausibility: the one place where the bounds live
+# --------------------------------------------------------------------------
+#
+# Each limit below is a property of the world (a car, a radar, the Earth), not of a data set, with a margin so
+# that no real recording comes near it; a value beyond it means a wrong unit, sign or column order.  The checks
+# that apply them are in sklearn_radar._validation; sklearn_radar.set_config(check_plausibility=False) skips them.
+
+#: m.  The farthest automotive radars see about 300 m (long-range sensors; RadarScenes: 100 m); 1000 m is more
+#: than three times that.  A range in mm (100 m -> 1e5) or cm (1e4) is beyond it.
+MAX_RANGE = 1000.0
+#: rad.  An azimuth is an angle about the boresight, wrapped to (-pi, pi] (RadarScenes sensors see +-60 deg);
+#: the margin covers float32 rounding of pi.  Degrees exceed it as soon as one detection lies 3.2 deg off boresight.
+MAX_AZIMUTH = np.pi + 1e-5
+#: rad.  A mounting yaw, in (-pi, pi] or [0, 2 pi) (both conventions occur); degrees exceed 2 pi above 6.3 deg.
+MAX_SENSOR_YAW = 2 * np.pi + 1e-5
+#: m.  Mounting x from the rear-axle centre: the longest road vehicles (articulated buses, truck-trailers, 25 m)
+#: hold every sensor within 25 m of an axle; 30 m is beyond any.  A mounting in cm (3.66 m -> 366) or mm is not.
+MAX_SENSOR_X = 30.0
+#: m.  Mounting y from the centre line: road vehicles are at most 2.6 m wide (EU and US limits), so a sensor sits
+#: within 1.3 m (1.6 m with mirrors); 5 m is beyond any.  A mounting in cm (0.87 m -> 87) or mm is not.
+MAX_SENSOR_Y = 5.0
+#: m/s.  The fastest road cars reach about 490 km/h (136 m/s); 150 m/s (540 km/h) is faster than any.  Speeds in
+#: km/h exceed it above 150 km/h only, so a km/h ego speed is caught on a motorway, not in town.
+MAX_EGO_SPEED = 150.0
+#: m/s.  Reverse gears are geared low (cars reverse at at most about 60 km/h, 17 m/s); -30 m/s (108 km/h
+#: backwards) is beyond any car, and more negative values mean a car x axis that points backwards.
+MIN_EGO_SPEED = -30.0
+#: rad/s.  A car at full lock circles about 10 m at walking pace (about 1 rad/s); even a car that spins out
+#: turns slower than half a revolution per second (pi rad/s = 180 deg/s).  A yaw rate in deg/s exceeds pi in
+#: any turn faster than 3.2 deg/s.
+MAX_YAW_RATE = np.pi
+#: m/s.  A Doppler velocity is the range rate between a sensor and a target, both road vehicles (<= 150 m/s
+#: each, head-on: 300 m/s), and automotive radars resolve at most about +-110 m/s (-400/+200 km/h); a
+#: compensated velocity (over ground) is smaller still.  300 m/s bounds both; km/h exceeds it above 300 km/h only.
+MAX_DOPPLER = 300.0
+#: m.  A position in a sequence (world) frame: no place on Earth is farther than its circumference (4.0e7 m)
+#: from any origin on Earth, even in UTM or ECEF coordinates.  A microsecond timestamp (1.6e11) read as a
+#: position is far beyond.
+MAX_POSITION = 4.0e7
+#: m.  A position in the car frame is a detection seen by a sensor mounted on the car.
+MAX_CAR_POSITION = MAX_RANGE + MAX_SENSOR_X
+
+
+@dataclass(frozen=True)
+class PlausibleRange:
+    """The physically plausible values of one column, and what a value beyond them usually means.
+
+    Parameters
+    ----------
+    column : str
+        Column name.
+    unit : str
+        Its unit.
+    low, high : float
+        Smallest and largest plausible value, in ``unit``.
+    too_low, too_high : str
+        The likely cause of a value below ``low`` / above ``high``, for the error message.
+    argument : str
+        Why these limits (documentation).
+    """
+
+    column: str
+    unit: str
+    low: float
+    high: float
+    too_low: str
+    too_high: str
+    argument: str
+
+
+def _symmetric(column, unit, limit, cause, argument):
+    return PlausibleRange(column, unit, -limit, limit, cause, cause, argument)
+
+
+_DEGREES = "it looks like degrees; sklearn-radar (as RadarScenes) uses rad"
+_RANGE_TOO_FAR = "it looks like mm or cm; sklearn-radar (as RadarScenes) uses m"
+_DOPPLER_TOO_FAST = "it looks like km/h; sklearn-radar (as RadarScenes) uses m/s"
+_POSITION_TOO_FAR = "it looks like mm, or another column (e.g. a µs timestamp) read as a position; positions are in m"
+_CAR_POSITION_TOO_FAR = "it looks like mm or cm; car-frame positions are in m"
+_MOUNTING_OUTSIDE = "the sensor would be mounted outside the car: it looks like cm or mm; mountings are in m"
+
+#: {column: PlausibleRange} of every bounded column any estimator or the RadarScenes reader reads.  Not bounded:
+#: ``ego_yaw_seq`` and ``heading`` (a heading may be unwrapped over a sequence, so any value is an angle;
+#: degrees there cannot be told from a car that turned many times), ``timestamp`` and ``t`` (any origin; their
+#: *spacing* is checked, :data:`SCAN_SPACING`), ``sequence``, ``keep``, ``rcs``, ids and labels.
+PLAUSIBLE_VALUES = {
+    bound.column: bound
+    for bound in (
+        PlausibleRange(
+            "range_sc",
+            "m",
+            0.0,
+            MAX_RANGE,
+            "a range is a distance and cannot be negative (a sign flip, an offset, or another column read as range_sc)",
+            _RANGE_TOO_FAR,
+            "0 to MAX_RANGE (1000 m): a distance, and no automotive radar sees beyond about 300 m",
+        ),
+        _symmetric("azimuth_sc", "rad", MAX_AZIMUTH, _DEGREES, "+-pi: an angle about the boresight"),
+        _symmetric("sensor_yaw", "rad", MAX_SENSOR_YAW, _DEGREES, "+-2 pi: (-pi, pi] and [0, 2 pi) both occur"),
+        _symmetric("sensor_x", "m", MAX_SENSOR_X, _MOUNTING_OUTSIDE, "+-30 m: within the longest road vehicle"),
+        _symmetric("sensor_y", "m", MAX_SENSOR_Y, _MOUNTING_OUTSIDE, "+-5 m: within the widest road vehicle"),
+        PlausibleRange(
+            "ego_vx",
+            "m/s",
+            MIN_EGO_SPEED,
+            MAX_EGO_SPEED,
+            "no car reverses that fast: the car x axis may point backwards, or the speed is in km/h",
+            _DOPPLER_TOO_FAST,
+            "-30 to 150 m/s: no car reverses faster than about 17 m/s or drives faster than 136 m/s",
+        ),
+        _symmetric(
+            "ego_yaw_rate",
+            "rad/s",
+            MAX_YAW_RATE,
+            "it looks like deg/s; sklearn-radar (as RadarScenes) uses rad/s",
+            "+-pi rad/s: no car turns faster than half a revolution per second",
+        ),
+        _symmetric("vr", "m/s", MAX_DOPPLER, _DOPPLER_TOO_FAST, "+-300 m/s: two road vehicles head-on"),
+        _symmetric("vr_compensated", "m/s", MAX_DOPPLER, _DOPPLER_TOO_FAST, "+-300 m/s, as vr"),
+        _symmetric("v_r", "m/s", MAX_DOPPLER, _DOPPLER_TOO_FAST, "+-300 m/s, as vr"),
+        _symmetric("x_cc", "m", MAX_CAR_POSITION, _CAR_POSITION_TOO_FAR, "+-1030 m: radar reach plus mounting"),
+        _symmetric("y_cc", "m", MAX_CAR_POSITION, _CAR_POSITION_TOO_FAR, "+-1030 m: radar reach plus mounting"),
+        _symmetric("x_seq", "m", MAX_POSITION, _POSITION_TOO_FAR, "+-4e7 m: the Earth's circumference"),
+        _symmetric("y_seq", "m", MAX_POSITION, _POSITION_TOO_FAR, "+-4e7 m: the Earth's circumference"),
+        _symmetric("ego_x_seq", "m", MAX_POSITION, _POSITION_TOO_FAR, "+-4e7 m: the Earth's circumference"),
+        _symmetric("ego_y_seq", "m", MAX_POSITION, _POSITION_TOO_FAR, "+-4e7 m: the Earth's circumference"),
+        _symmetric("x", "m", MAX_POSITION, _POSITION_TOO_FAR, "+-4e7 m: the Earth's circumference"),
+        _symmetric("y", "m", MAX_POSITION, _POSITION_TOO_FAR, "+-4e7 m: the Earth's circumference"),
+    )
+}
+
+
+#: s.  A radar network delivers scans at a rate set by its cycle time: RadarScenes' four unsynchronised sensors
+#: each cycle in about 60 ms, so distinct scan times are about 15 ms apart in a sequence and 60 ms apart per
+#: sensor.  The *median* spacing per sequence (or per sensor of it, where the sensor is known) is robust to two
+#: sensors that scan almost at once and to gaps.  Even 64 unsynchronised sensors cycling every 10 ms would be
+#: 0.16 ms apart: a median below 0.1 ms is no radar.  Timestamps in s or ms instead of µs are far below it.
+MIN_SCAN_SPACING = 1e-4
+#: s.  No radar cycles slower than 5 s, and a recording subsampled to one scan per second is still within;
+#: ``t`` in ms (15-60 "s") or µs (1.5e4) instead of s, or timestamps in ns, are above it.
+MAX_SCAN_SPACING = 5.0
+#: The spacing is judged only over at least this many distinct scan times of one sequence (or sensor): over a
+#: few hand-made rows, or a sparse subset such as one object's detections, a median says little.
+MIN_SCANS_FOR_SPACING = 10
+#: A scan is one measurement of many detections at one time (RadarScenes: tens to hundreds, the simulator about
+#: 35).  A group whose rows are on average fewer than 2 per distinct time is not scan-structured (synthetic
+#: data with a time per detection, per-detection times of some sensors): its spacing says nothing about a scan
+#: rate and is not judged.
+MIN_DETECTIONS_PER_SCAN = 2
+#: s, the typical spacing per sequence (4 sensors of about 60 ms) and per sensor: the unit whose typical
+#: spacing is nearest (in ratio) to the one seen is named as the likely unit.
+TYPICAL_SCAN_SPACING = 0.015
+TYPICAL_SENSOR_SCAN_SPACING = 0.06
+#: The units a time column is found in, as seconds per unit, and their names.
+TIME_UNITS = {"ns": 1e-9, "µs": 1e-6, "ms": 1e-3, "s": 1.0}
+TIME_UNIT_NAMES = {"ns": "nanoseconds", "µs": "microseconds", "ms": "milliseconds", "s": "seconds"}
+
+
+@dataclass(frozen=True)
+class ScanSpacing:
+    """The plausible median spacing of the distinct scan times of a recording, in a time column's unit.
+
+    The limits are :data:`MIN_SCAN_SPACING` and :data:`MAX_SCAN_SPACING` (s),
+    converted to the column's unit.
+
+    Parameters
+    ----------
+    column : str
+        ``"timestamp"`` or ``"t"``.
+    unit : str
+        The column's unit, a key of :data:`TIME_UNITS`.
+    convention : str
+        The right unit, as the error message states it.
+    too_dense : str
+        The likely cause of a spacing below the limit that no other unit explains.
+    """
+
+    column: str
+    unit: str
+    convention: str
+    too_dense: str = "no radar scans at that rate"
+
+    @property
+    def low(self) -> float:
+        """Smallest plausible median spacing, in the column's unit."""
+        return MIN_SCAN_SPACING / TIME_UNITS[self.unit]
+
+    @property
+    def high(self) -> float:
+        """Largest plausible median spacing, in the column's unit."""
+        return MAX_SCAN_SPACING / TIME_UNITS[self.unit]
+
+    def likely_unit(self, spacing: float, per_sensor: bool) -> str:
+        """The unit in which ``spacing`` (a number read from the column) would be the typical spacing."""
+        typical = TYPICAL_SENSOR_SCAN_SPACING if per_sensor else TYPICAL_SCAN_SPACING
+        return min(TIME_UNITS, key=lambda unit: abs(np.log(max(spacing, 1e-300) * TIME_UNITS[unit] / typical)))
+
+
+#: {column: ScanSpacing} of the time columns.
+SCAN_SPACING = {
+    "timestamp": ScanSpacing("timestamp", "µs", "RadarScenes uses µs"),
+    "t": ScanSpacing(
+        "t",
+        "s",
+        "t is in s (FrameTransform writes t = timestamp * 1e-6 s)",
+        too_dense="the timestamps it came from look like seconds (FrameTransform's t = timestamp * 1e-6 needs µs)",
+    ),
+}
 
 
 def column_names(columns):

@@ -14,7 +14,16 @@ import numpy as np
 import pandas as pd
 from sklearn.utils.validation import validate_data
 
-from ._schema import WORK_LAYOUT, ColumnsRead
+from ._config import get_config
+from ._schema import (
+    MIN_DETECTIONS_PER_SCAN,
+    MIN_SCANS_FOR_SPACING,
+    PLAUSIBLE_VALUES,
+    SCAN_SPACING,
+    TIME_UNIT_NAMES,
+    WORK_LAYOUT,
+    ColumnsRead,
+)
 
 
 def read_columns(estimator, X, reads: ColumnsRead, *, reset):
@@ -53,8 +62,43 @@ def read_columns(estimator, X, reads: ColumnsRead, *, reset):
         present = [column for column in reads.names if column in X.columns]
         columns = {column: None for column in reads.names}
         columns.update({column: _numeric_column(X[column], column, estimator) for column in present})
+        if get_config()["check_plausibility"]:
+            check_plausible(columns, name, sensor=_sensor_of(X))
         return X, columns
-    X = validate_data(estimator, X, reset=reset, dtype=np.float64)
+    X = _validate_array(estimator, X, reads.layout, reset=reset)
+    columns = _array_columns(X, reads, name)
+    check_plausible(columns, name, layout=reads.layout, n_columns=X.shape[1])
+    return X, columns
+
+
+def _sensor_of(X):
+    """The integer ``sensor_id`` column of a DataFrame, when it has one (for the per-sensor scan spacing)."""
+    if "sensor_id" not in X.columns:
+        return None
+    sensor = X["sensor_id"].to_numpy()
+    return sensor if sensor.dtype.kind in "iu" else None
+
+
+def _validate_array(estimator, X, layout, *, reset):
+    """``validate_data`` as float64; an array that is not numeric is blamed on its layout."""
+    try:
+        return validate_data(estimator, X, reset=reset, dtype=np.float64)
+    except ValueError as error:
+        if "could not convert" not in str(error):
+            raise
+        raise ValueError(
+            f"{type(estimator).__name__}: X is an array with non-numeric values ({error}), so its layout looks "
+            f"wrong: {_layout_text(layout)}.  The detection table (whose uuid and track_id hold strings) must be "
+            f"passed as the DataFrame itself, not as .to_numpy(); its columns are then found by name."
+        ) from error
+
+
+def _layout_text(layout):
+    return f"a plain array is read by position as the {layout.name}, columns {list(layout.columns)}"
+
+
+def _array_columns(X, reads, name):
+    """The columns of ``reads`` from a validated array, by position; see :func:`read_columns`."""
     layout = reads.layout
     columns = {}
     for column in reads.names:
@@ -70,7 +114,7 @@ def read_columns(estimator, X, reads: ColumnsRead, *, reset):
             )
         else:
             columns[column] = None
-    return X, columns
+    return columns
 
 
 def write_columns(X, new_columns, layout=WORK_LAYOUT):
@@ -149,3 +193,194 @@ def sequence_slices(sequence):
     order = np.argsort(inverse, kind="stable")
     bounds = np.searchsorted(inverse[order], np.arange(len(codes) + 1))
     return [order[bounds[k] : bounds[k + 1]] for k in range(len(codes))]
+
+
+# --------------------------------------------------------------------------
+# Physical plausibility (the bounds are sklearn_radar._schema.PLAUSIBLE_VALUES and SCAN_SPACING)
+# --------------------------------------------------------------------------
+
+
+def check_plausible(columns, where, *, sequence=None, sensor=None, layout=None, n_columns=None, bounds=None):
+    """Raise a ValueError when a column holds a physically implausible value (unless switched off).
+
+    Every column of ``columns`` with a bound in
+    :data:`~sklearn_radar._schema.PLAUSIBLE_VALUES` must lie within it, and
+    the time columns ``timestamp`` (µs) and ``t`` (s) must have a median
+    spacing of distinct scan times per sequence (and per sensor, where it
+    is known) within :data:`~sklearn_radar._schema.SCAN_SPACING`.  Rows may
+    come in any order.  Nothing is checked when
+    ``sklearn_radar.get_config()["check_plausibility"]`` is False.
+
+    Parameters
+    ----------
+    columns : dict of str to ndarray or None
+        Columns by name; None (absent) and unbounded columns are skipped.
+    where : str
+        Prefix of the message (estimator or file name).
+    sequence : ndarray, default=None
+        Sequence of each row; None: ``columns["sequence"]`` if present, else one sequence.
+    sensor : ndarray, default=None
+        Sensor of each row, when known.
+    layout : ArrayLayout, default=None
+        The layout the columns were read by, for array input: the message then says so.
+    n_columns : int, default=None
+        Width of that array.
+    bounds : dict of str to str, default=None
+        The bound of a column stored under another name, e.g. ``{"vx": "ego_vx"}`` for the odometry.
+
+    Raises
+    ------
+    ValueError
+        Naming the column, the value seen, the likely cause and, for an
+        array, the layout it was read by.
+    """
+    if not get_config()["check_plausibility"]:
+        return
+    if sequence is None:
+        sequence = columns.get("sequence")
+    problems = [
+        problem
+        for name, values in columns.items()
+        if values is not None and len(values)
+        for problem in (
+            _range_problem(name, values, (bounds or {}).get(name, name)),
+            _spacing_problem(name, values, sequence, sensor),
+        )
+        if problem is not None
+    ]
+    if problems:
+        raise ValueError(plausibility_message(where, problems, layout, n_columns))
+
+
+def plausibility_message(where, problems, layout=None, n_columns=None):
+    """The error message for a list of problem descriptions (the first in full, the others listed)."""
+    text = f"{where}: implausible input: {problems[0]}."
+    if len(problems) > 1:
+        text += (
+            f" Also {len(problems) - 1} more: "
+            + "; ".join(problems[1:4])
+            + ("; and more" if len(problems) > 4 else "")
+            + "."
+        )
+    if layout is not None:
+        wider = n_columns is not None and n_columns > len(layout.columns)
+        if len(problems) > 1 or wider:
+            verdict = "so the layout (column order) looks wrong"
+        else:
+            verdict = "check the unit, or the layout (column order)"
+        text += (
+            f" X is a plain array of {n_columns} column(s), {verdict}: {_layout_text(layout)}. "
+            f"Pass the detection table as a DataFrame (columns are found by name), or an array in that order."
+        )
+    return text + " If the data is right, sklearn_radar.set_config(check_plausibility=False) turns these checks off."
+
+
+def _range_problem(name, values, bound_name):
+    bound = PLAUSIBLE_VALUES.get(bound_name)
+    if bound is None:
+        return None
+    low, high = values.min(), values.max()
+    if low < bound.low:
+        row = int(np.argmin(values))
+        return (
+            f"column {name!r} holds {low:.6g} {bound.unit} (row {row}), below the plausible {bound.low:.6g} "
+            f"{bound.unit}: {bound.too_low}"
+        )
+    if high > bound.high:
+        row = int(np.argmax(values))
+        return (
+            f"column {name!r} holds {high:.6g} {bound.unit} (row {row}), above the plausible {bound.high:.6g} "
+            f"{bound.unit}: {bound.too_high}"
+        )
+    return None
+
+
+def _spacing_problem(name, times, sequence, sensor):
+    spacing_rule = SCAN_SPACING.get(name)
+    if spacing_rule is None:
+        return None
+    medians, sequences, sensors = median_scan_spacing(times, sequence, sensor)
+    if not len(medians):
+        return None
+    worst = int(np.argmin(medians)) if medians.min() < spacing_rule.low else int(np.argmax(medians))
+    spacing = medians[worst]
+    if spacing_rule.low <= spacing <= spacing_rule.high:
+        return None
+    group = "one sequence" if sequences is None else f"sequence {sequences[worst]:g}"
+    if sensors is not None:
+        group += f", sensor {sensors[worst]:g}"
+    side = (
+        f"below the plausible {spacing_rule.low:g}"
+        if spacing < spacing_rule.low
+        else f"above the plausible {spacing_rule.high:g}"
+    )
+    unit = spacing_rule.likely_unit(spacing, per_sensor=sensors is not None)
+    if unit == spacing_rule.unit:  # no other unit makes it a typical spacing
+        cause = spacing_rule.too_dense if spacing < spacing_rule.low else "no radar scans that seldom"
+    else:
+        cause = f"{name} looks like {TIME_UNIT_NAMES[unit]}; {spacing_rule.convention}"
+    return (
+        f"column {name!r}: distinct scan times are a median {spacing:.3g} {spacing_rule.unit} apart ({group}), "
+        f"{side} {spacing_rule.unit}: {cause}"
+    )
+
+
+def median_scan_spacing(times, sequence=None, sensor=None):
+    """Median spacing of the distinct values of ``times`` within each sequence (and sensor), rows in any order.
+
+    Parameters
+    ----------
+    times : ndarray of float, shape (n,)
+        Scan time of each row (one scan: one time).
+    sequence, sensor : ndarray of shape (n,) or None
+        Group keys; None: one group.
+
+    Returns
+    -------
+    medians : ndarray of float
+        One per group with at least :data:`~sklearn_radar._schema.MIN_SCANS_FOR_SPACING` distinct times
+        and on average at least :data:`~sklearn_radar._schema.MIN_DETECTIONS_PER_SCAN` rows per time.
+    sequences, sensors : ndarray or None
+        The keys of those groups (None when the key was not given).
+    """
+    keys = [key for key in (sensor, sequence) if key is not None]
+    # Rows come scan by scan in most tables: work on runs of equal (time, keys), a few per scan, not on rows.
+    run_start = np.zeros(len(times), dtype=bool)
+    run_start[:1] = True
+    for values in (times, *keys):
+        run_start[1:] |= values[1:] != values[:-1]
+    starts = np.flatnonzero(run_start)
+    if len(starts) < MIN_SCANS_FOR_SPACING:  # fewer runs than scans needed (one scan of a stream): nothing to judge
+        empty = np.zeros(0)
+        return empty, (empty if sequence is not None else None), (empty if sensor is not None else None)
+    run_rows = np.diff(np.r_[starts, len(times)])
+    times, keys = times[starts], [key[starts] for key in keys]
+    order = np.lexsort((times, *keys))  # by sequence, then sensor, then time
+    times, run_rows, keys = times[order], run_rows[order], [key[order] for key in keys]
+    new_group = np.zeros(len(times), dtype=bool)
+    new_group[:1] = True
+    for key in keys:
+        new_group[1:] |= key[1:] != key[:-1]
+    group_keys = [key[new_group] for key in keys]
+    group_of_run = np.cumsum(new_group) - 1
+    distinct = new_group.copy()
+    distinct[1:] |= times[1:] != times[:-1]
+    scan_times = times[distinct]
+    scan_group = group_of_run[distinct]
+    n_groups = int(scan_group[-1]) + 1 if len(scan_group) else 0
+    n_scans = np.bincount(scan_group, minlength=n_groups)
+    n_rows = np.bincount(group_of_run, weights=run_rows, minlength=n_groups)
+    same_group = scan_group[1:] == scan_group[:-1]
+    gaps = np.diff(scan_times)[same_group]
+    gap_group = scan_group[1:][same_group]
+    order = np.lexsort((gaps, gap_group))
+    gaps, gap_group = gaps[order], gap_group[order]
+    n_gaps = np.bincount(gap_group, minlength=n_groups)
+    start = np.r_[0, np.cumsum(n_gaps)[:-1]]
+    judged = np.flatnonzero((n_scans >= MIN_SCANS_FOR_SPACING) & (n_rows >= MIN_DETECTIONS_PER_SCAN * n_scans))
+    lower = gaps[start[judged] + (n_gaps[judged] - 1) // 2]
+    upper = gaps[start[judged] + n_gaps[judged] // 2]
+    medians = 0.5 * (lower + upper)
+    sequences = group_keys[-1][judged] if sequence is not None else None
+    sensors = group_keys[0][judged] if sensor is not None else None
+    return medians, sequences, sensors

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from sklearn.utils.estimator_checks import parametrize_with_checks
 
-from sklearn_radar import ClusterMerger, DopplerDensityFilter, FrameTransform, RadarDBSCAN
+from sklearn_radar import ClusterMerger, DopplerDensityFilter, FrameTransform, RadarDBSCAN, config_context
 from sklearn_radar.cluster import SequenceDBSCAN, SequenceHDBSCAN, WindowedDBSCAN, WindowedHDBSCAN
 
 #: {repr of the estimator below: {check name: reason}}.  Keep every entry justified.
@@ -41,6 +41,20 @@ EXPECTED_FAILED_CHECKS = {
         "check_clustering": "Its default stage 1 is RadarDBSCAN() with vr_min = 0.4 m/s: " + _BY_DESIGN_NOISE,
         "check_clustering(readonly_memmap=True)": "Its default stage 1 is RadarDBSCAN(): " + _BY_DESIGN_NOISE,
     },
+}
+
+
+_RAW_RANDOM_IS_IMPLAUSIBLE = (
+    "FrameTransform reads raw measurements by position (range_sc, azimuth_sc, vr, timestamp, mounting, odometry): "
+    "the checks' random columns give negative ranges, azimuths beyond +-pi rad and timestamps a fraction of a "
+    "microsecond apart, which no radar produces, so the plausibility check rightly refuses them. Its checks run "
+    "with sklearn_radar.config_context(check_plausibility=False); that they would fail otherwise is tested below."
+)
+#: {repr of the estimator: reason} of the estimators whose common checks run with the plausibility checks off.
+#: Every other estimator runs them with the checks on (the default).
+PLAUSIBILITY_OFF = {
+    "FrameTransform()": _RAW_RANDOM_IS_IMPLAUSIBLE,
+    "FrameTransform(frame='car')": _RAW_RANDOM_IS_IMPLAUSIBLE,
 }
 
 
@@ -91,7 +105,19 @@ CHECKS = _strict(
 
 @CHECKS
 def test_sklearn_compatible_estimator(estimator, check):
-    check(estimator)
+    with config_context(check_plausibility=repr(estimator) not in PLAUSIBILITY_OFF):
+        check(estimator)
+
+
+@pytest.mark.parametrize("name", sorted(PLAUSIBILITY_OFF))
+def test_an_estimator_run_without_plausibility_checks_needs_it(name):
+    # The table entry is justified: on the checks' kind of data (make_blobs, values within +-10) it raises.
+    estimator = {repr(e): e for e in (FrameTransform(), FrameTransform(frame="car"))}[name]
+    X = np.random.default_rng(0).normal(scale=5.0, size=(30, 4))
+    with pytest.raises(ValueError, match="implausible input"):
+        estimator.fit(X)
+    with config_context(check_plausibility=False):
+        estimator.fit(X)
 
 
 def test_every_expected_failure_is_strict_and_matches_a_check():

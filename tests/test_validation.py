@@ -4,7 +4,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from sklearn_radar import ClusterMerger, DopplerDensityFilter, FrameTransform, RadarDBSCAN
+from sklearn_radar import ClusterMerger, DopplerDensityFilter, FrameTransform, RadarDBSCAN, config_context
 from sklearn_radar._schema import (
     FILTER_READS,
     FRAME_TRANSFORM_READS,
@@ -97,5 +97,8 @@ def test_a_dataframe_without_a_required_column_is_named():
 def test_a_raw_value_that_makes_a_working_column_overflow_is_named():
     raw = np.c_[[10.0, 10.0], [0.1, 0.1], [1.0, 1.0], [0.0, 0.0], [3.6, 3.6], [0.7, 0.7], [0.0, 0.0]]
     raw = np.c_[raw, np.zeros((2, 4)), [0.1, 1.7e308]]  # ego_yaw_rate: 1.7e308 rad/s times sensor_x overflows v_r
-    with pytest.raises(ValueError, match=r"column 'ego_yaw_rate' holds 1.7e\+308 at row 1.*'v_r' overflow"):
+    with pytest.raises(ValueError, match=r"column 'ego_yaw_rate' holds 1.7e\+308 rad/s \(row 1\), above the plausible"):
         FrameTransform().fit_transform(raw)
+    with config_context(check_plausibility=False):  # what is left when the data is declared right
+        with pytest.raises(ValueError, match=r"column 'ego_yaw_rate' holds 1.7e\+308 at row 1.*'v_r' overflow"):
+            FrameTransform().fit_transform(raw)

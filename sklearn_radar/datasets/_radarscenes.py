@@ -13,7 +13,11 @@ field.  Values are checked where they are read: a NaN or infinite number in
 a field of ``radar_data.h5`` (``radar_data`` or ``odometry``) or in the
 mounting of ``sensors.json`` is rejected, as is a ``sequences.json`` that
 lists no sequence or a ``scenes.json`` whose ``sequence_name`` names another
-sequence than its folder.
+sequence than its folder.  Physical plausibility (units) is checked as the
+estimators check it (:func:`sklearn_radar._validation.check_plausible`):
+the measured fields of ``radar_data`` with the scan spacing per sensor, the
+odometry's speed, yaw rate and position, and the mounting of
+``sensors.json``.
 """
 
 from __future__ import annotations
@@ -46,6 +50,7 @@ from .._schema import (
     make_frame,
     nearest_odometry_index,
 )
+from .._validation import check_plausible
 
 __all__ = ["load_radarscenes", "write_radarscenes"]
 
@@ -107,7 +112,12 @@ def load_radarscenes(path, sequences=None) -> Bunch:
     ValueError
         If a file is malformed or inconsistent; the message names the file
         and the field.  Also if a requested sequence is not listed in
-        ``sequences.json`` or its name is not of the form ``sequence_N``.
+        ``sequences.json`` or its name is not of the form ``sequence_N``,
+        if time runs backwards in ``radar_data`` or ``odometry``, and if a
+        value is physically implausible (a range in mm, an azimuth in
+        degrees, timestamps in s, a mounting outside the car, ...; the
+        bounds of ``sklearn_radar._schema.PLAUSIBLE_VALUES``, switched off by
+        ``sklearn_radar.set_config(check_plausibility=False)``).
 
     See Also
     --------
@@ -192,7 +202,9 @@ def _read_sensors_json(file: Path) -> dict:
         mounting[sensor_id] = {
             key: _json_float(_field(entry, key, file, name), file, f"{name}.{key}") for key in ("x", "y", "yaw")
         }
-    return dict(sorted(mounting.items()))
+    mounting = dict(sorted(mounting.items()))
+    _check_plausible_mounting(mounting, file)
+    return mounting
 
 
 def _read_sequences_json(file: Path) -> dict:
@@ -249,6 +261,8 @@ def _load_sequence(sequence_dir: Path, number: int, mounting: dict):
     odometry = _file_frame(odometry_array, _ODOMETRY_FILE_COLUMNS, f"{h5_file} [odometry]")
     _check_sorted(radar["timestamp"], f"{h5_file} [radar_data]")
     _check_sorted(odometry["timestamp"], f"{h5_file} [odometry]")
+    _check_plausible_radar_data(radar, f"{h5_file} [radar_data]")
+    _check_plausible_odometry(odometry, f"{h5_file} [odometry]")
     _check_mounting(radar["sensor_id"], mounting, h5_file)
     scenes_file = sequence_dir / "scenes.json"
     scenes_content = _read_json(scenes_file)
@@ -339,8 +353,39 @@ def _check_sequence_name(content, name: str, file: Path) -> None:
 
 
 def _check_sorted(timestamps: pd.Series, table: str) -> None:
-    if np.any(np.diff(timestamps.to_numpy()) < 0):
-        raise ValueError(f"{table}: field 'timestamp' is not sorted ascending")
+    """Time must not run backwards: RadarScenes stores rows in time order (and so every sensor's scans)."""
+    values = timestamps.to_numpy()
+    backwards = np.flatnonzero(np.diff(values) < 0)
+    if backwards.size:
+        row = int(backwards[0]) + 1
+        raise ValueError(
+            f"{table}: field 'timestamp' is not sorted ascending: time runs backwards at row {row} "
+            f"({values[row]} µs after {values[row - 1]} µs); RadarScenes stores rows in time order"
+        )
+
+
+def _check_plausible_radar_data(radar: pd.DataFrame, table: str) -> None:
+    """Physical plausibility of the measured fields (sklearn_radar._schema.PLAUSIBLE_VALUES), per sensor."""
+    numeric = [name for name in radar.columns if name not in ("sensor_id", "label_id", *_STRING_FIELDS)]
+    columns = {name: radar[name].to_numpy(dtype=np.float64) for name in numeric}
+    check_plausible(columns, table, sensor=radar["sensor_id"].to_numpy())
+
+
+#: The odometry fields under the names of the detection columns whose bounds apply to them.
+_ODOMETRY_BOUNDS = {"vx": "ego_vx", "yaw_rate": "ego_yaw_rate", "x_seq": "ego_x_seq", "y_seq": "ego_y_seq"}
+
+
+def _check_plausible_odometry(odometry: pd.DataFrame, table: str) -> None:
+    columns = {name: odometry[name].to_numpy(dtype=np.float64) for name in _ODOMETRY_BOUNDS}
+    check_plausible(columns, table, bounds=_ODOMETRY_BOUNDS)
+
+
+def _check_plausible_mounting(mounting: dict, file: Path) -> None:
+    """Every sensor must sit on the car, looking in a direction given in rad."""
+    sensors = list(mounting)
+    columns = {field: np.array([mounting[k][field] for k in sensors], dtype=np.float64) for field in ("x", "y", "yaw")}
+    where = f"{file} (rows are the sensors {sensors})"
+    check_plausible(columns, where, bounds={"x": "sensor_x", "y": "sensor_y", "yaw": "sensor_yaw"})
 
 
 def _check_mounting(sensor_id: pd.Series, mounting: dict, file: Path) -> None:

@@ -1,0 +1,395 @@
+"""Physical plausibility of the input (issue #26): wrong units and layouts raise, naming column, value and cause.
+
+Each wrong-unit case below takes simulated detections (which pass) and changes one column the way a unit or
+convention error would; without the checks every one of them ran through silently.
+"""
+
+import importlib.util
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
+
+import sklearn_radar
+from sklearn_radar import ClusterMerger, DopplerDensityFilter, FrameTransform, RadarDBSCAN, config_context
+from sklearn_radar._config import ENVIRONMENT_VARIABLE
+from sklearn_radar._schema import PLAUSIBLE_VALUES, RAW_LAYOUT, SCAN_SPACING
+from sklearn_radar._validation import check_plausible, median_scan_spacing
+from sklearn_radar.cluster import SequenceDBSCAN, WindowedDBSCAN
+from sklearn_radar.datasets import load_radarscenes, make_scenes, write_radarscenes
+
+
+@pytest.fixture(scope="module")
+def scenes():
+    return make_scenes(n_sequences=2, duration=3.0, random_state=5)
+
+
+@pytest.fixture(scope="module")
+def working(scenes):
+    return FrameTransform().fit_transform(scenes.data)
+
+
+def _with(frame, **changes):
+    frame = frame.copy()
+    for name, change in changes.items():
+        frame[name] = change(frame[name].to_numpy())
+    return frame
+
+
+# --------------------------------------------------------------------------
+# Real data paths pass
+# --------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("difficulty", ["easy", "realistic"])
+def test_simulated_data_of_both_presets_passes_the_whole_pipeline(difficulty):
+    data = make_scenes(n_sequences=2, duration=4.0, random_state=1, difficulty=difficulty).data
+    Xt = DopplerDensityFilter().fit_transform(FrameTransform().fit_transform(data))
+    labels = ClusterMerger().fit(Xt).labels_
+    assert labels.max() >= 1
+    raw = data[list(RAW_LAYOUT.columns)].to_numpy(dtype=np.float64)  # the array path too
+    DopplerDensityFilter().fit_transform(FrameTransform(frame="car").fit_transform(raw))
+
+
+def test_a_written_simulated_folder_loads(tmp_path, scenes):
+    write_radarscenes(scenes, tmp_path / "data")
+    assert len(load_radarscenes(tmp_path / "data").data) == len(scenes.data)
+
+
+def test_offline_estimators_accept_rows_in_any_order(working):
+    # Rows in = rows out, in any order: the spacing check sorts internally and never rejects shuffled rows.
+    order = np.random.default_rng(0).permutation(len(working))
+    shuffled = working.iloc[order]
+    kept = DopplerDensityFilter().fit_transform(shuffled)["keep"].to_numpy()
+    np.testing.assert_array_equal(kept, DopplerDensityFilter().fit_transform(working)["keep"].to_numpy()[order])
+    for model in (RadarDBSCAN(), ClusterMerger(), SequenceDBSCAN(), WindowedDBSCAN()):
+        assert len(model.fit(shuffled).labels_) == len(working)
+
+
+# --------------------------------------------------------------------------
+# Wrong units: one case per kind, each with the message it gives
+# --------------------------------------------------------------------------
+
+RAW_CASES = {
+    "timestamp in s": (
+        {"timestamp": lambda v: v * 1e-6},
+        r"column 'timestamp': distinct scan times are a median 0\.0\d+ µs apart .*below the plausible 100 µs: "
+        r"timestamp looks like seconds; RadarScenes uses µs",
+    ),
+    "timestamp in ms": (
+        {"timestamp": lambda v: v // 1000},
+        r"column 'timestamp': .* median \d\d µs apart .*timestamp looks like milliseconds; RadarScenes uses µs",
+    ),
+    "timestamp in ns": (
+        {"timestamp": lambda v: v * 1000},
+        r"column 'timestamp': .*above the plausible 5e\+06 µs: timestamp looks like nanoseconds",
+    ),
+    "azimuth in degrees": (
+        {"azimuth_sc": np.degrees},
+        r"column 'azimuth_sc' holds -?\d+\.?\d* rad \(row \d+\), (below|above) the plausible -?3\.14\d* rad: "
+        r"it looks like degrees",
+    ),
+    "sensor yaw in degrees": ({"sensor_yaw": np.degrees}, r"column 'sensor_yaw' holds -85\.0\d* rad .*degrees"),
+    "range in mm": (
+        {"range_sc": lambda v: v * 1000},
+        r"column 'range_sc' holds \d+\.?\d* m .*above the plausible 1000 m",
+    ),
+    "negative range": ({"range_sc": lambda v: -v}, r"column 'range_sc' holds -\d+.* below the plausible 0 m: a range"),
+    "ego speed in km/h on a motorway": (
+        {"ego_vx": lambda v: np.full_like(v, 45.0) * 3.6},
+        r"column 'ego_vx' holds 162 m/s .*it looks like km/h; sklearn-radar \(as RadarScenes\) uses m/s",
+    ),
+    "car x axis backwards": ({"ego_vx": lambda v: np.full_like(v, -40.0)}, r"'ego_vx' holds -40 m/s .*backwards"),
+    "Doppler in km/h": (
+        {"vr": lambda v: np.r_[v[:-1], -90.0] * 3.6},
+        r"column 'vr' holds -324 m/s .*it looks like km/h",
+    ),
+    "yaw rate in deg/s in a turn": (
+        {"ego_yaw_rate": lambda v: np.degrees(np.full_like(v, 0.2))},
+        r"column 'ego_yaw_rate' holds 11\.4\d* rad/s .*above the plausible 3\.14\d* rad/s: it looks like deg/s",
+    ),
+    "mounting x in cm": ({"sensor_x": lambda v: v * 100}, r"column 'sensor_x' holds 386 m .*outside the car"),
+    "mounting y in mm": ({"sensor_y": lambda v: v * 1000}, r"column 'sensor_y' holds -?873 m .*outside the car"),
+}
+
+
+@pytest.mark.parametrize("case", sorted(RAW_CASES))
+def test_a_wrong_unit_in_raw_detections_is_named(scenes, case):
+    changes, message = RAW_CASES[case]
+    bad = _with(scenes.data, **changes)
+    with pytest.raises(ValueError, match=message) as error:
+        FrameTransform().fit(bad)
+    assert "set_config(check_plausibility=False)" in str(error.value)
+    with config_context(check_plausibility=False):
+        FrameTransform().fit(bad)  # the switch lets it through
+
+
+WORK_CASES = {
+    "t in µs (the raw timestamp)": (
+        {"t": lambda v: v * 1e6},
+        r"column 't': distinct scan times are a median 6\.\d+e\+04 s apart .*above the plausible 5 s: "
+        r"t looks like microseconds; t is in s",
+    ),
+    "t in ms": ({"t": lambda v: v * 1e3}, r"column 't': .* median 6\d\.?\d* s apart .*t looks like milliseconds"),
+    "t in µs interpreted as s twice": (
+        {"t": lambda v: v * 1e-6},
+        r"column 't': .*below the plausible 0\.0001 s: the timestamps it came from look like seconds",
+    ),
+    "compensated Doppler in km/h": ({"v_r": lambda v: np.r_[v[:-1], 100.0] * 3.6}, r"column 'v_r' holds 360 m/s"),
+    "positions in mm of UTM": (
+        {"x": lambda v: v * 1000 + 5e10},
+        r"column 'x' holds 5\.\d+e\+10 m .*positions are in m",
+    ),
+}
+
+
+@pytest.mark.parametrize("case", sorted(WORK_CASES))
+@pytest.mark.parametrize("model", [DopplerDensityFilter(), RadarDBSCAN(), ClusterMerger(), WindowedDBSCAN()], ids=repr)
+def test_a_wrong_unit_in_working_detections_is_named_by_every_estimator(working, case, model):
+    changes, message = WORK_CASES[case]
+    with pytest.raises(ValueError, match=f"{type(model).__name__}: implausible input: {message}"):
+        model.fit(_with(working, **changes))
+
+
+def test_the_issue_case_timestamps_in_seconds_no_longer_pass_silently(scenes):
+    # Issue 26: a 10 s sequence in s-as-µs collapsed to 1e-5 s, the filter kept 89.6 % instead of 70.9 %.
+    bad = _with(scenes.data, timestamp=lambda v: v * 1e-6)
+    with pytest.raises(ValueError, match="timestamp looks like seconds; RadarScenes uses µs"):
+        DopplerDensityFilter().fit_transform(FrameTransform().fit_transform(bad))
+
+
+# --------------------------------------------------------------------------
+# Wrong layouts of array input
+# --------------------------------------------------------------------------
+
+
+def test_the_whole_table_as_an_array_is_blamed_on_its_layout(scenes):
+    with pytest.raises(ValueError, match=r"non-numeric values \(could not convert string to float.*layout looks wrong"):
+        FrameTransform().fit(scenes.data.to_numpy())
+
+
+@pytest.mark.parametrize("model", [FrameTransform(), DopplerDensityFilter(), RadarDBSCAN()], ids=repr)
+def test_the_numeric_table_as_an_array_names_the_expected_layout(scenes, model):
+    # Before: "column 'x' holds a coordinate of magnitude 1.57e+11 m ... shift the data nearer the origin".
+    X = scenes.data.select_dtypes("number").to_numpy()
+    layout = "raw detection array" if isinstance(model, FrameTransform) else "working detection array"
+    message = rf"21 column\(s\), so the layout \(column order\) looks wrong: .* the {layout}, columns \[.*\]\. Pass"
+    with pytest.raises(ValueError, match=message):
+        model.fit(X)
+
+
+def test_with_the_checks_off_the_neighbour_grid_still_suspects_the_layout(scenes):
+    X = scenes.data.select_dtypes("number").to_numpy()  # timestamp (1.6e11 µs) lands in 'x'
+    with config_context(check_plausibility=False), pytest.raises(ValueError, match=r"magnitude 1\.\d+e\+11 m.*layout"):
+        DopplerDensityFilter().fit_transform(X)
+
+
+def test_an_array_message_lists_the_layout_columns_in_order(working):
+    X = working[["x", "y", "v_r", "t"]].to_numpy()
+    X[:, 3] *= 1e6  # t in µs
+    with pytest.raises(ValueError) as error:
+        RadarDBSCAN().fit(X)
+    assert "['x', 'y', 'v_r', 't', 'sequence', 'keep', 'range_sc', 'heading', 'azimuth_sc', 'sensor_yaw']" in str(
+        error.value
+    )
+    assert "check the unit, or the layout" in str(error.value)
+
+
+# --------------------------------------------------------------------------
+# The switch
+# --------------------------------------------------------------------------
+
+
+def test_set_config_turns_the_checks_off_and_on(working):
+    bad = _with(working, t=lambda v: v * 1e3)
+    assert sklearn_radar.get_config() == {"check_plausibility": True}
+    try:
+        sklearn_radar.set_config(check_plausibility=False)
+        DopplerDensityFilter().fit(bad)
+        sklearn_radar.set_config()  # None changes nothing
+        assert sklearn_radar.get_config()["check_plausibility"] is False
+    finally:
+        sklearn_radar.set_config(check_plausibility=True)
+    with pytest.raises(ValueError, match="t looks like milliseconds"):
+        DopplerDensityFilter().fit(bad)
+
+
+def test_config_context_restores_the_setting_on_an_exception():
+    with pytest.raises(RuntimeError), config_context(check_plausibility=False):
+        assert sklearn_radar.get_config()["check_plausibility"] is False
+        raise RuntimeError
+    assert sklearn_radar.get_config()["check_plausibility"] is True
+
+
+def test_get_config_returns_a_copy():
+    sklearn_radar.get_config()["check_plausibility"] = False
+    assert sklearn_radar.get_config()["check_plausibility"] is True
+
+
+def test_the_switch_does_not_let_nan_through(working):
+    bad = _with(working, t=lambda v: np.r_[v[:-1], np.nan])
+    with config_context(check_plausibility=False), pytest.raises(ValueError, match="NaN or infinity"):
+        DopplerDensityFilter().fit(bad)
+
+
+@pytest.mark.parametrize("value, expected", [("0", False), ("off", False), ("1", True), ("", True)])
+def test_the_environment_variable_sets_the_default_of_new_processes(value, expected):
+    # What a joblib (loky) or dask worker process sees when started with the variable set.
+    script = "import sklearn_radar; print(sklearn_radar.get_config()['check_plausibility'])"
+    env = {**os.environ, ENVIRONMENT_VARIABLE: value}
+    result = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True, check=True)
+    assert result.stdout.strip() == str(expected)
+
+
+def test_config_functions_validate_their_parameters():
+    spec = importlib.util.spec_from_file_location(
+        "public_functions", Path(__file__).with_name("test_public_functions.py")
+    )
+    public_functions = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(public_functions)
+    for name in ("sklearn_radar.set_config", "sklearn_radar.get_config", "sklearn_radar.config_context"):
+        func, func_name, params, required = public_functions._get_func_info(name)
+        check = public_functions._check_function_param_validation
+        check(func, func_name, params, required, func._skl_parameter_constraints)
+
+
+# --------------------------------------------------------------------------
+# load_radarscenes
+# --------------------------------------------------------------------------
+
+
+@pytest.fixture
+def written(tmp_path, scenes):
+    write_radarscenes(scenes, tmp_path / "data")
+    return tmp_path / "data"
+
+
+def _edit_radar_data(folder, field, change):
+    h5_file = folder / "sequence_1" / "radar_data.h5"
+    with h5py.File(h5_file, "r+") as h5:
+        array = h5["radar_data"][()]
+        array[field] = change(array[field])
+        del h5["radar_data"]
+        h5.create_dataset("radar_data", data=array)
+    return h5_file
+
+
+def test_load_radarscenes_names_the_file_and_the_field_in_degrees(written):
+    h5_file = _edit_radar_data(written, "azimuth_sc", np.degrees)
+    with pytest.raises(ValueError, match=rf"{h5_file} \[radar_data\]: implausible input: column 'azimuth_sc'.*degrees"):
+        load_radarscenes(written)
+    with config_context(check_plausibility=False):
+        assert load_radarscenes(written, sequences=1).data["azimuth_sc"].abs().max() > 10
+
+
+def test_load_radarscenes_checks_the_odometry(written):
+    h5_file = written / "sequence_1" / "radar_data.h5"
+    with h5py.File(h5_file, "r+") as h5:
+        odometry = h5["odometry"][()]
+        odometry["yaw_rate"] = np.degrees(odometry["yaw_rate"]) + 10.0
+        del h5["odometry"]
+        h5.create_dataset("odometry", data=odometry)
+    with pytest.raises(ValueError, match=r"\[odometry\]: implausible input: column 'yaw_rate' holds .* rad/s.*deg/s"):
+        load_radarscenes(written)
+
+
+def test_load_radarscenes_checks_the_mounting(written):
+    sensors = json.loads((written / "sensors.json").read_text())
+    sensors["radar_2"]["x"] *= 1000  # mm
+    (written / "sensors.json").write_text(json.dumps(sensors))
+    with pytest.raises(
+        ValueError, match=r"sensors\.json \(rows are the sensors \[1, 2, 3, 4\]\).*'x' holds 3860 m \(row 1\)"
+    ):
+        load_radarscenes(written)
+
+
+def test_load_radarscenes_refuses_time_running_backwards_with_the_values(written):
+    # The swap happens within the scans' own rows, so scenes.json still covers the file; the order check fires first.
+    h5_file = _edit_radar_data(written, "timestamp", lambda v: np.r_[v[:1], v[1:][::-1]])
+    with pytest.raises(
+        ValueError,
+        match=rf"{h5_file} \[radar_data\]: field 'timestamp' is not sorted ascending: "
+        r"time runs backwards at row \d+ \(\d+ µs after \d+ µs\)",
+    ):
+        load_radarscenes(written)
+
+
+# --------------------------------------------------------------------------
+# The spacing statistic and invariants
+# --------------------------------------------------------------------------
+
+
+def test_median_scan_spacing_per_group_in_any_row_order():
+    rng = np.random.default_rng(1)
+    times = np.r_[np.repeat(np.arange(20) * 60.0, 3), np.repeat(np.arange(12) * 15.0, 2), [0.0, 1.0]]
+    sequence = np.r_[np.full(60, 7), np.full(24, 8), [9, 9]]
+    order = rng.permutation(len(times))
+    medians, sequences, sensors = median_scan_spacing(times[order], sequence[order])
+    np.testing.assert_array_equal(medians, [60.0, 15.0])  # sequence 9 has too few scans to be judged
+    np.testing.assert_array_equal(sequences, [7, 8])
+    assert sensors is None
+    in_scan_order = median_scan_spacing(times, sequence)  # rows scan by scan: the runs shortcut
+    np.testing.assert_array_equal(in_scan_order[0], medians)
+
+
+def test_median_scan_spacing_per_sensor_of_a_simulated_recording(scenes):
+    data = scenes.data
+    medians, sequences, sensors = median_scan_spacing(
+        data["timestamp"].to_numpy(np.float64), data["sequence"].to_numpy(), data["sensor_id"].to_numpy()
+    )
+    assert len(medians) == 8 and sorted(set(sensors.tolist())) == [1, 2, 3, 4]
+    assert sequences.tolist() == [1, 1, 1, 1, 2, 2, 2, 2]
+    assert np.all((55_000 < medians) & (medians < 65_000))  # µs: each sensor cycles in about 60 ms
+    per_sequence = median_scan_spacing(data["timestamp"].to_numpy(np.float64), data["sequence"].to_numpy())[0]
+    assert np.all((10_000 < per_sequence) & (per_sequence < 20_000))  # four unsynchronised sensors: about 15 ms
+
+
+def test_a_time_per_detection_is_not_judged_as_a_scan_rate():
+    # Synthetic tables (uniform random t, one detection per time) are not scan-structured: no spacing.
+    times = np.random.default_rng(0).uniform(0, 0.25, 1000)
+    assert len(median_scan_spacing(times)[0]) == 0
+    check_plausible({"t": times}, "test")
+
+
+def test_every_bound_has_its_argument_and_a_cause():
+    for name, bound in PLAUSIBLE_VALUES.items():
+        assert bound.column == name and bound.low < bound.high
+        assert bound.argument and bound.too_low and bound.too_high
+    for rule in SCAN_SPACING.values():
+        assert rule.low < rule.high
+
+
+_FIELD_OF_VIEW = st.floats(min_value=0.06, max_value=1.5)  # rad; 0.06 rad = 3.4 deg, the least a FOV spans
+
+
+@settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.function_scoped_fixture])
+@given(seed=st.integers(0, 2**31), n=st.integers(1, 400), fov=_FIELD_OF_VIEW, speed=st.floats(-15, 60))
+def test_plausible_random_tables_never_raise_and_their_azimuth_in_degrees_always_does(seed, n, fov, speed):
+    rng = np.random.default_rng(seed)
+    n_scans = max(1, n // 20)
+    raw = {
+        "range_sc": rng.uniform(0.0, 300.0, n),
+        "azimuth_sc": np.r_[fov, rng.uniform(-fov, fov, n - 1)][:n],
+        "vr": rng.uniform(-120.0, 120.0, n),
+        "timestamp": np.sort(rng.integers(0, n_scans, n)) * rng.uniform(1e4, 1e5) + 1.5e11,
+        "sensor_x": rng.uniform(-5, 5, n),
+        "sensor_y": rng.uniform(-1.3, 1.3, n),
+        "sensor_yaw": rng.uniform(-np.pi, 2 * np.pi, n),
+        "ego_x_seq": rng.uniform(-1e6, 1e6, n),
+        "ego_y_seq": rng.uniform(-1e6, 1e6, n),
+        "ego_yaw_seq": rng.uniform(-100, 100, n),  # unwrapped: any value
+        "ego_vx": np.full(n, speed),
+        "ego_yaw_rate": rng.uniform(-1.0, 1.0, n),
+    }
+    X = np.column_stack([raw[name] for name in RAW_LAYOUT.columns[:-1]])
+    FrameTransform().fit(X)
+    X[:, RAW_LAYOUT.position("azimuth_sc")] = np.degrees(X[:, RAW_LAYOUT.position("azimuth_sc")])
+    with pytest.raises(ValueError, match=r"'azimuth_sc' .* it looks like degrees"):
+        FrameTransform().fit(X)
