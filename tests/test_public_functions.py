@@ -39,8 +39,11 @@ PACKAGES = [
 ]
 
 PARAM_VALIDATION_FUNCTION_LIST = [
+    "sklearn_radar.config_context",
     "sklearn_radar.describe_columns",
+    "sklearn_radar.get_config",
     "sklearn_radar.instance_target",
+    "sklearn_radar.set_config",
     "sklearn_radar.cluster.estimate_velocities",
     "sklearn_radar.cluster.estimate_velocity",
     "sklearn_radar.cluster.min_points_at_range",
