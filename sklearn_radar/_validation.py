@@ -65,6 +65,7 @@ def read_columns(estimator, X, reads: ColumnsRead, *, reset):
         if get_config()["check_plausibility"]:
             check_plausible(columns, name, sensor=_sensor_of(X))
         return X, columns
+    _refuse_other_frames(X, reads.layout, name)
     X = _validate_array(estimator, X, reads.layout, reset=reset)
     columns = _array_columns(X, reads, name)
     check_plausible(columns, name, layout=reads.layout, n_columns=X.shape[1])
@@ -77,6 +78,20 @@ def _sensor_of(X):
         return None
     sensor = X["sensor_id"].to_numpy()
     return sensor if sensor.dtype.kind in "iu" else None
+
+
+def _refuse_other_frames(X, layout, name):
+    """A table that is not a pandas DataFrame (polars, pyarrow) would be read by position: refuse it by name.
+
+    Its columns would otherwise be taken in the positional layout, a silent wrong answer for the detection table.
+    """
+    if hasattr(X, "columns") and (hasattr(X, "to_pandas") or hasattr(X, "__dataframe__")):
+        kind = f"{type(X).__module__.split('.')[0]}.{type(X).__name__}"
+        raise ValueError(
+            f"{name}: X is a {kind}, whose columns would be read by position; sklearn-radar reads a table by "
+            f"column name from a pandas DataFrame only: pass X.to_pandas(), or a numeric array in the order of the "
+            f"{layout.name} {list(layout.columns)}"
+        )
 
 
 def _validate_array(estimator, X, layout, *, reset):

@@ -102,3 +102,29 @@ def test_a_raw_value_that_makes_a_working_column_overflow_is_named():
     with config_context(check_plausibility=False):  # what is left when the data is declared right
         with pytest.raises(ValueError, match=r"column 'ego_yaw_rate' holds 1.7e\+308 at row 1.*'v_r' overflow"):
             FrameTransform().fit_transform(raw)
+
+
+class _OtherFrame:
+    """A table that is not pandas (as a polars DataFrame): named columns, convertible to an array by position."""
+
+    def __init__(self, frame):
+        self.frame = frame
+        self.columns = list(frame.columns)
+
+    def to_pandas(self):
+        return self.frame
+
+    def __array__(self, dtype=None, copy=None):
+        return self.frame.to_numpy(dtype=dtype)
+
+
+@pytest.mark.parametrize("estimator", [DopplerDensityFilter(), RadarDBSCAN()], ids=lambda e: type(e).__name__)
+def test_a_table_other_than_pandas_is_refused_rather_than_read_by_position(estimator):
+    # Its columns hold the working layout in another order: read by position, y would be taken for x.
+    rng = np.random.default_rng(0)
+    frame = pd.DataFrame({"t": np.repeat(np.arange(20) * 0.06, 5), "y": rng.normal(size=100)})
+    frame["x"] = rng.normal(size=100)
+    frame["v_r"] = 1.0
+    with pytest.raises(ValueError, match=r"_OtherFrame, whose columns would be read by position.*to_pandas"):
+        estimator.fit(_OtherFrame(frame))
+    estimator.fit(_OtherFrame(frame).to_pandas())  # the same table as pandas is read by name

@@ -85,7 +85,7 @@ class FrameTransform(TransformerMixin, BaseEstimator):
     and a ``RangeIndex``; the later stages read it by name.  A DataFrame
     result is the same under both settings.  ``"polars"`` needs polars
     (without it, scikit-learn raises an ImportError); the later stages read
-    pandas DataFrames by name, anything else by position.  Fit and transform
+    pandas DataFrames by name and refuse other tables.  Fit and transform
     the same kind of container: :meth:`get_feature_names_out` names the
     result of the kind seen in :meth:`fit`, and the pandas wrapper raises a
     ValueError when the widths differ.
