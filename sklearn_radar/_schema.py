@@ -507,6 +507,21 @@ SCAN_SPACING = {
 }
 
 
+#: The ego speed must agree with the ego's path: odometry dead-reckons the pose from the same wheel speed
+#: (RadarScenes, and the simulator), so over a sequence the speed integrated over time and the path of the pose
+#: differ by wheel slip and sampling only (a few %).  Their ratio is judged between consecutive scans at most
+#: SPEED_PATH_MAX_GAP apart (over longer gaps a chord cuts a curve short) and only over a path of at least
+#: SPEED_PATH_MIN_PATH (a car at rest says nothing).  A speed in km/h gives 3.6, in mph 2.24, a time column in the
+#: wrong unit a factor of 1000: all beyond these limits, while a km/h speed in town stays within MAX_EGO_SPEED.
+SPEED_PATH_RATIO = (0.6, 1.7)
+#: m.
+SPEED_PATH_MIN_PATH = 20.0
+#: s.
+SPEED_PATH_MAX_GAP = 0.5
+#: Units an ego speed is found in, as their value for 1 m/s, for naming the likely one.
+SPEED_UNITS = {"km/h": 3.6, "mph": 2.23694}
+
+
 def column_names(columns):
     """Names of a tuple of :class:`Column`."""
     return [column.name for column in columns]

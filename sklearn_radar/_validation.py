@@ -20,6 +20,10 @@ from ._schema import (
     MIN_SCANS_FOR_SPACING,
     PLAUSIBLE_VALUES,
     SCAN_SPACING,
+    SPEED_PATH_MAX_GAP,
+    SPEED_PATH_MIN_PATH,
+    SPEED_PATH_RATIO,
+    SPEED_UNITS,
     TIME_UNIT_NAMES,
     WORK_LAYOUT,
     ColumnsRead,
@@ -263,6 +267,8 @@ def check_plausible(columns, where, *, sequence=None, sensor=None, layout=None, 
         )
         if problem is not None
     ]
+    if not problems:  # the speed is compared with the path only in units that are each plausible
+        problems = [p for p in (_speed_path_problem(columns, sequence, bounds or {}),) if p is not None]
     if problems:
         raise ValueError(plausibility_message(where, problems, layout, n_columns))
 
@@ -338,6 +344,65 @@ def _spacing_problem(name, times, sequence, sensor):
         f"column {name!r}: distinct scan times are a median {spacing:.3g} {spacing_rule.unit} apart ({group}), "
         f"{side} {spacing_rule.unit}: {cause}"
     )
+
+
+def _speed_path_problem(columns, sequence, bounds):
+    """The ego speed integrated over time against the path of the ego positions (SPEED_PATH_RATIO), per sequence."""
+    given = {bounds.get(name, name): name for name, values in columns.items() if values is not None}
+    if not {"ego_x_seq", "ego_y_seq", "ego_vx"} <= given.keys() or not {"timestamp", "t"} & given.keys():
+        return None
+    time_name = given.get("timestamp", given.get("t"))
+    seconds = columns[time_name] * (1e-6 if "timestamp" in given else 1.0)
+    x, y, speed = (columns[given[name]] for name in ("ego_x_seq", "ego_y_seq", "ego_vx"))
+    path, integrated, sequences = _path_and_integrated_speed(seconds, x, y, speed, sequence)
+    judged = np.maximum(path, integrated) >= SPEED_PATH_MIN_PATH
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(judged, integrated / path, 1.0)
+    low, high = SPEED_PATH_RATIO
+    bad = np.flatnonzero((ratio < low) | (ratio > high))
+    if not len(bad):
+        return None
+    k = bad[np.argmax(np.abs(np.log(ratio[bad])))]
+    group = "one sequence" if sequences is None else f"sequence {sequences[k]:g}"
+    return (
+        f"column {given['ego_vx']!r} integrates to {integrated[k]:.4g} m over time while the ego positions "
+        f"({given['ego_x_seq']!r}, {given['ego_y_seq']!r}) move {path[k]:.4g} m ({group}; ratio {ratio[k]:.3g}, "
+        f"plausible {low:g}-{high:g}): {_speed_cause(ratio[k], given['ego_vx'], time_name)}"
+    )
+
+
+def _speed_cause(ratio, speed_name, time_name):
+    for unit, per_metre_per_second in SPEED_UNITS.items():
+        if abs(np.log(ratio / per_metre_per_second)) < 0.15:
+            return f"{speed_name} looks like {unit}; sklearn-radar (as RadarScenes) uses m/s"
+    return (
+        f"their units disagree: check {speed_name} (m/s), the ego positions (m) and {time_name} "
+        f"({'µs' if time_name == 'timestamp' else 's'})"
+    )
+
+
+def _path_and_integrated_speed(seconds, x, y, speed, sequence):
+    """Per sequence: the path of (x, y) and the integral of ``|speed|`` over consecutive scans (gaps <= MAX_GAP)."""
+    keys = [] if sequence is None else [sequence]
+    run_start = np.zeros(len(seconds), dtype=bool)  # rows come scan by scan: one row per run of equal time
+    run_start[:1] = True
+    for values in (seconds, *keys):
+        run_start[1:] |= values[1:] != values[:-1]
+    rows = np.flatnonzero(run_start)
+    order = np.lexsort((seconds[rows], *(key[rows] for key in keys)))
+    rows = rows[order]
+    t, px, py, v = seconds[rows], x[rows], y[rows], np.abs(speed[rows])
+    group = np.zeros(len(rows), dtype=np.int64)
+    if keys:
+        group = np.cumsum(np.r_[False, keys[0][rows][1:] != keys[0][rows][:-1]])
+    dt = np.diff(t)
+    step = (group[1:] == group[:-1]) & (dt > 0) & (dt <= SPEED_PATH_MAX_GAP)
+    n_groups = int(group[-1]) + 1 if len(group) else 0
+    path = np.bincount(group[1:][step], weights=np.hypot(np.diff(px), np.diff(py))[step], minlength=n_groups)
+    integrated = np.bincount(group[1:][step], weights=(0.5 * (v[1:] + v[:-1]) * dt)[step], minlength=n_groups)
+    first_of_group = np.r_[True, group[1:] != group[:-1]] if len(group) else np.zeros(0, dtype=bool)
+    sequences = keys[0][rows][first_of_group] if keys else None
+    return path, integrated, sequences
 
 
 def median_scan_spacing(times, sequence=None, sensor=None):

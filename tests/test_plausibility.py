@@ -106,6 +106,12 @@ RAW_CASES = {
         {"ego_vx": lambda v: np.full_like(v, 45.0) * 3.6},
         r"column 'ego_vx' holds 162 m/s .*it looks like km/h; sklearn-radar \(as RadarScenes\) uses m/s",
     ),
+    "ego speed in km/h in town": (  # within MAX_EGO_SPEED: caught by the path of the ego positions
+        {"ego_vx": lambda v: v * 3.6},
+        r"column 'ego_vx' integrates to \d+\.?\d* m over time while the ego positions \('ego_x_seq', 'ego_y_seq'\) "
+        r"move \d+\.?\d* m \(sequence \d; ratio 3\.6\d*, plausible 0\.6-1\.7\): ego_vx looks like km/h",
+    ),
+    "ego speed in mph": ({"ego_vx": lambda v: v * 2.23694}, r"ratio 2\.24, .*ego_vx looks like mph"),
     "car x axis backwards": ({"ego_vx": lambda v: np.full_like(v, -40.0)}, r"'ego_vx' holds -40 m/s .*backwards"),
     "Doppler in km/h": (
         {"vr": lambda v: np.r_[v[:-1], -90.0] * 3.6},
@@ -300,6 +306,25 @@ def test_load_radarscenes_checks_the_odometry(written):
         load_radarscenes(written)
 
 
+def test_load_radarscenes_compares_the_odometry_speed_with_its_path(written):
+    h5_file = written / "sequence_1" / "radar_data.h5"
+    with h5py.File(h5_file, "r+") as h5:
+        odometry = h5["odometry"][()]
+        odometry["vx"] = odometry["vx"] * 3.6  # km/h, within MAX_EGO_SPEED
+        del h5["odometry"]
+        h5.create_dataset("odometry", data=odometry)
+    with pytest.raises(ValueError, match=r"\[odometry\]: implausible input: column 'vx' integrates .*'x_seq'.*km/h"):
+        load_radarscenes(written)
+
+
+def test_a_car_at_rest_is_not_judged_by_its_path():
+    n = 200
+    at_rest = {"timestamp": np.arange(n) * 15_000.0, "ego_x_seq": np.full(n, 5.0), "ego_y_seq": np.zeros(n)}
+    check_plausible({**at_rest, "ego_vx": np.zeros(n)}, "test")
+    with pytest.raises(ValueError, match=r"'ego_vx' integrates to 29\.85 m .* move 0 m"):  # 10 m/s, not moving
+        check_plausible({**at_rest, "ego_vx": np.full(n, 10.0)}, "test")
+
+
 def test_load_radarscenes_checks_the_mounting(written):
     sensors = json.loads((written / "sensors.json").read_text())
     sensors["radar_2"]["x"] *= 1000  # mm
@@ -374,16 +399,19 @@ _FIELD_OF_VIEW = st.floats(min_value=0.06, max_value=1.5)  # rad; 0.06 rad = 3.4
 def test_plausible_random_tables_never_raise_and_their_azimuth_in_degrees_always_does(seed, n, fov, speed):
     rng = np.random.default_rng(seed)
     n_scans = max(1, n // 20)
+    scan, spacing_us = np.sort(rng.integers(0, n_scans, n)), rng.uniform(1e4, 1e5)
+    travelled = speed * scan * spacing_us * 1e-6  # m: the ego drives straight at `speed`, as its odometry says
+    heading, origin = rng.uniform(-np.pi, np.pi), rng.uniform(-1e6, 1e6, 2)
     raw = {
         "range_sc": rng.uniform(0.0, 300.0, n),
         "azimuth_sc": np.r_[fov, rng.uniform(-fov, fov, n - 1)][:n],
         "vr": rng.uniform(-120.0, 120.0, n),
-        "timestamp": np.sort(rng.integers(0, n_scans, n)) * rng.uniform(1e4, 1e5) + 1.5e11,
+        "timestamp": scan * spacing_us + 1.5e11,
         "sensor_x": rng.uniform(-5, 5, n),
         "sensor_y": rng.uniform(-1.3, 1.3, n),
         "sensor_yaw": rng.uniform(-np.pi, 2 * np.pi, n),
-        "ego_x_seq": rng.uniform(-1e6, 1e6, n),
-        "ego_y_seq": rng.uniform(-1e6, 1e6, n),
+        "ego_x_seq": origin[0] + travelled * np.cos(heading),
+        "ego_y_seq": origin[1] + travelled * np.sin(heading),
         "ego_yaw_seq": rng.uniform(-100, 100, n),  # unwrapped: any value
         "ego_vx": np.full(n, speed),
         "ego_yaw_rate": rng.uniform(-1.0, 1.0, n),

@@ -376,7 +376,7 @@ _ODOMETRY_BOUNDS = {"vx": "ego_vx", "yaw_rate": "ego_yaw_rate", "x_seq": "ego_x_
 
 
 def _check_plausible_odometry(odometry: pd.DataFrame, table: str) -> None:
-    columns = {name: odometry[name].to_numpy(dtype=np.float64) for name in _ODOMETRY_BOUNDS}
+    columns = {name: odometry[name].to_numpy(dtype=np.float64) for name in ("timestamp", *_ODOMETRY_BOUNDS)}
     check_plausible(columns, table, bounds=_ODOMETRY_BOUNDS)
 
 

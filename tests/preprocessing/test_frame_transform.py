@@ -164,7 +164,7 @@ def _rigid_body_detections(n, seed):
             "ego_yaw_seq": psi0,
             "ego_vx": speed,
             "ego_yaw_rate": omega,
-            "sequence": 1,
+            "sequence": np.arange(1, n + 1),  # each row its own car and recording: no ego path across rows
         }
     )
     relative = target0 - ego0
