@@ -12,6 +12,7 @@ The reference ``F0`` is the paper's best stage 1 (#8): FCS, the Doppler-density 
 setting (0.10 m/s, 1.4 m), the joint x-y-v_r distance (Eq. 5), N_min(r) (Eq. 2), a core-only Doppler
 gate ``vr_min`` and eps_t fixed at 0.25 s.  The factors (one at a time against F0):
 
+* ``wide``: #8's space with N_min,50 up to 20 (not 8) and vr_min up to 3 m/s (not 1.5), where F0 stops;
 * ``eps_t``: eps_t tuned in [0.05, 2] s instead of fixed at 0.25 s;
 * ``point_gate``: a Doppler gate on every detection (|v_r| <= gate is noise before clustering, as the
   per-sequence baseline does) instead of the core-only gate;
@@ -171,6 +172,16 @@ def variants():
     vr_gate = Real(0.0, 1.5, name="cluster__cluster_vr_min")
     return [
         Variant("F0", _stage0(), _cluster(), f0),
+        Variant(
+            "wide",
+            _stage0(),
+            _cluster(),
+            _with(
+                f0,
+                cluster__min_samples=Real(1.5, 20.0, name="cluster__min_samples"),
+                cluster__vr_min=Real(0.0, 3.0, name="cluster__vr_min"),
+            ),
+        ),
         Variant("eps_t", _stage0(), _cluster(), _with(f0, cluster__eps_t=_EPS_T)),
         Variant("point_gate", _stage0(), _gated(eps_t=0.25, vr_min=-np.inf), gate_space),
         Variant("no_filter", _stage0(False), _cluster(), f0),
