@@ -34,16 +34,16 @@ PER_DETECTION = {FILTER: 1.2e-5, FILTER_EFFECT: 5e-6, "fixed": 2e-6}
 #: Seconds to draw the figures and write the report.
 REPORT_S = 6.0
 #: Seconds of the first run in a new environment spent compiling the numba kernels the run uses, by kernel (later
-#: runs load them from numba's cache): the default run's cold minus warm wall time on an idle 2-core machine,
-#: shared out by each kernel's compile time (benchmarks/bench_compile.py; docs/performance.rst, "Compile time").
+#: runs load them from numba's cache): the default run's cold minus warm time in a new virtual environment on the
+#: 2-core machine, 13 s, shared out by each kernel's compile time (docs/performance.rst, "Compile time").
 COMPILE_S = {
-    "sklearn_radar.cluster._radar_dbscan_kernels._dbscan_sorted": 4.0,
-    "sklearn_radar.cluster._merge_kernels._candidate_pairs": 2.5,
-    "sklearn_radar._neighbors._count_capped": 1.2,
-    "sklearn_radar.cluster._merge_kernels._continuation_edges": 0.9,
-    "sklearn_radar.cluster._merge_kernels._max_speeds": 0.9,
-    "sklearn_radar.cluster._merge_kernels._velocity_frames": 0.4,
-    "sklearn_radar._labels._number_by_first_row": 0.5,
+    "sklearn_radar.cluster._radar_dbscan_kernels._dbscan_sorted": 4.7,
+    "sklearn_radar.cluster._merge_kernels._candidate_pairs": 3.0,
+    "sklearn_radar._neighbors._count_capped": 1.4,
+    "sklearn_radar.cluster._merge_kernels._continuation_edges": 1.1,
+    "sklearn_radar.cluster._merge_kernels._max_speeds": 1.1,
+    "sklearn_radar.cluster._merge_kernels._velocity_frames": 0.5,
+    "sklearn_radar._labels._number_by_first_row": 0.6,
     "sklearn_radar.cluster._merge_kernels._merge_components": 0.3,
     "sklearn_radar._neighbors._counting_order": 0.3,
 }
