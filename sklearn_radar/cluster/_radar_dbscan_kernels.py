@@ -150,7 +150,7 @@ def _advance(times, position, end, bound, inclusive):
     return position + np.searchsorted(times[position:end], bound, side="left")
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(cache=True, nogil=True)  # not inlined (3 call sites): its callees are, inside it
 def _window(times, start, end, lo, hi, fresh, t_low, t_high):
     """Positions [lo, hi) of a time-sorted run within [t_low, t_high].
 
