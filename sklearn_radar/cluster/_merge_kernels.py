@@ -113,13 +113,13 @@ def _time_compatible_pairs(by_start, start, end, eps_t2):
 _MAX_CELLS = 64  # a cluster whose reach covers more grid cells is compared with every other one
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(cache=True, nogil=True)
 def _cell_key(cx, cy):
     """Hash of a grid cell; collisions only add candidates, which the box test then drops."""
     return cx * np.int64(73856093) ^ cy * np.int64(19349663)
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(cache=True, nogil=True)
 def _boxes_close(a, b, lo_x, hi_x, lo_y, hi_y, half):
     """False only when the boxes of a and b are ``half[a] + half[b]`` or more apart along x or along y."""
     reach = half[a] + half[b]
@@ -131,28 +131,21 @@ def _boxes_close(a, b, lo_x, hi_x, lo_y, hi_y, half):
 
 
 @numba.njit(cache=True, nogil=True)
-def _candidate_pairs(by_start, start, end, eps_t2, lo_x, hi_x, lo_y, hi_y, half):
+def _candidate_pairs(by_start, start, end, eps_t2, lo_x, hi_x, lo_y, hi_y, half, side):
     """The pairs of :func:`_time_compatible_pairs` (same order) whose boxes are less than ``half[a] + half[b]`` apart.
 
     ``by_start`` orders the clusters (a pair's a comes first); the boxes
     ``[lo_x, hi_x] x [lo_y, hi_y]`` (m) bound each cluster, ``half`` is the
-    reach of each cluster (m, inf for unbounded).  A uniform grid over the
-    boxes expanded by ``half`` gives each cluster its spatial neighbours; a
-    cluster covering more than ``_MAX_CELLS`` cells is compared with all.
-    Memory is linear in the clusters plus the pairs returned.
+    reach of each cluster (m, inf for unbounded).  A uniform grid of cells
+    of ``side`` (m, :func:`_cell_side`) over the boxes expanded by ``half``
+    gives each cluster its spatial neighbours; a cluster covering more than
+    ``_MAX_CELLS`` cells is compared with all.  Memory is linear in the
+    clusters plus the pairs returned.
     """
     n = len(by_start)
     rank = np.empty(n, dtype=np.int64)
     for position in range(n):
         rank[by_start[position]] = position
-    # Cell side: the median expanded extent (at least one grid cell per typical cluster).
-    extent = np.empty(n)
-    for c in range(n):
-        extent[c] = max(hi_x[c] - lo_x[c], hi_y[c] - lo_y[c]) + 2.0 * half[c]
-    finite = extent[np.isfinite(extent)]
-    side = np.median(finite) if len(finite) > 0 else 1.0
-    if not (side > 0.0 and side < np.inf):
-        side = 1.0
     cell_x0 = np.zeros(n, dtype=np.int64)
     cell_x1 = np.zeros(n, dtype=np.int64)
     cell_y0 = np.zeros(n, dtype=np.int64)
@@ -229,7 +222,11 @@ def _candidate_pairs(by_start, start, end, eps_t2, lo_x, hi_x, lo_y, hi_y, half)
                 ranks = np.empty(n_found, dtype=np.int64)
                 for i in range(n_found):
                     ranks[i] = rank[found[i]]
-                found[:n_found] = found[:n_found][np.argsort(ranks)]
+                # The ranks are distinct, so any sort gives this order: mergesort, compiled for the keys already
+                # (quicksort would be compiled too), copied by a loop (a slice assignment compiles its error text).
+                by_rank = found[:n_found][np.argsort(ranks, kind="mergesort")]
+                for i in range(n_found):
+                    found[i] = by_rank[i]
         for i in range(n_found):
             first_a.append(found[i])
             second_b.append(b)
@@ -250,6 +247,21 @@ def _max_speeds(scan_t, scan_x, scan_y, scan_start, scan_end):
             if np.isfinite(vx) and np.isfinite(vy):
                 speed[c] = max(speed[c], np.hypot(vx, vy))
     return speed
+
+
+def _cell_side(lo_x, hi_x, lo_y, hi_y, half):
+    """Grid cell side of :func:`_candidate_pairs`, m: the median finite expanded extent of the clusters (else 1).
+
+    At least one grid cell per typical cluster.  The extent of a cluster is
+    the larger side of its box (numba's ``max``: the first unless the second
+    is larger) plus twice its reach.
+    """
+    with np.errstate(over="ignore", invalid="ignore"):
+        width, height = hi_x - lo_x, hi_y - lo_y
+        extent = np.where(height > width, height, width) + 2.0 * half
+    finite = extent[np.isfinite(extent)]
+    side = float(np.median(finite)) if len(finite) > 0 else 1.0
+    return side if 0.0 < side < np.inf else 1.0
 
 
 def _cluster_boxes(runs):
@@ -300,8 +312,9 @@ def candidate_pairs(runs, eps_t2, eps_d, mode):
             speed = _max_speeds(runs.scan_t, runs.scan_x, runs.scan_y, runs.scan_start, runs.scan_end)
             reach = lag * speed
         half = (0.5 * float(eps_d) + reach) * (1.0 + 1e-6) + 1e-9 * scale
-    half = np.where(np.isnan(half), np.inf, half)
-    return _candidate_pairs(by_start, start, end, float(eps_t2), lo_x, hi_x, lo_y, hi_y, np.ascontiguousarray(half))
+    half = np.ascontiguousarray(np.where(np.isnan(half), np.inf, half))
+    side = _cell_side(lo_x, hi_x, lo_y, hi_y, half)  # in numpy: numba's median would compile for about 1 s
+    return _candidate_pairs(by_start, start, end, float(eps_t2), lo_x, hi_x, lo_y, hi_y, half, side)
 
 
 def time_compatible_pairs(runs, eps_t2):
@@ -313,7 +326,7 @@ def time_compatible_pairs(runs, eps_t2):
     )
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(cache=True, nogil=True)
 def _pair_frame(a, b, t, run_start, run_end, eps_t2):
     """Decision time tau of pair (a, b) and its row ranges; ``ok`` is False when A ended eps_t2 or more before s_B.
 
@@ -356,7 +369,9 @@ def _velocity_frames(pair_a, pair_b, t, x, y, run_start, run_end, eps_d, eps_t2)
             if close:
                 break
         if close:
-            kept[n_kept] = (k, a_first, a_end, run_start[b], b_end)
+            # Element by element: a row assignment compiles numba's text for a shape mismatch (about 1 s).
+            kept[n_kept, 0], kept[n_kept, 1], kept[n_kept, 2] = k, a_first, a_end
+            kept[n_kept, 3], kept[n_kept, 4] = run_start[b], b_end
             n_kept += 1
     return kept[:n_kept]
 
@@ -368,7 +383,7 @@ def velocity_frames(runs, pair_a, pair_b, eps_d, eps_t2):
     )
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(cache=True, nogil=True)
 def _smoothed(values, scan, n):
     """Centred 3-scan moving average at ``scan`` of a track of ``n`` scans (the window shrinks at the ends).
 

@@ -150,7 +150,7 @@ def _advance(times, position, end, bound, inclusive):
     return position + np.searchsorted(times[position:end], bound, side="left")
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
+@numba.njit(cache=True, nogil=True)  # not inlined (3 call sites): its callees are, inside it
 def _window(times, start, end, lo, hi, fresh, t_low, t_high):
     """Positions [lo, hi) of a time-sorted run within [t_low, t_high].
 
@@ -274,7 +274,8 @@ def _dbscan_sorted(points, min_points, can_be_core, cell_x, cell_y, cell_keys, c
             roots[i] = find(parent, i)
             continue
         own = point_cell[i]
-        closest, closest_distance = -1, np.inf
+        # np.int64, not the literal -1: numba would also compile find() for the argument type Literal[int](-1).
+        closest, closest_distance = np.int64(-1), np.inf
         for k in range(9):
             c = cells[own, k]
             if c < 0 or core_end[c] == core_start[c]:
@@ -357,7 +358,7 @@ def _causal_update(points, min_points, can_be_core, core, cluster, first_new, ne
     # Phase B: old clusters touched by a component merge into the oldest (smallest) id.
     ids = np.empty(first_new, dtype=np.int64)  # distinct old cluster ids met
     id_parent = np.empty(first_new, dtype=np.int64)
-    n_ids = 0
+    n_ids = np.int64(0)  # not a literal 0 (one compiled _local_id, see _dbscan_sorted's closest)
     best = np.full(n_new, -1, dtype=np.int64)  # per component: local index of an id it touches
     for i in range(first_new, n):
         if not core[i]:
@@ -428,7 +429,7 @@ def _causal_sequence(points, min_points, can_be_core, crit):
     core = np.zeros(n, dtype=np.bool_)
     cluster = np.full(n, -1, dtype=np.int64)
     emitted = np.full(n, -1, dtype=np.int64)
-    next_id = 0
+    next_id = np.int64(0)  # not a literal 0: numba would compile the large _causal_update twice
     start = 0
     scan_start = 0
     while scan_start < n:

@@ -9,6 +9,7 @@ this machine actually went.
 
 from __future__ import annotations
 
+import importlib
 import time
 
 from ._constants import BASELINES, FILTER, FILTER_EFFECT, STAGE2
@@ -32,6 +33,20 @@ EXTRA_ITERATIONS = 2
 PER_DETECTION = {FILTER: 1.2e-5, FILTER_EFFECT: 5e-6, "fixed": 2e-6}
 #: Seconds to draw the figures and write the report.
 REPORT_S = 6.0
+#: Seconds of the first run in a new environment spent compiling the numba kernels the run uses, by kernel (later
+#: runs load them from numba's cache): the default run's cold minus warm time in a new virtual environment on the
+#: 2-core machine, 13 s, shared out by each kernel's compile time (docs/performance.rst, "Compile time").
+COMPILE_S = {
+    "sklearn_radar.cluster._radar_dbscan_kernels._dbscan_sorted": 4.7,
+    "sklearn_radar.cluster._merge_kernels._candidate_pairs": 3.0,
+    "sklearn_radar._neighbors._count_capped": 1.4,
+    "sklearn_radar.cluster._merge_kernels._continuation_edges": 1.1,
+    "sklearn_radar.cluster._merge_kernels._max_speeds": 1.1,
+    "sklearn_radar.cluster._merge_kernels._velocity_frames": 0.5,
+    "sklearn_radar._labels._number_by_first_row": 0.6,
+    "sklearn_radar.cluster._merge_kernels._merge_components": 0.3,
+    "sklearn_radar._neighbors._counting_order": 0.3,
+}
 
 
 def step_cost(key, budget: Budget, n_train, n_test, n_detections, tuned):
@@ -61,6 +76,29 @@ def step_cost(key, budget: Budget, n_train, n_test, n_detections, tuned):
     scale = (max(n_train, 1) / REFERENCE_TRAIN) ** SIZE_EXPONENT[kind]
     per_iteration = max(MIN_PER_ITERATION[kind], PER_ITERATION[kind] * scale)
     return (budget.n_iter + EXTRA_ITERATIONS) * per_iteration
+
+
+def compile_cost():
+    """Estimated seconds the run will spend compiling: :data:`COMPILE_S` of the kernels not in numba's cache.
+
+    A kernel is cached when its cache index (one small file per kernel,
+    written at its first compilation) exists and matches the source file;
+    after an install or an edit of the source, it does not.
+
+    Returns
+    -------
+    seconds : float
+        0 when every kernel is cached (or numba's cache cannot be read).
+    """
+    seconds = 0.0
+    for name, cost in COMPILE_S.items():
+        module, kernel = name.rsplit(".", 1)
+        try:
+            cached = bool(getattr(importlib.import_module(module), kernel)._cache._cache_file._load_index())
+        except Exception:  # another numba's cache internals: no claim either way
+            cached = True
+        seconds += 0.0 if cached else cost
+    return seconds
 
 
 def duration(seconds):
@@ -150,4 +188,4 @@ class RunProgress:
         return lambda i, n: self.status((part + i / max(n, 1)) / parts)
 
 
-__all__ = ["REPORT_S", "RunProgress", "duration", "rough", "step_cost"]
+__all__ = ["COMPILE_S", "REPORT_S", "RunProgress", "compile_cost", "duration", "rough", "step_cost"]

@@ -97,7 +97,7 @@ from ._io import (
     sha256,
     temporary_prefix,
 )
-from ._progress import REPORT_S, RunProgress, duration, rough, step_cost
+from ._progress import REPORT_S, RunProgress, compile_cost, duration, rough, step_cost
 from ._report import write_report
 from ._results import (
     BaselineResult,
@@ -439,14 +439,19 @@ def _estimate(run, keys, *, full, simulated):
 
     # The time spent on the data so far (simulation, statistics, compilation) counts towards the run's length.
     spent = time.perf_counter() - run.started
-    progress = RunProgress({**costs(run.budget, 1.0, run.results.meta.repeats), DATA: spent}, run.started)
+    steps = costs(run.budget, 1.0, run.results.meta.repeats)
+    compiling = compile_cost()  # on an empty numba cache (a new environment), charged to the first step
+    steps[keys[0] if keys else REPORT] += compiling
+    progress = RunProgress({**steps, DATA: spent}, run.started)
     progress.finish(DATA)
     text = f"estimated run time: {rough(progress.total)} on an idle 2-core machine"
+    if compiling:
+        text += f" (with {rough(compiling)} to compile the numba kernels: this first run fills their cache)"
     if not full:
         # --full simulates the paper's data size; on a data folder it keeps the data and raises the budget.
         default, paper = Budget.default(), Budget.full()
         scale = (paper.n_sequences * paper.duration) / (default.n_sequences * default.duration) if simulated else 1.0
-        full_s = spent * scale + sum(costs(paper, scale, 3).values())  # --full repeats each search 3 times
+        full_s = spent * scale + sum(costs(paper, scale, 3).values()) + compiling  # 3 repeats of each search
         text += f"; --full (the paper's budget, 3 repeats) takes {rough(full_s)}"
     _say(run, text + "; the progress lines below re-estimate the time left as the run goes")
     return progress
