@@ -35,9 +35,9 @@ PER_DETECTION = {FILTER: 1.2e-5, FILTER_EFFECT: 5e-6, "fixed": 2e-6}
 REPORT_S = 6.0
 #: Seconds of the first run in a new environment spent compiling the numba kernels the run uses, by kernel (later
 #: runs load them from numba's cache): the default run's cold minus warm time in a new virtual environment on the
-#: 2-core machine, 13 s, shared out by each kernel's compile time (docs/performance.rst, "Compile time").
+#: 2-core machine, 12-13 s, shared out by each kernel's compile time (docs/performance.rst, "Compile time").
 COMPILE_S = {
-    "sklearn_radar.cluster._radar_dbscan_kernels._dbscan_sorted": 4.7,
+    "sklearn_radar.cluster._radar_dbscan_kernels._dbscan_sorted": 3.6,
     "sklearn_radar.cluster._merge_kernels._candidate_pairs": 3.0,
     "sklearn_radar._neighbors._count_capped": 1.4,
     "sklearn_radar.cluster._merge_kernels._continuation_edges": 1.1,
