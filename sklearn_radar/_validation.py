@@ -384,11 +384,7 @@ def _speed_cause(ratio, speed_name, time_name):
 def _path_and_integrated_speed(seconds, x, y, speed, sequence):
     """Per sequence: the path of (x, y) and the integral of ``|speed|`` over consecutive scans (gaps <= MAX_GAP)."""
     keys = [] if sequence is None else [sequence]
-    run_start = np.zeros(len(seconds), dtype=bool)  # rows come scan by scan: one row per run of equal time
-    run_start[:1] = True
-    for values in (seconds, *keys):
-        run_start[1:] |= values[1:] != values[:-1]
-    rows = np.flatnonzero(run_start)
+    rows = _run_starts(seconds, *keys)
     order = np.lexsort((seconds[rows], *(key[rows] for key in keys)))
     rows = rows[order]
     t, px, py, v = seconds[rows], x[rows], y[rows], np.abs(speed[rows])
@@ -403,6 +399,15 @@ def _path_and_integrated_speed(seconds, x, y, speed, sequence):
     first_of_group = np.r_[True, group[1:] != group[:-1]] if len(group) else np.zeros(0, dtype=bool)
     sequences = keys[0][rows][first_of_group] if keys else None
     return path, integrated, sequences
+
+
+def _run_starts(*columns):
+    """First row of each run of rows equal in every column: rows come scan by scan, so a few runs per scan."""
+    start = np.zeros(len(columns[0]), dtype=bool)
+    start[:1] = True
+    for values in columns:
+        start[1:] |= values[1:] != values[:-1]
+    return np.flatnonzero(start)
 
 
 def median_scan_spacing(times, sequence=None, sensor=None):
@@ -425,11 +430,7 @@ def median_scan_spacing(times, sequence=None, sensor=None):
     """
     keys = [key for key in (sensor, sequence) if key is not None]
     # Rows come scan by scan in most tables: work on runs of equal (time, keys), a few per scan, not on rows.
-    run_start = np.zeros(len(times), dtype=bool)
-    run_start[:1] = True
-    for values in (times, *keys):
-        run_start[1:] |= values[1:] != values[:-1]
-    starts = np.flatnonzero(run_start)
+    starts = _run_starts(times, *keys)
     if len(starts) < MIN_SCANS_FOR_SPACING:  # fewer runs than scans needed (one scan of a stream): nothing to judge
         empty = np.zeros(0)
         return empty, (empty if sequence is not None else None), (empty if sensor is not None else None)
