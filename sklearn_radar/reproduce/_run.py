@@ -417,7 +417,7 @@ def _reproduce(
                 raise
         _finish(run, context, "complete")
     except BaseException as error:
-        marker = _read_marker(run.out)
+        marker = run_marker(run.out / RUN_MARKER) or {}
         if marker.get("run_id") == run.run_id and marker.get("status") == "running":
             _write_marker(run, "failed", error=f"{type(error).__name__}: {error}")
         raise
@@ -509,14 +509,6 @@ def _finish(run, context, status):
 
 def _utc_now():
     return datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
-
-
-def _read_marker(out):
-    try:
-        marker = json.loads((Path(out) / RUN_MARKER).read_text(encoding="utf-8"))
-    except (OSError, ValueError):
-        return {}
-    return marker if isinstance(marker, dict) else {}
 
 
 def _start_folder(run):
