@@ -133,6 +133,24 @@ class FrameTransform(TransformerMixin, BaseEstimator):
         read_columns(self, X, FRAME_TRANSFORM_READS, reset=True)
         return self
 
+    @_fit_context(prefer_skip_nested_validation=True)
+    def fit_transform(self, X, y=None):
+        """:meth:`fit`, then :meth:`transform`, reading and checking the input once.
+
+        Parameters
+        ----------
+        X : DataFrame or array-like of shape (n_detections, n_columns)
+            Raw detections, as for :meth:`fit`.
+        y : None
+            Ignored.
+
+        Returns
+        -------
+        Xt : DataFrame or ndarray
+            As :meth:`transform` returns it.
+        """
+        return self._transformed(*read_columns(self, X, FRAME_TRANSFORM_READS, reset=True))
+
     def transform(self, X):
         """Add the working columns ``x``, ``y`` (m), ``v_r`` (m/s), ``t`` (s) and ``heading`` (rad).
 
@@ -150,15 +168,7 @@ class FrameTransform(TransformerMixin, BaseEstimator):
             of shape (n_detections, 10) (:data:`~sklearn_radar._schema.WORK_LAYOUT`).
         """
         check_is_fitted(self)
-        X, c = read_columns(self, X, FRAME_TRANSFORM_READS, reset=False)
-        with np.errstate(over="ignore", invalid="ignore"):
-            work = self._working_columns(c)
-        _check_finite(work, c)
-        if hasattr(X, "columns"):
-            return write_columns(X, {name: work[name] for name in WORKING_COLUMNS})
-        sequence = c["sequence"] if c["sequence"] is not None else np.zeros(len(work["x"]))
-        line_of_sight = {name: c[name] for name in _LINE_OF_SIGHT}
-        return write_columns(np.empty((len(work["x"]), 0)), {**work, "sequence": sequence, **line_of_sight})
+        return self._transformed(*read_columns(self, X, FRAME_TRANSFORM_READS, reset=False))
 
     def get_feature_names_out(self, input_features=None):
         """Names of the columns :meth:`transform` returns, as ``set_output`` uses them.
@@ -184,6 +194,17 @@ class FrameTransform(TransformerMixin, BaseEstimator):
         return feature_names_out(
             self, input_features, added=WORKING_COLUMNS, array_width=work_array_width(0, _ARRAY_COLUMNS)
         )
+
+    def _transformed(self, X, c):
+        """The working columns from the read raw columns ``c``, written into ``X``'s kind of container."""
+        with np.errstate(over="ignore", invalid="ignore"):
+            work = self._working_columns(c)
+        _check_finite(work, c)
+        if hasattr(X, "columns"):
+            return write_columns(X, {name: work[name] for name in WORKING_COLUMNS})
+        sequence = c["sequence"] if c["sequence"] is not None else np.zeros(len(work["x"]))
+        line_of_sight = {name: c[name] for name in _LINE_OF_SIGHT}
+        return write_columns(np.empty((len(work["x"]), 0)), {**work, "sequence": sequence, **line_of_sight})
 
     def _working_columns(self, c):
         """x, y (m), v_r (m/s), t (s) and heading (rad) from the raw columns ``c``."""
