@@ -66,8 +66,7 @@ def read_columns(estimator, X, reads: ColumnsRead, *, reset):
         present = [column for column in reads.names if column in X.columns]
         columns = {column: None for column in reads.names}
         columns.update({column: _numeric_column(X[column], column, estimator) for column in present})
-        if get_config()["check_plausibility"]:
-            check_plausible(columns, name, sensor=_sensor_of(X))
+        check_plausible(columns, name, sensor=_sensor_of(X))
         return X, columns
     _refuse_other_frames(X, reads.layout, name)
     X = _validate_array(estimator, X, reads.layout, reset=reset)
