@@ -178,7 +178,8 @@ def test_pipeline_memory_computes_frame_and_filter_once_per_data_subset(scenes, 
     grid = {"cluster__eps_xy": [0.5, 0.8, 1.1], "cluster__min_samples": [2, 3]}  # 6 candidates
     results = {}
     for memory in (None, str(tmp_path / "cache")):
-        frame_calls = _count_calls(monkeypatch, FrameTransform, "transform")
+        # FrameTransform's transform and fit_transform both compute the working columns in _transformed.
+        frame_calls = _count_calls(monkeypatch, FrameTransform, "_transformed")
         filter_calls = _count_calls(monkeypatch, DopplerDensityFilter, "transform")
         search = GridSearchCV(
             experiment_pipeline(3, memory=memory),
