@@ -69,6 +69,12 @@ from ..metrics._parts import (
     score_parts,
 )
 from ..model_selection import ProgressPrinter
+from ..model_selection._sequence_search import (
+    SearchData,
+    candidate_scores,
+    search_and_score_start,
+    sized_sequence_folds,
+)
 from ..preprocessing import DopplerDensityFilter, FrameTransform
 from ._constants import (
     ALL_EXPERIMENTS,
@@ -120,7 +126,7 @@ from ._results import (
     RunResults,
     SearchRecord,
 )
-from ._search import SearchData, candidate_scores, search_and_score_start, search_on_a_worker, sized_sequence_folds
+from ._search import search_on_a_worker
 from ._sections._figures import CONVERGENCE, SCENE, V1_BARS
 from ._sections._filter import FILTER_SCENE, HEATMAP
 from ._sequences import RunSequences

@@ -28,8 +28,8 @@ from ..datasets import load_radarscenes
 from ..datasets._radarscenes import _read_sensors_json, _read_sequences_json, _resolve_data_dir
 from ..datasets._simulator import _check_knobs, sequence_seeds, simulate_sequences
 from ..metrics import precluster_target
+from ..model_selection._sequence_search import SearchData, balanced_blocks
 from ..model_selection._split import sequence_sides
-from ._search import SearchData, balanced_blocks
 
 __all__ = ["RunSequences", "Sequence"]
 
