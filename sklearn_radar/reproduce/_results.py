@@ -7,8 +7,8 @@ Every dataclass is keyword-only: a field that is missing or misspelt raises
 TypeError where the object is built, and ValueError naming the file and the
 key where it is read back, not when the report reads it after a run.
 
-The JSON form is derived from the fields, by one converter (:func:`to_json`,
-:func:`from_json`) instead of a pair of methods per record.  Its rules are
+The JSON form is derived from the fields, by one converter (``_to_json``,
+``_from_json``) instead of a pair of methods per record.  Its rules are
 those of the format it replaced, so that ``results.json`` stays byte for byte
 the same:
 
@@ -55,26 +55,22 @@ _RECORD = {"slots": True, "kw_only": True}
 # ----------------------------------------------------------------------------- the JSON converter
 
 _HOW = "results_json"  # the key of a field's metadata that says how it is written
-_FLAT, _UNWRITTEN, _AT_DEFAULT = "flat", "unwritten", "absent at default"
-
-
-#: ``field(metadata=...)`` of a field written as its record's (or dictionary's) keys among its owner's.
-_WRITTEN_FLAT = {_HOW: _FLAT}
-#: ... of a field that the JSON form does not hold.
-_NOT_WRITTEN = {_HOW: _UNWRITTEN}
-#: ... of a field whose key is absent while it has its default.
-_ABSENT_AT_DEFAULT = {_HOW: _AT_DEFAULT}
+#: ``field(metadata=...)`` of a field written as its record's (or dictionary's) keys among its owner's,
+_WRITTEN_FLAT = {_HOW: "flat"}
+#: of a field that the JSON form does not hold,
+_NOT_WRITTEN = {_HOW: "not written"}
+#: of a field whose key is absent while it has its default.
+_ABSENT_AT_DEFAULT = {_HOW: "absent at default"}
 
 
 class _Field(NamedTuple):
     name: str
-    hint: Any
     how: str | None
     default: Any
     required: bool
-    holds_records: bool
+    holds_records: bool  # else its value is written as it is
     record: type | None  # the record class of a (possibly optional) record type
-    read: Any  # _reader(hint)
+    read: Any  # _reader of its type
 
 
 def _optional_of(hint):
@@ -86,67 +82,47 @@ def _optional_of(hint):
 
 
 def _holds_records(hint):
-    """Whether a value of this type may contain a record (else it is written as it is)."""
-    if is_dataclass(hint):
-        return True
-    return any(_holds_records(arg) for arg in typing.get_args(hint))
+    return is_dataclass(hint) or any(_holds_records(arg) for arg in typing.get_args(hint))
 
 
 @functools.cache
 def _plan(cls):
-    """The fields of a record class with their resolved types, in declaration order."""
+    """The fields of a record class, in declaration order, with what the converter needs to know of them."""
     hints = typing.get_type_hints(cls)
     return tuple(
         _Field(
             name=f.name,
-            hint=hints[f.name],
             how=f.metadata.get(_HOW),
             default=f.default,
             required=f.default is MISSING and f.default_factory is MISSING,
             holds_records=_holds_records(hints[f.name]),
-            record=_record_class(hints[f.name]),
+            record=next((h for h in (_optional_of(hints[f.name]), hints[f.name]) if is_dataclass(h)), None),
             read=_reader(hints[f.name]),
         )
         for f in fields(cls)
     )
 
 
-def _record_class(hint):
-    """The record class of a (possibly optional) record type, else None."""
-    hint = _optional_of(hint) or hint
-    return hint if is_dataclass(hint) else None
-
-
 @functools.cache
 def _own_keys(cls):
-    """The keys of a record's JSON object that its fields (flattened ones included) claim."""
+    """The keys of a record's JSON object that its fields (flattened records' included) claim."""
     keys = []
     for f in _plan(cls):
-        if f.how != _FLAT:
+        if f.how != "flat":
             keys.append(f.name)
         elif f.record is not None:
             keys.extend(_own_keys(f.record))
     return frozenset(keys)
 
 
-def to_json(value):
-    """The JSON form of a record, or of a dictionary or list of them (see the module's rules).
-
-    Parameters
-    ----------
-    value : dataclass instance, dict, list or JSON value
-
-    Returns
-    -------
-    document : dict, list or JSON value
-        For :func:`json.dumps`.
-    """
+def _to_json(value):
+    """The JSON form of a record, or of a dictionary or list of them, for :func:`json.dumps`."""
     if is_dataclass(value):
         return _record_to_json(value)
     if isinstance(value, dict):
-        return {str(key) if isinstance(key, int) else key: to_json(item) for key, item in value.items()}
+        return {str(key) if isinstance(key, int) else key: _to_json(item) for key, item in value.items()}
     if isinstance(value, list | tuple):
-        return [to_json(item) for item in value]
+        return [_to_json(item) for item in value]
     return value
 
 
@@ -155,41 +131,21 @@ def _record_to_json(record):
     for f in _plan(type(record)):
         value = getattr(record, f.name)
         if (
-            f.how == _UNWRITTEN
+            f.how == "not written"
             or (value is None and f.default is None)
-            or (f.how == _AT_DEFAULT and value == f.default)
+            or (f.how == "absent at default" and value == f.default)
         ):
             continue
-        if f.holds_records:
-            value = to_json(value)
-        if f.how == _FLAT:
+        value = _to_json(value) if f.holds_records else value
+        if f.how == "flat":
             document.update(value)
         else:
             document[f.name] = value
     return document
 
 
-def from_json(hint, document, source="results.json"):
-    """Read :func:`to_json`'s form of a type back, checking every key and type.
-
-    Parameters
-    ----------
-    hint : type
-        A record class, or a type such as ``dict[str, BaselineResult]``.
-    document : dict, list or JSON value
-        Parsed JSON.
-    source : str, default="results.json"
-        Where the document was read, for the error messages.
-
-    Returns
-    -------
-    value : instance of ``hint``
-
-    Raises
-    ------
-    ValueError
-        Naming ``source`` and the key, if a key is missing or not known, or a value has the wrong type.
-    """
+def _from_json(hint, document, source):
+    """Read :func:`_to_json`'s form of type ``hint`` back; ValueError naming ``source`` and the key if it is bad."""
     try:
         return _reader(hint)(document)
     except _BadDocument as error:
@@ -201,7 +157,6 @@ class _BadDocument(Exception):
     """([keys from the document's top to the bad value], what is wrong with it)."""
 
     def within(self, key):
-        """The error one level up: inside the entry ``key``."""
         self.args[0].insert(0, key)
         return self
 
@@ -249,7 +204,6 @@ def _read_scalar(kinds, what, value):
 
 
 def _read_int_key(key):
-    """A JSON object's key (a string) as the int it was written from."""
     if not key.lstrip("-").isdigit():
         raise _BadDocument([], f"has the key {key!r}, which is not an integer")
     return int(key)
@@ -259,11 +213,14 @@ def _read_dict(read_key, read_item, document):
     _expect(document, (dict,), "an object")
     if read_key is read_item is _as_is:
         return document
-    key = None
-    try:
-        return {read_key(key): read_item(item) for key, item in document.items()}
-    except _BadDocument as error:
-        raise error.within(key) from None
+    read = {}
+    for key, item in document.items():
+        read_as = read_key(key)
+        try:
+            read[read_as] = read_item(item)
+        except _BadDocument as error:
+            raise error.within(key) from None
+    return read
 
 
 def _read_list(read_item, document):
@@ -271,35 +228,31 @@ def _read_list(read_item, document):
     if read_item is _as_is or (
         getattr(read_item, "func", None) is _read_scalar and {type(item) for item in document} <= set(read_item.args[0])
     ):
-        return document
-    index = 0
-    try:
-        return [read_item(item) for index, item in enumerate(document)]
-    except _BadDocument as error:
-        raise error.within(index) from None
-
-
-@functools.cache
-def _collects_the_rest(cls):
-    """Whether a flattened dictionary of the record takes the keys no other field claims."""
-    return any(f.how == _FLAT and f.record is None for f in _plan(cls))
+        return document  # the common case, checked at once
+    read = []
+    for index, item in enumerate(document):
+        try:
+            read.append(read_item(item))
+        except _BadDocument as error:
+            raise error.within(index) from None
+    return read
 
 
 def _read_record(cls, document):
     _expect(document, (dict,), f"an object ({cls.__name__})")
-    own = _own_keys(cls)
-    if not _collects_the_rest(cls):
-        unknown = [key for key in document if key not in own]
-        if unknown:
-            raise _BadDocument([], f"has the key {unknown[0]!r}, which {cls.__name__} does not know")
+    own, plan = _own_keys(cls), _plan(cls)
+    unknown = [key for key in document if key not in own]
+    collects_the_rest = any(f.how == "flat" and f.record is None for f in plan)
+    if unknown and not collects_the_rest:
+        raise _BadDocument([], f"has the key {unknown[0]!r}, which {cls.__name__} does not know")
     values = {}
-    for f in _plan(cls):
-        if f.how == _FLAT and f.record is not None:
+    for f in plan:
+        if f.how == "flat" and f.record is not None:
             part = {key: document[key] for key in _own_keys(f.record) if key in document}
             if part or f.required:
                 values[f.name] = _read_record(f.record, part)
-        elif f.how == _FLAT:
-            values[f.name] = f.read({key: item for key, item in document.items() if key not in own})
+        elif f.how == "flat":
+            values[f.name] = f.read({key: document[key] for key in unknown})
         elif f.name in document:
             try:
                 values[f.name] = f.read(document[f.name])
@@ -311,7 +264,7 @@ def _read_record(cls, document):
 
 
 class _JsonRecord:
-    """``to_json_dict`` and ``from_json_dict`` of every record: :func:`to_json` and :func:`from_json`."""
+    """``to_json_dict`` and ``from_json_dict`` of every record, by the module's rules."""
 
     __slots__ = ()
 
@@ -322,7 +275,7 @@ class _JsonRecord:
         -------
         document : dict
         """
-        return to_json(self)
+        return _to_json(self)
 
     @classmethod
     def from_json_dict(cls, document, *, source="results.json"):
@@ -344,7 +297,7 @@ class _JsonRecord:
         ValueError
             Naming ``source`` and the key, if a key is missing or not known, or a value has the wrong type.
         """
-        return from_json(cls, document, source)
+        return _from_json(cls, document, source)
 
 
 @dataclass(**_RECORD)
@@ -1023,9 +976,9 @@ class RunResults(_JsonRecord):
             ``meta``, ``statistics`` (when measured), ``experiments`` (keyed by the number as a string), then
             ``filter``, ``filter_effect`` and ``baselines`` where they ran.
         """
-        document = to_json(self)
+        document = _to_json(self)
         if figures:
-            document["figures"] = to_json(self.figures)
+            document["figures"] = _to_json(self.figures)
         return document
 
     @classmethod
@@ -1049,7 +1002,7 @@ class RunResults(_JsonRecord):
             Naming ``source`` and the key, if a key is missing or not known, a value has the wrong type, or an
             experiment's record is filed under another number.
         """
-        results = from_json(cls, document, source)
+        results = _from_json(cls, document, source)
         for key, result in document.get("experiments", {}).items():
             if str(result["number"]) != key:
                 raise ValueError(f"{source}: experiment {key!r} holds the record of #{result['number']}")
