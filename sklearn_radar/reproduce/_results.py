@@ -24,14 +24,17 @@ the same:
   are written as they are, for :func:`json.dumps` to format.
 
 Why a converter over :func:`dataclasses.fields` rather than a library
-(measured on this machine, Python 3.11, on the default run's
-``results.json``, 34 kB; see the report of issue 28): none of cattrs 26.2,
-msgspec 0.23 and pydantic 2.14 writes a nested record's keys flat among its
-owner's (SearchRecord in an experiment, the measured figures of the filter
-effect), which the format needs, so each needed hand-written hooks for those
-records; msgspec's own encoder writes NaN as null, and pydantic pulls in 10 MB
-(pydantic-core).  The converter needs no new dependency, and loads and dumps
-the file in less time than json.loads and json.dumps take for it.
+(issue 28; measured on the default run's ``results.json``, 34 kB, and on a
+``--full``-sized one, 216 kB: 100 iterations, 3 repeats): cattrs 26.2 writes
+the same bytes only with hand-written hooks for the flattened records (about
+50 lines), turns an int in a float field into a float (``1`` becomes
+``1.0``: other bytes) and reads the string ``"1.4"`` as a number; msgspec
+0.23 writes NaN as null and pydantic 2.14 adds 10 MB (pydantic-core), and
+neither writes a record flat among its owner's keys.  Speed decides nothing:
+the converter loads the files in 0.6-0.8 ms and 2.7 ms and dumps them in
+0.2-0.3 ms and 1.0-1.4 ms, cattrs in 0.4-0.6 / 1.9-3.2 ms and 0.3-0.4 /
+0.7-1.1 ms, while ``json.loads`` alone takes 0.7 / 5.9 ms and
+``json.dumps(indent=1)`` 2.9 / 22 ms.  So no new dependency.
 
 Parameter settings (``params``, ``paper_params``, ...) stay dictionaries of
 pipeline parameters (``{"cluster__eps_xy": 0.6, ...}``): their keys are the
@@ -297,7 +300,13 @@ class _JsonRecord:
         ValueError
             Naming ``source`` and the key, if a key is missing or not known, or a value has the wrong type.
         """
-        return _from_json(cls, document, source)
+        record = _from_json(cls, document, source)
+        cls._check_read(document, source)
+        return record
+
+    @classmethod
+    def _check_read(cls, document, source):
+        """Raise ValueError naming ``source`` if a read document breaks a rule its types do not say."""
 
 
 @dataclass(**_RECORD)
@@ -421,14 +430,14 @@ class RunMeta(_JsonRecord):
         Step keys finished, in run order (``"filter"``, ``"1"``, ...).
     interrupted : bool, default=False
         Whether the run was interrupted.
-    wall_time_s : float or None, default=None
-        Wall time of the whole run, s; None until it finishes (the key is then absent).
     objective : {"v1", "pq"}, default="v1"
         What the searches maximised and ``params.json``'s ``best`` ranks by: the paper's radar
         V-measure, or the panoptic quality of moving road users per 0.5 s frame.
     repeats : int, default=1
         Searches per tuned experiment and baseline, with the seeds ``seed``, ``seed + 1``, ... on the same
         split (the key is absent for 1).
+    wall_time_s : float or None, default=None
+        Wall time of the whole run, s; None until it finishes (the key is then absent).
     """
 
     version: str
@@ -648,10 +657,10 @@ class SearchRecord(_JsonRecord):
     best_source : str
         ``"search"``, or the paper's setting when it scored at least as well
         (:data:`~sklearn_radar.reproduce._constants.SOURCE_PAPER`).
-    search_wall_time_s : float
     cv_start_from : float or None, default=None
         Mean cross-validated V1 of the paper's setting, scored beside the
         search; None where there is none (the scikit-learn baselines).
+    search_wall_time_s : float
     """
 
     cv_best: float
@@ -701,14 +710,14 @@ class RepeatResult(_JsonRecord):
     ----------
     seed : int
         Random seed of the repeat's search (the run's seed plus the repeat's index).
+    search : SearchRecord or None, default=None
+        The repeat's search; None for #10 and #11, which take the same repeat's #8 setting.
     params : dict
         The setting scored on the test half, as pipeline parameters.
     v1_test : float
         Radar V-measure on the test half, 0-1.
     n_clusters_test : int
         Clusters found on the test half.
-    search : SearchRecord or None, default=None
-        The repeat's search; None for #10 and #11, which take the same repeat's #8 setting.
     instance_test : InstanceScores or None, default=None
         Object-level scores on the test half.
     """
@@ -755,28 +764,28 @@ class ExperimentResult(_JsonRecord):
         The paper's V1, %.
     paper_params : dict
         The paper's setting, as pipeline parameters.
-    params : dict
-        The setting scored on the test half, as pipeline parameters.
-    v1_test : float
-        Radar V-measure on the test half, 0-1.
-    n_clusters_test : int
-        Clusters found on the test half.
-    wall_time_s : float
-        Wall time of the experiment (search and scoring), s.
     stage1_params : dict or None, default=None
         Stage 2 only: the fixed stage-1 setting (#8's).
     derived_from_8 : str or None, default=None
         #10 and #11 only: whether #8's setting was tuned or the paper's.
     search : SearchRecord or None, default=None
         The search, for the tuned experiments.
-    instance_test : InstanceScores or None, default=None
-        Object-level scores on the test half.
+    params : dict
+        The setting scored on the test half, as pipeline parameters.
+    v1_test : float
+        Radar V-measure on the test half, 0-1.
+    wall_time_s : float
+        Wall time of the experiment (search and scoring), s.
+    n_clusters_test : int
+        Clusters found on the test half.
+    n_stage1_clusters_test : int or None, default=None
+        Stage 2 only: stage-1 clusters on the test half, before merging.
     n_merges_test : int or None, default=None
         Stage 2 only: pairs of stage-1 clusters that met the merge criterion
         on the test half (``ClusterMerger.merges_``); 0 means the experiment
         returned its stage-1 clustering unchanged.
-    n_stage1_clusters_test : int or None, default=None
-        Stage 2 only: stage-1 clusters on the test half, before merging.
+    instance_test : InstanceScores or None, default=None
+        Object-level scores on the test half.
     repeats : list of RepeatResult or None, default=None
         Every repeat of a run with more than one (``meta.repeats``), the
         first being the one whose values the other fields hold; None for a
@@ -814,10 +823,10 @@ class BaselineResult(_JsonRecord):
         The kept setting, as pipeline parameters.
     v1_test : float
         Radar V-measure on the test half, 0-1.
-    n_clusters_test : int
-        Clusters found on the test half.
     wall_time_s : float
         Wall time of the search and scoring, s.
+    n_clusters_test : int
+        Clusters found on the test half.
     instance_test : InstanceScores or None, default=None
         Object-level scores on the test half.
     repeats : list of RepeatResult or None, default=None
@@ -931,6 +940,8 @@ class RunResults(_JsonRecord):
     Attributes
     ----------
     meta : RunMeta
+    statistics : DataStatistics or None, default=None
+        Statistics of the data; None in results of older versions.
     experiments : dict of int to ExperimentResult, default={}
         By experiment number, in run order.
     filter : FilterResult or None, default=None
@@ -940,8 +951,6 @@ class RunResults(_JsonRecord):
         By clusterer name.
     figures : FigureRecord, default=FigureRecord()
         Figures drawn; written to ``results.json`` only on request.
-    statistics : DataStatistics or None, default=None
-        Statistics of the data; None in results of older versions.
     """
 
     meta: RunMeta
@@ -982,31 +991,10 @@ class RunResults(_JsonRecord):
         return document
 
     @classmethod
-    def from_json_dict(cls, document, *, source="results.json"):
-        """Read ``results.json`` (or :meth:`to_json_dict`'s form) back.
-
-        Parameters
-        ----------
-        document : dict
-            Parsed JSON.
-        source : str, default="results.json"
-            Where it was read, for the error messages.
-
-        Returns
-        -------
-        results : RunResults
-
-        Raises
-        ------
-        ValueError
-            Naming ``source`` and the key, if a key is missing or not known, a value has the wrong type, or an
-            experiment's record is filed under another number.
-        """
-        results = _from_json(cls, document, source)
+    def _check_read(cls, document, source):
         for key, result in document.get("experiments", {}).items():
             if str(result["number"]) != key:
                 raise ValueError(f"{source}: experiment {key!r} holds the record of #{result['number']}")
-        return results
 
     @classmethod
     def read(cls, path):
