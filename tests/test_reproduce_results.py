@@ -1,10 +1,12 @@
 """``results.json``: every record written and read back by the one converter, old files, bad files.
 
-The byte-for-byte references are real runs' files in ``tests/data``: the
-default run's (``results_default_run.json``, written by the hand-written
-methods the converter replaced) and one of the first typed layout
-(``results_3bcbd36_layout.json``: the same run without the keys added since
-commit 3bcbd36, which that commit's reader reads and writes back unchanged).
+The byte-for-byte references are real runs' files in ``tests/data``, written
+by the hand-written methods the converter replaced: the default run's
+(``results_default_run.json``), a ``--full`` run's as saved after its
+experiment #6 (``results_full_run_partial.json``: 100 iterations, no wall
+time yet), and one of the first typed layout (``results_3bcbd36_layout.json``:
+the default run without the keys added since commit 3bcbd36, which that
+commit's reader reads and writes back unchanged).
 """
 
 import dataclasses
@@ -30,6 +32,7 @@ from sklearn_radar.reproduce._results import (
 DATA = Path(__file__).parent / "data"
 DEFAULT_RUN = DATA / "results_default_run.json"
 OLD_LAYOUT = DATA / "results_3bcbd36_layout.json"
+FULL_RUN_PARTIAL = DATA / "results_full_run_partial.json"
 RECORDS = [
     value
     for value in vars(_results).values()
@@ -39,11 +42,12 @@ RECORDS = [
 # ----------------------------------------------------------------------------- files of real runs
 
 
-def test_the_default_runs_file_is_written_back_byte_for_byte():
-    text = DEFAULT_RUN.read_text()
-    results = RunResults.read(DEFAULT_RUN)
+@pytest.mark.parametrize("path", [DEFAULT_RUN, FULL_RUN_PARTIAL], ids=lambda path: path.stem)
+def test_a_real_runs_file_is_written_back_byte_for_byte(path):
+    text = path.read_text()
+    results = RunResults.read(path)
     assert json.dumps(results.to_json_dict(), indent=1) == text
-    assert isinstance(results.experiments[13].search, SearchRecord) and results.experiments[1].search is None
+    assert isinstance(results.experiments[2].search, SearchRecord) and results.experiments[1].search is None
     assert results.filter.windows.n_windows == json.loads(text)["filter"]["windows"]["n_windows"]
 
 
