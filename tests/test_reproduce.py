@@ -285,15 +285,15 @@ def test_a_missing_or_renamed_field_fails_where_the_results_are_built(tiny_repor
     document = json.loads((tiny_report / "results.json").read_text())
     renamed = json.loads(json.dumps(document))
     renamed["experiments"]["2"]["v1"] = renamed["experiments"]["2"].pop("v1_test")
-    with pytest.raises(TypeError, match="v1"):
+    with pytest.raises(ValueError, match="v1"):
         RunResults.from_json_dict(renamed)
     missing = json.loads(json.dumps(document))
     del missing["meta"]["data"]["n_test"]
-    with pytest.raises(TypeError, match="n_test"):
+    with pytest.raises(ValueError, match="n_test"):
         RunResults.from_json_dict(missing)
     renamed_search = json.loads(json.dumps(document))
     renamed_search["baselines"]["sklearn DBSCAN per 0.25 s window"].pop("cv_best")
-    with pytest.raises(TypeError, match="cv_best"):
+    with pytest.raises(ValueError, match="cv_best"):
         RunResults.from_json_dict(renamed_search)
     record = dict(document["experiments"]["1"])
     del record["n_clusters_test"]

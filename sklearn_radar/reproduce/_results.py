@@ -1,11 +1,40 @@
 """Typed results of a reproduce run and their JSON form, ``results.json``.
 
 A run fills these dataclasses as it goes; ``results.json`` is
-:meth:`RunResults.to_json_dict` written with ``json.dumps(indent=1)``: the
-same keys, in the same order, as the untyped dictionaries that came before,
-and :meth:`RunResults.from_json_dict` reads it back.  Every dataclass is
-keyword-only: a field that is missing or misspelt raises TypeError where the
-object is built (or read back), not when the report reads it after a run.
+:meth:`RunResults.to_json_dict` written with ``json.dumps(indent=1)``, and
+:meth:`RunResults.from_json_dict` (or :meth:`RunResults.read`) reads it back.
+Every dataclass is keyword-only: a field that is missing or misspelt raises
+TypeError where the object is built, and ValueError naming the file and the
+key where it is read back, not when the report reads it after a run.
+
+The JSON form is derived from the fields, by one converter (``_to_json``,
+``_from_json``) instead of a pair of methods per record.  Its rules are
+those of the format it replaced, so that ``results.json`` stays byte for byte
+the same:
+
+- the keys are the field names, in declaration order (the fields are
+  declared in the order of the JSON keys);
+- a field whose default is None is absent while it is None, not null
+  (a None in a required field, or in a dictionary, is written as null);
+- a field declared with ``_WRITTEN_FLAT`` metadata is written as its record's (or
+  dictionary's) keys among its owner's, not as a nested object;
+- a field declared with ``_NOT_WRITTEN`` is not written (and read back if
+  present), one with ``_ABSENT_AT_DEFAULT`` is absent at its default;
+- dictionary keys typed ``int`` are written as strings; numbers and strings
+  are written as they are, for :func:`json.dumps` to format.
+
+Why a converter over :func:`dataclasses.fields` rather than a library
+(issue 28; measured on the default run's ``results.json``, 34 kB, and on a
+``--full``-sized one, 216 kB: 100 iterations, 3 repeats): cattrs 26.2 writes
+the same bytes only with hand-written hooks for the flattened records (about
+50 lines), turns an int in a float field into a float (``1`` becomes
+``1.0``: other bytes) and reads the string ``"1.4"`` as a number; msgspec
+0.23 writes NaN as null and pydantic 2.14 adds 10 MB (pydantic-core), and
+neither writes a record flat among its owner's keys.  Speed decides nothing:
+the converter loads the files in 0.6-0.8 ms and 2.7 ms and dumps them in
+0.2-0.3 ms and 1.0-1.4 ms, cattrs in 0.4-0.6 / 1.9-3.2 ms and 0.3-0.4 /
+0.7-1.1 ms, while ``json.loads`` alone takes 0.7 / 5.9 ms and
+``json.dumps(indent=1)`` 2.9 / 22 ms.  So no new dependency.
 
 Parameter settings (``params``, ``paper_params``, ...) stay dictionaries of
 pipeline parameters (``{"cluster__eps_xy": 0.6, ...}``): their keys are the
@@ -14,28 +43,274 @@ estimators', not this module's.
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields
-from typing import Any
+import functools
+import json
+import types
+import typing
+from dataclasses import MISSING, dataclass, field, fields, is_dataclass
+from pathlib import Path
+from typing import Any, NamedTuple
 
 from ._constants import PAPER_N_ITER
 
 _RECORD = {"slots": True, "kw_only": True}
 
+# ----------------------------------------------------------------------------- the JSON converter
 
-def _flat(record):
-    """The fields of a dataclass without nested records, in declaration order, as a dictionary."""
-    return {f.name: getattr(record, f.name) for f in fields(record)}
+_HOW = "results_json"  # the key of a field's metadata that says how it is written
+#: ``field(metadata=...)`` of a field written as its record's (or dictionary's) keys among its owner's,
+_WRITTEN_FLAT = {_HOW: "flat"}
+#: of a field that the JSON form does not hold,
+_NOT_WRITTEN = {_HOW: "not written"}
+#: of a field whose key is absent while it has its default.
+_ABSENT_AT_DEFAULT = {_HOW: "absent at default"}
 
 
-def _put(document, key, value):
-    """Set ``document[key] = value`` unless ``value`` is None (an optional key is absent, not null)."""
-    if value is not None:
-        document[key] = value
+class _Field(NamedTuple):
+    name: str
+    how: str | None
+    default: Any
+    required: bool
+    holds_records: bool  # else its value is written as it is
+    record: type | None  # the record class of a (possibly optional) record type
+    read: Any  # _reader of its type
+
+
+def _optional_of(hint):
+    """X for ``X | None``, else None."""
+    if typing.get_origin(hint) in (typing.Union, types.UnionType):
+        args = [arg for arg in typing.get_args(hint) if arg is not type(None)]
+        return args[0] if len(args) == 1 else None
+    return None
+
+
+def _holds_records(hint):
+    return is_dataclass(hint) or any(_holds_records(arg) for arg in typing.get_args(hint))
+
+
+@functools.cache
+def _plan(cls):
+    """The fields of a record class, in declaration order, with what the converter needs to know of them."""
+    hints = typing.get_type_hints(cls)
+    return tuple(
+        _Field(
+            name=f.name,
+            how=f.metadata.get(_HOW),
+            default=f.default,
+            required=f.default is MISSING and f.default_factory is MISSING,
+            holds_records=_holds_records(hints[f.name]),
+            record=next((h for h in (_optional_of(hints[f.name]), hints[f.name]) if is_dataclass(h)), None),
+            read=_reader(hints[f.name]),
+        )
+        for f in fields(cls)
+    )
+
+
+@functools.cache
+def _own_keys(cls):
+    """The keys of a record's JSON object that its fields (flattened records' included) claim."""
+    keys = []
+    for f in _plan(cls):
+        if f.how != "flat":
+            keys.append(f.name)
+        elif f.record is not None:
+            keys.extend(_own_keys(f.record))
+    return frozenset(keys)
+
+
+def _to_json(value):
+    """The JSON form of a record, or of a dictionary or list of them, for :func:`json.dumps`."""
+    if is_dataclass(value):
+        return _record_to_json(value)
+    if isinstance(value, dict):
+        return {str(key) if isinstance(key, int) else key: _to_json(item) for key, item in value.items()}
+    if isinstance(value, list | tuple):
+        return [_to_json(item) for item in value]
+    return value
+
+
+def _record_to_json(record):
+    document = {}
+    for f in _plan(type(record)):
+        value = getattr(record, f.name)
+        if (
+            f.how == "not written"
+            or (value is None and f.default is None)
+            or (f.how == "absent at default" and value == f.default)
+        ):
+            continue
+        value = _to_json(value) if f.holds_records else value
+        if f.how == "flat":
+            document.update(value)
+        else:
+            document[f.name] = value
     return document
 
 
+def _from_json(hint, document, source):
+    """Read :func:`_to_json`'s form of type ``hint`` back; ValueError naming ``source`` and the key if it is bad."""
+    try:
+        return _reader(hint)(document)
+    except _BadDocument as error:
+        path, problem = error.args
+        raise ValueError(f"{source}: {'.'.join(map(str, path)) or 'the document'} {problem}") from None
+
+
+class _BadDocument(Exception):
+    """([keys from the document's top to the bad value], what is wrong with it)."""
+
+    def within(self, key):
+        self.args[0].insert(0, key)
+        return self
+
+
+def _expect(value, kinds, what):
+    if not isinstance(value, kinds) or (isinstance(value, bool) and bool not in kinds):
+        raise _BadDocument([], f"should be {what}, not {type(value).__name__} {value!r:.40}")
+
+
+_SCALARS = {
+    float: ((int, float), "a number"),
+    int: ((int,), "an integer"),
+    str: ((str,), "a string"),
+    bool: ((bool,), "true or false"),
+}
+
+
+def _as_is(value):
+    return value
+
+
+@functools.cache
+def _reader(hint):
+    """The function that checks a parsed JSON value of type ``hint`` and returns it as that type."""
+    inner = _optional_of(hint)
+    if inner is not None:
+        read = _reader(inner)
+        return lambda value: None if value is None else read(value)
+    if is_dataclass(hint):
+        return functools.partial(_read_record, hint)
+    origin, args = typing.get_origin(hint) or hint, typing.get_args(hint)
+    if origin is dict:
+        key_type, item_type = args or (str, Any)
+        return functools.partial(_read_dict, _read_int_key if key_type is int else _as_is, _reader(item_type))
+    if origin is list:
+        return functools.partial(_read_list, _reader(args[0] if args else Any))
+    if hint in _SCALARS:
+        return functools.partial(_read_scalar, *_SCALARS[hint])
+    return _as_is
+
+
+def _read_scalar(kinds, what, value):
+    _expect(value, kinds, what)
+    return value
+
+
+def _read_int_key(key):
+    if not key.lstrip("-").isdigit():
+        raise _BadDocument([], f"has the key {key!r}, which is not an integer")
+    return int(key)
+
+
+def _read_dict(read_key, read_item, document):
+    _expect(document, (dict,), "an object")
+    if read_key is read_item is _as_is:
+        return document
+    read = {}
+    for key, item in document.items():
+        read_as = read_key(key)
+        try:
+            read[read_as] = read_item(item)
+        except _BadDocument as error:
+            raise error.within(key) from None
+    return read
+
+
+def _read_list(read_item, document):
+    _expect(document, (list,), "a list")
+    if read_item is _as_is or (
+        getattr(read_item, "func", None) is _read_scalar and {type(item) for item in document} <= set(read_item.args[0])
+    ):
+        return document  # the common case, checked at once
+    read = []
+    for index, item in enumerate(document):
+        try:
+            read.append(read_item(item))
+        except _BadDocument as error:
+            raise error.within(index) from None
+    return read
+
+
+def _read_record(cls, document):
+    _expect(document, (dict,), f"an object ({cls.__name__})")
+    own, plan = _own_keys(cls), _plan(cls)
+    unknown = [key for key in document if key not in own]
+    collects_the_rest = any(f.how == "flat" and f.record is None for f in plan)
+    if unknown and not collects_the_rest:
+        raise _BadDocument([], f"has the key {unknown[0]!r}, which {cls.__name__} does not know")
+    values = {}
+    for f in plan:
+        if f.how == "flat" and f.record is not None:
+            part = {key: document[key] for key in _own_keys(f.record) if key in document}
+            if part or f.required:
+                values[f.name] = _read_record(f.record, part)
+        elif f.how == "flat":
+            values[f.name] = f.read({key: document[key] for key in unknown})
+        elif f.name in document:
+            try:
+                values[f.name] = f.read(document[f.name])
+            except _BadDocument as error:
+                raise error.within(f.name) from None
+        elif f.required:
+            raise _BadDocument([], f"lacks the key {f.name!r} ({cls.__name__})")
+    return cls(**values)
+
+
+class _JsonRecord:
+    """``to_json_dict`` and ``from_json_dict`` of every record, by the module's rules."""
+
+    __slots__ = ()
+
+    def to_json_dict(self):
+        """The record's JSON form (see the module's rules).
+
+        Returns
+        -------
+        document : dict
+        """
+        return _to_json(self)
+
+    @classmethod
+    def from_json_dict(cls, document, *, source="results.json"):
+        """Read :meth:`to_json_dict`'s form back.
+
+        Parameters
+        ----------
+        document : dict
+            Parsed JSON.
+        source : str, default="results.json"
+            Where it was read, for the error messages.
+
+        Returns
+        -------
+        record : instance of the class
+
+        Raises
+        ------
+        ValueError
+            Naming ``source`` and the key, if a key is missing or not known, or a value has the wrong type.
+        """
+        record = _from_json(cls, document, source)
+        cls._check_read(document, source)
+        return record
+
+    @classmethod
+    def _check_read(cls, document, source):
+        """Raise ValueError naming ``source`` if a read document breaks a rule its types do not say."""
+
+
 @dataclass(**_RECORD)
-class Budget:
+class Budget(_JsonRecord):
     """Data size and optimisation budget of a run.
 
     Attributes
@@ -59,8 +334,8 @@ class Budget:
     n_iter: int
     n_initial_points: int
     cv_folds: int
-    n_sequences: int | None = None
-    duration: float | None = None
+    n_sequences: int | None = field(default=None, metadata=_NOT_WRITTEN)
+    duration: float | None = field(default=None, metadata=_NOT_WRITTEN)
 
     @classmethod
     def default(cls, n_iter=None):
@@ -113,23 +388,9 @@ class Budget:
         """bool : Whether the run had fewer iterations than the paper's 100."""
         return self.n_iter < PAPER_N_ITER
 
-    def to_json_dict(self):
-        """The ``meta.budget`` entry of ``results.json`` (without the data size)."""
-        return {
-            "label": self.label,
-            "n_iter": self.n_iter,
-            "n_initial_points": self.n_initial_points,
-            "cv_folds": self.cv_folds,
-        }
-
-    @classmethod
-    def from_json_dict(cls, document):
-        """Read :meth:`to_json_dict`'s form back."""
-        return cls(**document)
-
 
 @dataclass(**_RECORD)
-class DataMeta:
+class DataMeta(_JsonRecord):
     """The data of a run and its split by sequence (``meta.data``).
 
     Attributes
@@ -152,18 +413,9 @@ class DataMeta:
     train_sequences: list[int]
     test_sequences: list[int]
 
-    def to_json_dict(self):
-        """The ``meta.data`` entry of ``results.json``."""
-        return _flat(self)
-
-    @classmethod
-    def from_json_dict(cls, document):
-        """Read :meth:`to_json_dict`'s form back."""
-        return cls(**document)
-
 
 @dataclass(**_RECORD)
-class RunMeta:
+class RunMeta(_JsonRecord):
     """What ran, on what, with which budget (``meta``).
 
     Attributes
@@ -178,14 +430,14 @@ class RunMeta:
         Step keys finished, in run order (``"filter"``, ``"1"``, ...).
     interrupted : bool, default=False
         Whether the run was interrupted.
-    wall_time_s : float or None, default=None
-        Wall time of the whole run, s; None until it finishes (the key is then absent).
     objective : {"v1", "pq"}, default="v1"
         What the searches maximised and ``params.json``'s ``best`` ranks by: the paper's radar
         V-measure, or the panoptic quality of moving road users per 0.5 s frame.
     repeats : int, default=1
         Searches per tuned experiment and baseline, with the seeds ``seed``, ``seed + 1``, ... on the same
         split (the key is absent for 1).
+    wall_time_s : float or None, default=None
+        Wall time of the whole run, s; None until it finishes (the key is then absent).
     """
 
     version: str
@@ -194,35 +446,13 @@ class RunMeta:
     data: DataMeta
     completed: list[str] = field(default_factory=list)
     interrupted: bool = False
-    wall_time_s: float | None = None
     objective: str = "v1"
-    repeats: int = 1
-
-    def to_json_dict(self):
-        """The ``meta`` entry of ``results.json``."""
-        document = {
-            "version": self.version,
-            "seed": self.seed,
-            "budget": self.budget.to_json_dict(),
-            "data": self.data.to_json_dict(),
-            "completed": list(self.completed),
-            "interrupted": self.interrupted,
-            "objective": self.objective,
-        }
-        _put(document, "repeats", self.repeats if self.repeats != 1 else None)
-        return _put(document, "wall_time_s", self.wall_time_s)
-
-    @classmethod
-    def from_json_dict(cls, document):
-        """Read :meth:`to_json_dict`'s form back."""
-        document = dict(document)
-        budget = Budget.from_json_dict(document.pop("budget"))
-        data = DataMeta.from_json_dict(document.pop("data"))
-        return cls(budget=budget, data=data, **document)
+    repeats: int = field(default=1, metadata=_ABSENT_AT_DEFAULT)
+    wall_time_s: float | None = None
 
 
 @dataclass(**_RECORD)
-class DataStatistics:
+class DataStatistics(_JsonRecord):
     """Statistics of the run's data, to judge how close to real radar data it is (``statistics``).
 
     Attributes
@@ -238,21 +468,12 @@ class DataStatistics:
     summary: dict[str, Any]
     text: str
 
-    def to_json_dict(self):
-        """The ``statistics`` entry of ``results.json``."""
-        return _flat(self)
-
-    @classmethod
-    def from_json_dict(cls, document):
-        """Read :meth:`to_json_dict`'s form back (None stays None)."""
-        return None if document is None else cls(**document)
-
 
 # ----------------------------------------------------------------------------- the filter (Tables I and II)
 
 
 @dataclass(**_RECORD)
-class GridTable:
+class GridTable(_JsonRecord):
     """A table of Table I (rows: eta_1 in m/s, columns: d_xy in m), as ``DataFrame.to_dict(orient="split")``.
 
     Attributes
@@ -280,18 +501,9 @@ class GridTable:
 
         return pd.DataFrame(self.data, index=self.index, columns=self.columns)
 
-    def to_json_dict(self):
-        """The ``split`` dictionary."""
-        return _flat(self)
-
-    @classmethod
-    def from_json_dict(cls, document):
-        """Read :meth:`to_json_dict`'s form back."""
-        return cls(**document)
-
 
 @dataclass(**_RECORD)
-class FilterGridResult:
+class FilterGridResult(_JsonRecord):
     """Table I in one coordinate system: error counts and background removal per filter setting.
 
     Attributes
@@ -305,18 +517,9 @@ class FilterGridResult:
     errors: GridTable
     background_removed: GridTable
 
-    def to_json_dict(self):
-        """One coordinate system of ``filter.table_i``."""
-        return {"errors": self.errors.to_json_dict(), "background_removed": self.background_removed.to_json_dict()}
-
-    @classmethod
-    def from_json_dict(cls, document):
-        """Read :meth:`to_json_dict`'s form back."""
-        return cls(**{key: GridTable.from_json_dict(value) for key, value in document.items()})
-
 
 @dataclass(**_RECORD)
-class FilterSettingRow:
+class FilterSettingRow(_JsonRecord):
     """One row of Table II: a setting of the paper, its removal rates and errors, ours and the paper's.
 
     Attributes
@@ -348,18 +551,9 @@ class FilterSettingRow:
     object_removal_rate: float
     errors: int
 
-    def to_json_dict(self):
-        """One record of ``filter.table_ii``."""
-        return _flat(self)
-
-    @classmethod
-    def from_json_dict(cls, document):
-        """Read :meth:`to_json_dict`'s form back."""
-        return cls(**document)
-
 
 @dataclass(**_RECORD)
-class BestRemoval:
+class BestRemoval(_JsonRecord):
     """The filter setting that removes the most background with at most a given number of errors.
 
     Attributes
@@ -376,18 +570,9 @@ class BestRemoval:
     d_xy: float
     background_removed: float
 
-    def to_json_dict(self):
-        """One entry of ``filter.best_removal_with_zero_errors``."""
-        return _flat(self)
-
-    @classmethod
-    def from_json_dict(cls, document):
-        """Read :meth:`to_json_dict`'s form back (None stays None)."""
-        return None if document is None else cls(**document)
-
 
 @dataclass(**_RECORD)
-class FilterWindows:
+class FilterWindows(_JsonRecord):
     """The (object, window) cases behind the error counts, at one filter setting (``filter.windows``).
 
     An object's window is an *error* when the filter keeps less than
@@ -431,18 +616,9 @@ class FilterWindows:
     mean_detections_error: float | None
     n_errors_sparse: int
 
-    def to_json_dict(self):
-        """The ``filter.windows`` entry of ``results.json``."""
-        return _flat(self)
-
-    @classmethod
-    def from_json_dict(cls, document):
-        """Read :meth:`to_json_dict`'s form back (None stays None)."""
-        return None if document is None else cls(**document)
-
 
 @dataclass(**_RECORD)
-class FilterResult:
+class FilterResult(_JsonRecord):
     """The filter evaluation: Tables I and II (``filter``).
 
     Attributes
@@ -464,36 +640,12 @@ class FilterResult:
     wall_time_s: float
     windows: FilterWindows | None = None
 
-    def to_json_dict(self):
-        """The ``filter`` entry of ``results.json``."""
-        document = {
-            "table_i": {frame: grid.to_json_dict() for frame, grid in self.table_i.items()},
-            "table_ii": [row.to_json_dict() for row in self.table_ii],
-            "best_removal_with_zero_errors": {
-                frame: None if best is None else best.to_json_dict()
-                for frame, best in self.best_removal_with_zero_errors.items()
-            },
-            "wall_time_s": self.wall_time_s,
-        }
-        return _put(document, "windows", None if self.windows is None else self.windows.to_json_dict())
-
-    @classmethod
-    def from_json_dict(cls, document):
-        """Read :meth:`to_json_dict`'s form back."""
-        document = dict(document)
-        windows = FilterWindows.from_json_dict(document.pop("windows", None))
-        table_i = {frame: FilterGridResult.from_json_dict(grid) for frame, grid in document.pop("table_i").items()}
-        table_ii = [FilterSettingRow.from_json_dict(row) for row in document.pop("table_ii")]
-        best = document.pop("best_removal_with_zero_errors")
-        best = {frame: BestRemoval.from_json_dict(removal) for frame, removal in best.items()}
-        return cls(table_i=table_i, table_ii=table_ii, best_removal_with_zero_errors=best, windows=windows, **document)
-
 
 # ----------------------------------------------------------------------------- experiments and baselines
 
 
 @dataclass(**_RECORD)
-class SearchRecord:
+class SearchRecord(_JsonRecord):
     """A Bayesian-optimisation search on the training half.
 
     Attributes
@@ -505,51 +657,21 @@ class SearchRecord:
     best_source : str
         ``"search"``, or the paper's setting when it scored at least as well
         (:data:`~sklearn_radar.reproduce._constants.SOURCE_PAPER`).
-    search_wall_time_s : float
     cv_start_from : float or None, default=None
         Mean cross-validated V1 of the paper's setting, scored beside the
         search; None where there is none (the scikit-learn baselines).
+    search_wall_time_s : float
     """
 
     cv_best: float
     convergence: list[float]
     best_source: str
-    search_wall_time_s: float
     cv_start_from: float | None = None
-
-    #: The keys of a search in a flat experiment or baseline record of ``results.json``.
-    KEYS = ("cv_best", "convergence", "best_source", "cv_start_from", "search_wall_time_s")
-
-    def to_json_dict(self):
-        """The search's keys, as they appear in an experiment's or a baseline's record."""
-        document = {"cv_best": self.cv_best, "convergence": list(self.convergence), "best_source": self.best_source}
-        _put(document, "cv_start_from", self.cv_start_from)
-        document["search_wall_time_s"] = self.search_wall_time_s
-        return document
-
-    @classmethod
-    def split_json_dict(cls, document):
-        """Split a flat record into (search or None, the other keys).
-
-        Parameters
-        ----------
-        document : dict
-            An experiment's or a baseline's record of ``results.json``.
-
-        Returns
-        -------
-        search : SearchRecord or None
-            None when the record has none of the search's keys.
-        rest : dict
-            The record without them.
-        """
-        search = {key: value for key, value in document.items() if key in cls.KEYS}
-        rest = {key: value for key, value in document.items() if key not in cls.KEYS}
-        return (cls(**search) if search else None), rest
+    search_wall_time_s: float
 
 
 @dataclass(**_RECORD)
-class InstanceScores:
+class InstanceScores(_JsonRecord):
     """Object-level scores of one labelling of the test half (``instance_test``).
 
     Attributes
@@ -579,72 +701,33 @@ class InstanceScores:
     background_segment_share: float
     background_cluster_share: float
 
-    def to_json_dict(self):
-        """The ``instance_test`` entry of an experiment or baseline."""
-        return _flat(self)
-
-    @classmethod
-    def from_json_dict(cls, document):
-        """Read :meth:`to_json_dict`'s form back."""
-        return cls(**document)
-
-
-def _instance_from_json(rest):
-    """Turn the optional ``instance_test`` entry of a parsed record into :class:`InstanceScores`."""
-    if rest.get("instance_test") is not None:
-        rest["instance_test"] = InstanceScores.from_json_dict(rest["instance_test"])
-    return rest
-
-
-def _repeats_from_json(rest):
-    """Turn the optional ``repeats`` entry of a parsed record into a list of :class:`RepeatResult`."""
-    if rest.get("repeats") is not None:
-        rest["repeats"] = [RepeatResult.from_json_dict(record) for record in rest["repeats"]]
-    return rest
-
 
 @dataclass(**_RECORD)
-class RepeatResult:
+class RepeatResult(_JsonRecord):
     """One repeat of an experiment or baseline: its search with its own seed, and the kept setting's test scores.
 
     Attributes
     ----------
     seed : int
         Random seed of the repeat's search (the run's seed plus the repeat's index).
+    search : SearchRecord or None, default=None
+        The repeat's search; None for #10 and #11, which take the same repeat's #8 setting.
     params : dict
         The setting scored on the test half, as pipeline parameters.
     v1_test : float
         Radar V-measure on the test half, 0-1.
     n_clusters_test : int
         Clusters found on the test half.
-    search : SearchRecord or None, default=None
-        The repeat's search; None for #10 and #11, which take the same repeat's #8 setting.
     instance_test : InstanceScores or None, default=None
         Object-level scores on the test half.
     """
 
     seed: int
+    search: SearchRecord | None = field(default=None, metadata=_WRITTEN_FLAT)
     params: dict[str, Any]
     v1_test: float
     n_clusters_test: int
-    search: SearchRecord | None = None
     instance_test: InstanceScores | None = None
-
-    def to_json_dict(self):
-        """One entry of a record's ``repeats``: the seed, the search's keys, then the test scores."""
-        document = {"seed": self.seed}
-        if self.search is not None:
-            document.update(self.search.to_json_dict())
-        document.update(params=self.params, v1_test=self.v1_test, n_clusters_test=self.n_clusters_test)
-        if self.instance_test is not None:
-            document["instance_test"] = self.instance_test.to_json_dict()
-        return document
-
-    @classmethod
-    def from_json_dict(cls, document):
-        """Read :meth:`to_json_dict`'s form back."""
-        search, rest = SearchRecord.split_json_dict(document)
-        return cls(search=search, **_instance_from_json(rest))
 
 
 def repeated_scores(result, score="v1"):
@@ -668,7 +751,7 @@ def repeated_scores(result, score="v1"):
 
 
 @dataclass(**_RECORD)
-class ExperimentResult:
+class ExperimentResult(_JsonRecord):
     """One experiment of Tables III and IV, re-run (``experiments.N``).
 
     Attributes
@@ -681,28 +764,28 @@ class ExperimentResult:
         The paper's V1, %.
     paper_params : dict
         The paper's setting, as pipeline parameters.
-    params : dict
-        The setting scored on the test half, as pipeline parameters.
-    v1_test : float
-        Radar V-measure on the test half, 0-1.
-    n_clusters_test : int
-        Clusters found on the test half.
-    wall_time_s : float
-        Wall time of the experiment (search and scoring), s.
     stage1_params : dict or None, default=None
         Stage 2 only: the fixed stage-1 setting (#8's).
     derived_from_8 : str or None, default=None
         #10 and #11 only: whether #8's setting was tuned or the paper's.
     search : SearchRecord or None, default=None
         The search, for the tuned experiments.
-    instance_test : InstanceScores or None, default=None
-        Object-level scores on the test half.
+    params : dict
+        The setting scored on the test half, as pipeline parameters.
+    v1_test : float
+        Radar V-measure on the test half, 0-1.
+    wall_time_s : float
+        Wall time of the experiment (search and scoring), s.
+    n_clusters_test : int
+        Clusters found on the test half.
+    n_stage1_clusters_test : int or None, default=None
+        Stage 2 only: stage-1 clusters on the test half, before merging.
     n_merges_test : int or None, default=None
         Stage 2 only: pairs of stage-1 clusters that met the merge criterion
         on the test half (``ClusterMerger.merges_``); 0 means the experiment
         returned its stage-1 clustering unchanged.
-    n_stage1_clusters_test : int or None, default=None
-        Stage 2 only: stage-1 clusters on the test half, before merging.
+    instance_test : InstanceScores or None, default=None
+        Object-level scores on the test half.
     repeats : list of RepeatResult or None, default=None
         Every repeat of a run with more than one (``meta.repeats``), the
         first being the one whose values the other fields hold; None for a
@@ -716,53 +799,21 @@ class ExperimentResult:
     stage: int
     paper_v1_percent: float
     paper_params: dict[str, Any]
-    params: dict[str, Any]
-    v1_test: float
-    n_clusters_test: int
-    wall_time_s: float
     stage1_params: dict[str, Any] | None = None
     derived_from_8: str | None = None
-    search: SearchRecord | None = None
-    instance_test: InstanceScores | None = None
-    n_merges_test: int | None = None
+    search: SearchRecord | None = field(default=None, metadata=_WRITTEN_FLAT)
+    params: dict[str, Any]
+    v1_test: float
+    wall_time_s: float
+    n_clusters_test: int
     n_stage1_clusters_test: int | None = None
+    n_merges_test: int | None = None
+    instance_test: InstanceScores | None = None
     repeats: list[RepeatResult] | None = None
-
-    def to_json_dict(self):
-        """The experiment's record in ``results.json``: the search's keys flat among the others."""
-        document = {
-            "number": self.number,
-            "method": self.method,
-            "frame": self.frame,
-            "filtered": self.filtered,
-            "stage": self.stage,
-            "paper_v1_percent": self.paper_v1_percent,
-            "paper_params": self.paper_params,
-        }
-        _put(document, "stage1_params", self.stage1_params)
-        _put(document, "derived_from_8", self.derived_from_8)
-        if self.search is not None:
-            document.update(self.search.to_json_dict())
-        document.update(
-            params=self.params, v1_test=self.v1_test, wall_time_s=self.wall_time_s, n_clusters_test=self.n_clusters_test
-        )
-        _put(document, "n_stage1_clusters_test", self.n_stage1_clusters_test)
-        _put(document, "n_merges_test", self.n_merges_test)
-        if self.instance_test is not None:
-            document["instance_test"] = self.instance_test.to_json_dict()
-        if self.repeats is not None:
-            document["repeats"] = [repeat.to_json_dict() for repeat in self.repeats]
-        return document
-
-    @classmethod
-    def from_json_dict(cls, document):
-        """Read :meth:`to_json_dict`'s form back."""
-        search, rest = SearchRecord.split_json_dict(document)
-        return cls(search=search, **_repeats_from_json(_instance_from_json(rest)))
 
 
 @dataclass(**_RECORD)
-class BaselineResult:
+class BaselineResult(_JsonRecord):
     """A scikit-learn clusterer tuned and scored like the experiments (``baselines.NAME``).
 
     Attributes
@@ -772,10 +823,10 @@ class BaselineResult:
         The kept setting, as pipeline parameters.
     v1_test : float
         Radar V-measure on the test half, 0-1.
-    n_clusters_test : int
-        Clusters found on the test half.
     wall_time_s : float
         Wall time of the search and scoring, s.
+    n_clusters_test : int
+        Clusters found on the test half.
     instance_test : InstanceScores or None, default=None
         Object-level scores on the test half.
     repeats : list of RepeatResult or None, default=None
@@ -783,41 +834,20 @@ class BaselineResult:
         whose values the other fields hold; None for a single run.
     """
 
-    search: SearchRecord
+    search: SearchRecord = field(metadata=_WRITTEN_FLAT)
     params: dict[str, Any]
     v1_test: float
-    n_clusters_test: int
     wall_time_s: float
+    n_clusters_test: int
     instance_test: InstanceScores | None = None
     repeats: list[RepeatResult] | None = None
-
-    def to_json_dict(self):
-        """The baseline's record in ``results.json``: the search's keys first."""
-        document = {
-            **self.search.to_json_dict(),
-            "params": self.params,
-            "v1_test": self.v1_test,
-            "wall_time_s": self.wall_time_s,
-            "n_clusters_test": self.n_clusters_test,
-        }
-        if self.instance_test is not None:
-            document["instance_test"] = self.instance_test.to_json_dict()
-        if self.repeats is not None:
-            document["repeats"] = [repeat.to_json_dict() for repeat in self.repeats]
-        return document
-
-    @classmethod
-    def from_json_dict(cls, document):
-        """Read :meth:`to_json_dict`'s form back."""
-        search, rest = SearchRecord.split_json_dict(document)
-        return cls(search=search, **_repeats_from_json(_instance_from_json(rest)))
 
 
 # ----------------------------------------------------------------------------- the filter's effect
 
 
 @dataclass(**_RECORD)
-class ClusteringCost:
+class ClusteringCost(_JsonRecord):
     """Clustering time and clusters on the test half, filtered or not.
 
     Attributes
@@ -833,18 +863,9 @@ class ClusteringCost:
     clustering_s: float
     n_clusters: int
 
-    def to_json_dict(self):
-        """``filter_effect.filtered`` or ``filter_effect.unfiltered``."""
-        return _flat(self)
-
-    @classmethod
-    def from_json_dict(cls, document):
-        """Read :meth:`to_json_dict`'s form back."""
-        return cls(**document)
-
 
 @dataclass(frozen=True, **_RECORD)
-class FilterEffectFigures:
+class FilterEffectFigures(_JsonRecord):
     """The filter's effect in three numbers.
 
     Attributes
@@ -861,15 +882,6 @@ class FilterEffectFigures:
     fewer_clusters_per_sequence_percent: float
     fewer_clusters_overall_percent: float
 
-    def to_json_dict(self):
-        """The three numbers under their keys."""
-        return _flat(self)
-
-    @classmethod
-    def from_json_dict(cls, document):
-        """Read :meth:`to_json_dict`'s form back."""
-        return cls(**document)
-
 
 #: The paper's figures of the filter's effect (Section V).
 PAPER_FILTER_EFFECT = FilterEffectFigures(
@@ -878,7 +890,7 @@ PAPER_FILTER_EFFECT = FilterEffectFigures(
 
 
 @dataclass(**_RECORD)
-class FilterEffectResult:
+class FilterEffectResult(_JsonRecord):
     """Clustering with and without the filter at #8's setting (``filter_effect``).
 
     Attributes
@@ -898,41 +910,15 @@ class FilterEffectResult:
     setting_source: str
     filtered: ClusteringCost
     unfiltered: ClusteringCost
-    measured: FilterEffectFigures
+    measured: FilterEffectFigures = field(metadata=_WRITTEN_FLAT)
     paper: FilterEffectFigures = PAPER_FILTER_EFFECT
-
-    def to_json_dict(self):
-        """The ``filter_effect`` entry of ``results.json``."""
-        return {
-            "setting": self.setting,
-            "setting_source": self.setting_source,
-            "filtered": self.filtered.to_json_dict(),
-            "unfiltered": self.unfiltered.to_json_dict(),
-            **self.measured.to_json_dict(),
-            "paper": self.paper.to_json_dict(),
-        }
-
-    @classmethod
-    def from_json_dict(cls, document):
-        """Read :meth:`to_json_dict`'s form back."""
-        document = dict(document)
-        measured = {f.name: document.pop(f.name) for f in fields(FilterEffectFigures) if f.name in document}
-        return cls(
-            setting=document.pop("setting"),
-            setting_source=document.pop("setting_source"),
-            filtered=ClusteringCost.from_json_dict(document.pop("filtered")),
-            unfiltered=ClusteringCost.from_json_dict(document.pop("unfiltered")),
-            measured=FilterEffectFigures.from_json_dict(measured),
-            paper=FilterEffectFigures.from_json_dict(document.pop("paper")),
-            **document,
-        )
 
 
 # ----------------------------------------------------------------------------- the whole run
 
 
 @dataclass(**_RECORD)
-class FigureRecord:
+class FigureRecord(_JsonRecord):
     """The figures drawn for the report (not part of ``results.json``: they are drawn after it is saved).
 
     Attributes
@@ -943,28 +929,19 @@ class FigureRecord:
         Why no figure was drawn (matplotlib missing).
     """
 
-    drawn: dict[str, str] = field(default_factory=dict)
+    drawn: dict[str, str] = field(default_factory=dict, metadata=_WRITTEN_FLAT)
     missing: str | None = None
-
-    def to_json_dict(self):
-        """``{name: file name, ..., "missing": reason}``."""
-        return _put(dict(self.drawn), "missing", self.missing)
-
-    @classmethod
-    def from_json_dict(cls, document):
-        """Read :meth:`to_json_dict`'s form back."""
-        document = dict(document or {})
-        missing = document.pop("missing", None)
-        return cls(drawn=document, missing=missing)
 
 
 @dataclass(**_RECORD)
-class RunResults:
+class RunResults(_JsonRecord):
     """Everything a reproduce run measured: ``results.json`` in memory.
 
     Attributes
     ----------
     meta : RunMeta
+    statistics : DataStatistics or None, default=None
+        Statistics of the data; None in results of older versions.
     experiments : dict of int to ExperimentResult, default={}
         By experiment number, in run order.
     filter : FilterResult or None, default=None
@@ -974,17 +951,15 @@ class RunResults:
         By clusterer name.
     figures : FigureRecord, default=FigureRecord()
         Figures drawn; written to ``results.json`` only on request.
-    statistics : DataStatistics or None, default=None
-        Statistics of the data; None in results of older versions.
     """
 
     meta: RunMeta
+    statistics: DataStatistics | None = None
     experiments: dict[int, ExperimentResult] = field(default_factory=dict)
     filter: FilterResult | None = None
     filter_effect: FilterEffectResult | None = None
     baselines: dict[str, BaselineResult] | None = None
-    figures: FigureRecord = field(default_factory=FigureRecord)
-    statistics: DataStatistics | None = None
+    figures: FigureRecord = field(default_factory=FigureRecord, metadata=_NOT_WRITTEN)
 
     def v1_test(self):
         """Test V1 by experiment number, for the experiments that ran.
@@ -1010,24 +985,24 @@ class RunResults:
             ``meta``, ``statistics`` (when measured), ``experiments`` (keyed by the number as a string), then
             ``filter``, ``filter_effect`` and ``baselines`` where they ran.
         """
-        document = {"meta": self.meta.to_json_dict()}
-        _put(document, "statistics", None if self.statistics is None else self.statistics.to_json_dict())
-        document["experiments"] = {str(number): result.to_json_dict() for number, result in self.experiments.items()}
-        _put(document, "filter", None if self.filter is None else self.filter.to_json_dict())
-        _put(document, "filter_effect", None if self.filter_effect is None else self.filter_effect.to_json_dict())
-        if self.baselines is not None:
-            document["baselines"] = {name: result.to_json_dict() for name, result in self.baselines.items()}
+        document = _to_json(self)
         if figures:
-            document["figures"] = self.figures.to_json_dict()
+            document["figures"] = _to_json(self.figures)
         return document
 
     @classmethod
-    def from_json_dict(cls, document):
-        """Read ``results.json`` (or :meth:`to_json_dict`'s form) back.
+    def _check_read(cls, document, source):
+        for key, result in document.get("experiments", {}).items():
+            if str(result["number"]) != key:
+                raise ValueError(f"{source}: experiment {key!r} holds the record of #{result['number']}")
+
+    @classmethod
+    def read(cls, path):
+        """Read a ``results.json`` file.
 
         Parameters
         ----------
-        document : dict
+        path : str or Path
 
         Returns
         -------
@@ -1035,33 +1010,15 @@ class RunResults:
 
         Raises
         ------
-        TypeError
-            If a record lacks a field or has one that is not known.
+        ValueError
+            Naming the file and the key, if the file is not valid JSON or not a run's results.
         """
-        document = dict(document)
-        meta = RunMeta.from_json_dict(document.pop("meta"))
-        statistics = DataStatistics.from_json_dict(document.pop("statistics", None))
-        experiments = {}
-        for key, record in document.pop("experiments", {}).items():
-            result = ExperimentResult.from_json_dict(record)
-            if str(result.number) != key:
-                raise ValueError(f"results.json: experiment {key!r} holds the record of #{result.number}")
-            experiments[result.number] = result
-        filter_ = document.pop("filter", None)
-        effect = document.pop("filter_effect", None)
-        baselines = document.pop("baselines", None)
-        if baselines is not None:
-            baselines = {name: BaselineResult.from_json_dict(record) for name, record in baselines.items()}
-        return cls(
-            meta=meta,
-            experiments=experiments,
-            filter=None if filter_ is None else FilterResult.from_json_dict(filter_),
-            filter_effect=None if effect is None else FilterEffectResult.from_json_dict(effect),
-            baselines=baselines,
-            figures=FigureRecord.from_json_dict(document.pop("figures", None)),
-            statistics=statistics,
-            **document,
-        )
+        path = Path(path)
+        try:
+            document = json.loads(path.read_text(encoding="utf-8"))
+        except json.JSONDecodeError as error:
+            raise ValueError(f"{path}: not JSON ({error})") from None
+        return cls.from_json_dict(document, source=str(path))
 
     def to_params_dict(self):
         """What ``params.json`` holds: each experiment's setting and the best one; None before any experiment.
