@@ -135,7 +135,9 @@ class FilterEvaluationOptions:
     ``DopplerDensityFilter(vr_threshold=..., d_xy=..., dt=dt, causal=causal,
     threshold_ratios=threshold_ratios, min_neighbors=min_neighbors)``
     (Eq. 1), scored with :func:`~sklearn_radar.evaluation.filter_errors`
-    (``window``, ``min_kept``).
+    (``window``, ``min_kept``).  Each option is kept as the attribute of the
+    same name, the array-likes as tuples (of floats; of ints for
+    ``min_neighbors``).
 
     Parameters
     ----------
@@ -171,11 +173,6 @@ class FilterEvaluationOptions:
     verbose : int or bool, default=0
         If > 0, print one line per finished (frame, ``d_xy``) pair to
         stdout.
-
-    Attributes
-    ----------
-    The parameters, the array-likes as tuples: of floats, and of ints for
-    ``min_neighbors``.
 
     Raises
     ------

@@ -64,10 +64,10 @@ _CONSTRAINTS = {
 def instance_scores(labels_true, labels_pred, *, times, groups=None, frame=0.5):
     """Panoptic quality, coverage and background shares at once, from one segmentation of the detections.
 
-    Equal to the union of :func:`panoptic_quality`, :func:`instance_coverage`
-    and :func:`background_share` (see them for the formulas), but segments
-    the detections once: the choice for a report that shows them side by
-    side.
+    The union of :func:`panoptic_quality`, :func:`instance_coverage` and
+    :func:`background_share` (see them for the formulas), which are parts of
+    it; it segments the detections once: the choice for a report that shows
+    them side by side.
 
     Parameters
     ----------
@@ -139,22 +139,9 @@ def panoptic_quality(labels_true, labels_pred, *, times, groups=None, frame=0.5)
 
     Parameters
     ----------
-    labels_true : array-like of shape (n_detections,)
-        Ground-truth instance per detection, -1 for background.
-    labels_pred : array-like of shape (n_detections,)
-        Predicted cluster per detection, -1 for noise.
-    times : array-like of shape (n_detections,) or None
-        Time of each detection in s (e.g. ``timestamp * 1e-6``).  None, or
-        ``frame=None``: every sequence is one frame.
-    groups : array-like of shape (n_detections,), default=None
-        Sequence of each detection: equal labels in different sequences are
-        different segments, and frames start at each sequence's first
-        detection.  None: one sequence.
-    frame : float or None, default=0.5
-        Length of a time frame in s, > 0; detection ``i`` of sequence ``s``
-        lies in frame ``floor((times[i] - min(times of s)) / frame)``.  The
-        default, 500 ms, is the frame of Scheiner et al. (2021).  None: one
-        frame per sequence ("per sequence" evaluation).
+    labels_true, labels_pred, times, groups, frame
+        As in :func:`instance_scores`: ground truth (-1 background),
+        clusters (-1 noise), times (s), sequences and frame length (s).
 
     Returns
     -------
@@ -210,22 +197,9 @@ def instance_coverage(labels_true, labels_pred, *, times, groups=None, frame=0.5
 
     Parameters
     ----------
-    labels_true : array-like of shape (n_detections,)
-        Ground-truth instance per detection, -1 for background.
-    labels_pred : array-like of shape (n_detections,)
-        Predicted cluster per detection, -1 for noise.
-    times : array-like of shape (n_detections,) or None
-        Time of each detection in s (e.g. ``timestamp * 1e-6``).  None, or
-        ``frame=None``: every sequence is one frame.
-    groups : array-like of shape (n_detections,), default=None
-        Sequence of each detection: equal labels in different sequences are
-        different segments, and frames start at each sequence's first
-        detection.  None: one sequence.
-    frame : float or None, default=0.5
-        Length of a time frame in s, > 0; detection ``i`` of sequence ``s``
-        lies in frame ``floor((times[i] - min(times of s)) / frame)``.  The
-        default, 500 ms, is the frame of Scheiner et al. (2021).  None: one
-        frame per sequence ("per sequence" evaluation).
+    labels_true, labels_pred, times, groups, frame
+        As in :func:`instance_scores`: ground truth (-1 background),
+        clusters (-1 noise), times (s), sequences and frame length (s).
 
     Returns
     -------
@@ -272,22 +246,10 @@ def background_share(labels_true, labels_pred, *, times=None, groups=None, frame
 
     Parameters
     ----------
-    labels_true : array-like of shape (n_detections,)
-        Ground-truth instance per detection, -1 for background.
-    labels_pred : array-like of shape (n_detections,)
-        Predicted cluster per detection, -1 for noise.
-    times : array-like of shape (n_detections,), default=None
-        Time of each detection in s (e.g. ``timestamp * 1e-6``).  None, or
-        ``frame=None``: every sequence is one frame.
-    groups : array-like of shape (n_detections,), default=None
-        Sequence of each detection: equal labels in different sequences are
-        different segments, and frames start at each sequence's first
-        detection.  None: one sequence.
-    frame : float or None, default=0.5
-        Length of a time frame in s, > 0; detection ``i`` of sequence ``s``
-        lies in frame ``floor((times[i] - min(times of s)) / frame)``.  The
-        default, 500 ms, is the frame of Scheiner et al. (2021).  None: one
-        frame per sequence ("per sequence" evaluation).
+    labels_true, labels_pred, times, groups, frame
+        As in :func:`instance_scores`: ground truth (-1 background),
+        clusters (-1 noise), times (s), sequences and frame length (s);
+        here ``times`` may be left out (None: every sequence is one frame).
 
     Returns
     -------
@@ -357,15 +319,9 @@ class _InstanceScorer:
 def panoptic_quality_scorer(estimator, X, y):
     """Scorer for every scikit-learn search: ``fit_predict`` on X, panoptic quality per 0.5 s frame against y.
 
-    Clusterers have no out-of-sample ``predict``, so the estimator is fitted
-    on the data it is scored on, as by
-    :func:`~sklearn_radar.metrics.radar_v_measure_scorer`.  X is the
-    detection table: the times come from its ``t`` column (s) or else from
-    ``timestamp`` (µs), the sequences from ``sequence`` when it has one.
-    Once its arguments are valid and X has the time column it needs, it
-    never raises and never returns NaN: a failing fit scores the worst value
-    (0.0; -1.0 for a negated share), a degenerate labelling what the
-    function gives it (0.0 for a ratio 0/0).
+    The scorer of ``make_instance_scorer("pq", frame=0.5)``: see
+    :func:`make_instance_scorer` for how it fits the estimator, reads the
+    times and sequences of X and scores a failing fit (0.0).
 
     Parameters
     ----------

@@ -123,11 +123,8 @@ class InstanceParts(PanopticParts):
 
     Attributes
     ----------
-    tp, fp, fn : int
-        Matched pairs, unmatched predicted and unmatched ground-truth
-        segments (per time frame) of :func:`~sklearn_radar.metrics.panoptic_quality`.
-    iou_sum : float
-        Sum of the IoUs of the matched pairs, in [0, tp].
+    tp, fp, fn, iou_sum
+        As in :class:`PanopticParts`.
     cover_sum : float
         Sum of the coverages (best IoU with any predicted segment) of the
         ``tp + fn`` ground-truth segments, in [0, tp + fn].
@@ -426,21 +423,10 @@ def instance_parts(labels_true, labels_pred, *, times, frame=0.5, groups=None):
 
     Parameters
     ----------
-    labels_true : array-like of shape (n_detections,)
-        Ground-truth instance per detection, -1 for background.
-    labels_pred : array-like of shape (n_detections,)
-        Predicted cluster per detection, -1 for noise.
-    times : array-like of shape (n_detections,) or None
-        Time of each detection in s; frames are counted from the sequence's
-        first detection, ``floor((times - min(times)) / frame)``.  None: the
-        sequence is one frame.
-    frame : float or None, default=0.5
-        Length of a time frame in s, > 0 (500 ms: Scheiner et al. 2021);
-        None: one frame per sequence.
-    groups : array-like of shape (n_detections,), default=None
-        Sequence of each detection, when the labelling covers several
-        sequences: the part then equals the merge of their parts.  None: one
-        sequence.
+    labels_true, labels_pred, times, frame, groups
+        As in :func:`~sklearn_radar.metrics.instance_scores`, for one
+        sequence; with ``groups``, for several, and the part then equals the
+        merge of their parts.
 
     Returns
     -------

@@ -110,15 +110,8 @@ def radar_v_measure(labels_true, labels_pred, *, groups=None, beta=1.0):
 
     Parameters
     ----------
-    labels_true : array-like of shape (n_detections,)
-        Ground-truth instance per detection, -1 for background.
-    labels_pred : array-like of shape (n_detections,)
-        Predicted cluster per detection, -1 for noise.
-    groups : array-like of shape (n_detections,), default=None
-        Sequence of each detection: equal ids in different sequences are
-        different clusters (and instances).
-    beta : float, default=1.0
-        Weight of homogeneity in the V-measure, >= 0, as in scikit-learn.
+    labels_true, labels_pred, groups, beta
+        As in :func:`radar_homogeneity_completeness_v_measure`.
 
     Returns
     -------
