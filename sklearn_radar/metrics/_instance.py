@@ -149,14 +149,9 @@ def panoptic_quality(labels_true, labels_pred, *, times, groups=None, frame=0.5)
         ``pq``, ``sq``, ``rq``, ``precision``, ``recall`` (floats in
         [0, 1]) and the counts ``tp``, ``fp``, ``fn`` (ints).
 
-    Raises
-    ------
-    ValueError
-        If the arrays are not 1-D of equal length or a time is not finite.
-
     See Also
     --------
-    instance_scores : all object-level scores at once.
+    instance_scores : all object-level scores at once, and the errors it raises.
     panoptic_quality_scorer : PQ as a scorer for parameter searches.
 
     References
@@ -206,14 +201,9 @@ def instance_coverage(labels_true, labels_pred, *, times, groups=None, frame=0.5
     scores : Bunch
         ``mcov`` and ``mwcov``, floats in [0, 1].
 
-    Raises
-    ------
-    ValueError
-        If the arrays are not 1-D of equal length or a time is not finite.
-
     See Also
     --------
-    instance_scores : all object-level scores at once.
+    instance_scores : all object-level scores at once, and the errors it raises.
 
     References
     ----------
@@ -258,14 +248,9 @@ def background_share(labels_true, labels_pred, *, times=None, groups=None, frame
         when ``times`` or ``frame`` is None) and
         ``background_cluster_share`` (per sequence), floats in [0, 1].
 
-    Raises
-    ------
-    ValueError
-        If the arrays are not 1-D of equal length or a time is not finite.
-
     See Also
     --------
-    instance_scores : all object-level scores at once.
+    instance_scores : all object-level scores at once, and the errors it raises.
 
     Examples
     --------
