@@ -23,7 +23,13 @@ import numpy as np
 
 from sklearn_radar import DopplerDensityFilter, FrameTransform
 from sklearn_radar.datasets import make_scenes
-from sklearn_radar.evaluation import PAPER_TABLE_II, filter_grid, filter_settings_table, plot_filter_errors
+from sklearn_radar.evaluation import (
+    PAPER_TABLE_II,
+    FilterEvaluationOptions,
+    filter_grid,
+    filter_settings_table,
+    plot_filter_errors,
+)
 from sklearn_radar.preprocessing import neighbor_counts
 
 scenes = make_scenes(n_sequences=2, duration=20.0, random_state=0)
@@ -82,9 +88,12 @@ print(
 # pair of ``eta_1`` in 0.05-0.35 m/s and ``d_xy`` in 0.8-2.0 m (the paper's
 # ranges) and counts the *errors*: the times a road user kept less than 75 %
 # of its detections during a whole 150 ms window.  The neighbour counts are
-# computed once per ``d_xy``.  Left: errors (the paper's Table I, the
-# asterisk marks its choice); right: share of background removed.
-grid = filter_grid(scenes.data, scenes.target, n_jobs=2)
+# computed once per ``d_xy``.  The options (the grid, the frame, Eq. 1's rule,
+# the error window, the parallelism) travel as one
+# :class:`~sklearn_radar.evaluation.FilterEvaluationOptions`.  Left: errors
+# (the paper's Table I, the asterisk marks its choice); right: share of
+# background removed.
+grid = filter_grid(scenes.data, scenes.target, FilterEvaluationOptions(n_jobs=2))
 print(f"{grid.errors.size} settings in {grid.elapsed_s:.1f} s")
 
 fig, (left, right) = plt.subplots(1, 2, figsize=(13, 5))

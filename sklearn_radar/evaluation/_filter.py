@@ -8,20 +8,30 @@ road user kept less than 75 % of its detections during a whole 150 ms time
 frame (Table I).  For a few promising settings it then reports the share of
 background detections removed (Table II).
 
+This module holds the evaluation's options (:class:`FilterEvaluationOptions`),
+its checks, the error windows and the counting; the tables themselves are
+sums of per-sequence counts (:mod:`sklearn_radar.evaluation._filter_parts`).
+
 Units: positions and radii in m, velocities in m/s, times in s, shares in
 [0, 1] unless a column says percent.
 """
 
 from __future__ import annotations
 
-import time
+from dataclasses import dataclass, field, fields
 from numbers import Integral, Real
+from typing import ClassVar
 
 import numpy as np
 import pandas as pd
 from joblib import Parallel, delayed
-from sklearn.utils import Bunch
-from sklearn.utils._param_validation import HasMethods, Interval, StrOptions, validate_params
+from sklearn.utils._param_validation import (
+    HasMethods,
+    Interval,
+    StrOptions,
+    validate_parameter_constraints,
+    validate_params,
+)
 
 from .._validation import check_filter_rule
 from ..preprocessing import FrameTransform
@@ -29,11 +39,8 @@ from ..preprocessing._doppler_density_filter import _doppler_density_keep, _neig
 
 __all__ = [
     "PAPER_TABLE_II",
-    "filter_error_windows",
-    "filter_errors",
-    "filter_grid",
+    "FilterEvaluationOptions",
     "filter_removal_rates",
-    "filter_settings_table",
     "plot_filter_errors",
 ]
 
@@ -56,6 +63,10 @@ PAPER_TABLE_II = pd.DataFrame(
         "paper_errors": np.array([0, 0, 0, 1, 1], dtype=np.int64),
     }
 )
+
+#: Table I's axes: Doppler thresholds eta_1 (m/s) and radii d_xy (m), the defaults of :class:`FilterEvaluationOptions`.
+TABLE_I_VR_THRESHOLDS = (0.05, 0.10, 0.15, 0.20, 0.25, 0.30, 0.35)
+TABLE_I_D_XYS = (0.8, 1.0, 1.2, 1.4, 1.6, 1.8, 2.0)
 
 
 # ----------------------------------------------------------------------------
@@ -95,21 +106,6 @@ _WINDOW_CONSTRAINTS = {
     "min_kept": [Interval(Real, 0, 1, closed="both")],
 }
 
-#: Constraints shared by the grid (Table I) and the settings table (Table II).
-_EVALUATION_CONSTRAINTS = (
-    {
-        "X": [pd.DataFrame],
-        "target": ["array-like"],
-        "frame": [StrOptions({"frame", "car"})],
-        "dt": [Interval(Real, 0, None, closed="left")],
-        "causal": ["boolean"],
-        "threshold_ratios": ["array-like"],
-        "min_neighbors": ["array-like"],
-    }
-    | _WINDOW_CONSTRAINTS
-    | {"n_jobs": [Integral, None], "verbose": ["verbose"]}
-)
-
 
 def _check_grid(values, name, allow_zero):
     values = np.asarray(values, dtype=np.float64).ravel()
@@ -123,9 +119,135 @@ def _check_grid(values, name, allow_zero):
     return values
 
 
+def _floats(values):
+    return tuple(float(value) for value in np.asarray(values, dtype=np.float64).ravel())
+
+
+@dataclass(frozen=True, kw_only=True)
+class FilterEvaluationOptions:
+    """The options of the filter evaluation (Tables I and II), checked once, when made.
+
+    One frozen (hashable, comparable) object for
+    :func:`~sklearn_radar.evaluation.filter_grid`,
+    :func:`~sklearn_radar.evaluation.filter_settings_table` and their
+    per-sequence parts.  A cell of the grid, or a setting of the table,
+    equals ``FrameTransform(frame=frame)`` followed by
+    ``DopplerDensityFilter(vr_threshold=..., d_xy=..., dt=dt, causal=causal,
+    threshold_ratios=threshold_ratios, min_neighbors=min_neighbors)``
+    (Eq. 1), scored with :func:`~sklearn_radar.evaluation.filter_errors`
+    (``window``, ``min_kept``).  Each option is kept as the attribute of the
+    same name, the array-likes as tuples (of floats; of ints for
+    ``min_neighbors``).
+
+    Parameters
+    ----------
+    vr_thresholds : array-like of float, default=(0.05, 0.10, ..., 0.35)
+        Table I's rows: distinct Doppler thresholds ``eta_1``, m/s, each
+        >= 0 (the paper: 0.05 to 0.35 m/s).  Table II takes its thresholds
+        from its settings instead.
+    d_xys : array-like of float, default=(0.8, 1.0, ..., 2.0)
+        Table I's columns: distinct spatial radii ``d_xy``, m, each > 0 (the
+        paper: 0.8 to 2.0 m).  Table II takes its radii from its settings.
+    frame : {"frame", "car"}, default="frame"
+        Coordinate system: "frame" (FCS) or "car" (CCS); for Table II the
+        frame of the settings that lack a ``frame`` column.
+    dt : float, default=0.25
+        Neighbour time window of Eq. 1, s, >= 0.
+    causal : bool, default=False
+        Count only neighbours at or before a detection's time.
+    threshold_ratios : array-like of float, default=(1, 5, 10, 50)
+        ``eta_1 / eta_i`` of Eq. 1, each > 0.
+    min_neighbors : array-like of int, default=(2, 3, 4, 10)
+        ``N_i`` of Eq. 1, each >= 1, one per ratio; the neighbour counts are
+        capped at their maximum.
+    window : float, default=0.15
+        Error window, s, > 0.
+    min_kept : float, default=0.75
+        Share of an object's detections per window that must be kept, in
+        [0, 1].
+    n_jobs : int, default=None
+        Number of (frame, ``d_xy``) pairs processed in parallel (joblib
+        threads; the neighbour-count kernel releases the GIL).  None means
+        1, -1 all cores.  Does not change the results, so two options that
+        differ only in ``n_jobs`` or ``verbose`` compare equal.
+    verbose : int or bool, default=0
+        If > 0, print one line per finished (frame, ``d_xy``) pair to
+        stdout.
+
+    Raises
+    ------
+    InvalidParameterError
+        A ValueError naming the option of a wrong type or out of range.
+    ValueError
+        If an axis is empty or repeats a value, or ``threshold_ratios`` and
+        ``min_neighbors`` do not form a rule of Eq. 1.
+
+    Examples
+    --------
+    >>> from sklearn_radar.evaluation import FilterEvaluationOptions
+    >>> options = FilterEvaluationOptions(vr_thresholds=(0.1, 0.2), d_xys=(1.4,), frame="car")
+    >>> options.vr_thresholds, options.window
+    ((0.1, 0.2), 0.15)
+    """
+
+    vr_thresholds: tuple = TABLE_I_VR_THRESHOLDS
+    d_xys: tuple = TABLE_I_D_XYS
+    frame: str = "frame"
+    dt: float = 0.25
+    causal: bool = False
+    threshold_ratios: tuple = (1.0, 5.0, 10.0, 50.0)
+    min_neighbors: tuple = (2, 3, 4, 10)
+    window: float = 0.15
+    min_kept: float = 0.75
+    n_jobs: int | None = field(default=None, compare=False)
+    verbose: int = field(default=0, compare=False)
+
+    _parameter_constraints: ClassVar[dict] = {
+        "vr_thresholds": ["array-like"],
+        "d_xys": ["array-like"],
+        "frame": [StrOptions({"frame", "car"})],
+        "dt": [Interval(Real, 0, None, closed="left")],
+        "causal": ["boolean"],
+        "threshold_ratios": ["array-like"],
+        "min_neighbors": ["array-like"],
+        **_WINDOW_CONSTRAINTS,
+        "n_jobs": [Integral, None],
+        "verbose": ["verbose"],
+    }
+
+    def __post_init__(self):
+        values = {option.name: getattr(self, option.name) for option in fields(self)}
+        validate_parameter_constraints(self._parameter_constraints, values, caller_name=type(self).__name__)
+        ratios, n_min = check_filter_rule(self.threshold_ratios, self.min_neighbors)
+        checked = {
+            "vr_thresholds": _floats(_check_grid(self.vr_thresholds, "vr_thresholds", allow_zero=True)),
+            "d_xys": _floats(_check_grid(self.d_xys, "d_xys", allow_zero=False)),
+            "dt": float(self.dt),
+            "causal": bool(self.causal),
+            "threshold_ratios": _floats(ratios),
+            "min_neighbors": tuple(int(n) for n in n_min),
+            "window": float(self.window),
+            "min_kept": float(self.min_kept),
+        }
+        for name, value in checked.items():
+            object.__setattr__(self, name, value)  # frozen: the checked values, set once here
+
+
 # ----------------------------------------------------------------------------
-# Removal rates and errors of one keep mask
+# Removal rates of one keep mask
 # ----------------------------------------------------------------------------
+def _removed(keep, background):
+    """Background rows and object rows that ``keep`` removes: counts, so that parts add up."""
+    removed = ~keep
+    return int(np.count_nonzero(removed & background)), int(np.count_nonzero(removed & ~background))
+
+
+def _shares(removed, n):
+    """Removed share(s) of a group of ``n`` rows, 0.0 when the group is empty (as :func:`filter_removal_rates`)."""
+    removed = np.asarray(removed, dtype=np.int64)
+    return removed / n if n else np.zeros(removed.shape)
+
+
 @validate_params({"keep": ["array-like"], "target": ["array-like"]}, prefer_skip_nested_validation=True)
 def filter_removal_rates(keep, target) -> dict:
     """Shares of background and of object detections that a filter removed.
@@ -159,17 +281,10 @@ def filter_removal_rates(keep, target) -> dict:
     (0.5, 0.5)
     """
     keep = _as_keep(keep)
-    return _filter_removal_rates(keep, _as_target(target, len(keep)))
-
-
-def _filter_removal_rates(keep, target):
-    """:func:`filter_removal_rates` of a checked boolean ``keep`` and int64 ``target``, unvalidated."""
-    background = target == -1
+    background = _as_target(target, len(keep)) == -1
     n_background = int(background.sum())
-    n_objects = int(len(target) - n_background)
-    removed = ~keep
-    removed_background = int(np.count_nonzero(removed & background))
-    removed_objects = int(np.count_nonzero(removed & ~background))
+    n_objects = int(len(keep) - n_background)
+    removed_background, removed_objects = _removed(keep, background)
     return {
         "background_removed": removed_background / n_background if n_background else 0.0,
         "objects_removed": removed_objects / n_objects if n_objects else 0.0,
@@ -178,70 +293,9 @@ def _filter_removal_rates(keep, target):
     }
 
 
-@validate_params(
-    {"keep": ["array-like"], "target": ["array-like"], "t": ["array-like"]} | _WINDOW_CONSTRAINTS,
-    prefer_skip_nested_validation=True,
-)
-def filter_error_windows(keep, target, t, window=0.15, min_kept=0.75) -> pd.DataFrame:
-    """Per object and complete time window: detections, kept detections, error flag.
-
-    For each object (``target >= 0``) with first and last detection times
-    ``t0`` and ``t1``, the windows are ``[t0 + k window, t0 + (k + 1) window)``
-    for every ``k >= 0`` with ``t0 + (k + 1) window <= t1``: only complete
-    windows count, so an object present for less than ``window`` has none,
-    and detections after the last complete window are ignored.  A window
-    with ``n > 0`` detections of which ``kept`` survive the filter is an
-    *error* when ``kept / n < min_kept`` (the paper: 75 % within 150 ms).
-
-    Parameters
-    ----------
-    keep : array-like of bool, shape (n_detections,)
-        Filter output, False = removed.
-    target : array-like of int, shape (n_detections,)
-        Instance id per detection, -1 for background (ignored).  Ids must be
-        unique across sequences (as ``make_scenes(...).target`` is).
-    t : array-like of float, shape (n_detections,)
-        Detection time, s (the ``t`` column of
-        :class:`~sklearn_radar.FrameTransform`, i.e. ``timestamp * 1e-6``).
-    window : float, default=0.15
-        Window length, s, > 0.
-    min_kept : float, default=0.75
-        Smallest share of an object's detections in a window that must be
-        kept for the window not to be an error, in [0, 1].
-
-    Returns
-    -------
-    windows : DataFrame
-        One row per complete window that holds at least one detection of
-        its object (empty windows cannot be errors and are not listed),
-        sorted by ``instance`` and ``start_s``, with columns
-
-        ``instance`` (int), ``start_s`` (float, s: ``t0 + k window``),
-        ``n`` (int, detections), ``kept`` (int, detections kept),
-        ``kept_share`` (float, ``kept / n``), ``error`` (bool).
-
-    Notes
-    -----
-    Times are placed into windows with a tolerance of 1 ns (or a few
-    float64 spacings of the largest time, if coarser), so that a detection
-    meant to lie on a window edge (timestamps are integer µs) falls into the
-    window that starts there.  The work is a few sorts of
-    the object rows: no Python loop over objects or detections.
-
-    See Also
-    --------
-    filter_errors : the number of error windows.
-    """
-    return _filter_error_windows(keep, target, t, window, min_kept)
-
-
-def _filter_error_windows(keep, target, t, window, min_kept):
-    """:func:`filter_error_windows` without its parameter validation."""
-    keep = _as_keep(keep)
-    target = _as_target(target, len(keep))
-    return _windows_frame(_Windows(target, t, window), keep, min_kept)
-
-
+# ----------------------------------------------------------------------------
+# Error windows
+# ----------------------------------------------------------------------------
 def _windows_frame(windows, keep, min_kept):
     """:func:`filter_error_windows`'s table of prepared windows and a checked boolean ``keep``."""
     kept = windows.kept(keep)
@@ -331,52 +385,8 @@ class _Windows:
         return kept / np.maximum(self.n, 1) < min_kept
 
 
-@validate_params(
-    {"keep": ["array-like"], "target": ["array-like"], "t": ["array-like"]} | _WINDOW_CONSTRAINTS,
-    prefer_skip_nested_validation=True,
-)
-def filter_errors(keep, target, t, window=0.15, min_kept=0.75) -> int:
-    """Number of (object, time window) cases in which an object lost too many detections.
-
-    The paper's optimisation criterion for the filter (Table I): the number
-    of times a labelled road user kept less than ``min_kept`` (75 %) of its
-    detections during a whole time window of ``window`` (150 ms).  Windows
-    are defined per object from its first detection on, and only complete
-    windows count; see :func:`filter_error_windows` for the exact rule and
-    for the windows themselves.
-
-    Parameters
-    ----------
-    keep : array-like of bool, shape (n_detections,)
-        Filter output, False = removed.
-    target : array-like of int, shape (n_detections,)
-        Instance id per detection, -1 for background.
-    t : array-like of float, shape (n_detections,)
-        Detection time, s.
-    window : float, default=0.15
-        Window length, s, > 0.
-    min_kept : float, default=0.75
-        Share of an object's detections in a window that must be kept, in
-        [0, 1].
-
-    Returns
-    -------
-    errors : int
-        ``filter_error_windows(...)["error"].sum()``.
-
-    Examples
-    --------
-    >>> from sklearn_radar.evaluation import filter_errors
-    >>> t = [0.00, 0.05, 0.10, 0.15, 0.20, 0.30]       # one object, s
-    >>> keep = [True, False, False, True, True, True]  # window [0, 0.15): 1 of 3 kept
-    >>> filter_errors(keep, [0] * 6, t)
-    1
-    """
-    return int(_filter_error_windows(keep, target, t, window, min_kept)["error"].sum())
-
-
 # ----------------------------------------------------------------------------
-# Grid enumeration (Table I) and settings (Table II)
+# Counting: Tables I and II are counts of filter settings
 # ----------------------------------------------------------------------------
 def _working_columns(X, frame):
     """FrameTransform once; the float64 arrays the filter reads."""
@@ -386,28 +396,16 @@ def _working_columns(X, frame):
     return columns
 
 
-def _counts(c, d_xy, dt, causal, cap):
-    # n_jobs=1 inside: the parallelism is over d_xy (or settings) outside.
-    return _neighbor_counts(c["x"], c["y"], c["t"], c["sequence"], float(d_xy), dt, causal, cap, 1)
-
-
-def _scores(c, counts, vr_threshold, background, windows, min_kept, ratios, n_min):
+def _scores(c, counts, vr_threshold, background, windows, options):
     """(errors, background rows removed, object rows removed) of one setting: counts, so that parts add up."""
-    keep = _doppler_density_keep(c["v_r"], counts, float(vr_threshold), ratios, n_min)
-    removed = ~keep
-    removed_background = int(np.count_nonzero(removed & background))
-    removed_objects = int(np.count_nonzero(removed & ~background))
-    errors = int(np.count_nonzero(windows.errors(windows.kept(keep), min_kept)))
-    return errors, removed_background, removed_objects
+    keep = _doppler_density_keep(
+        c["v_r"], counts, float(vr_threshold), np.asarray(options.threshold_ratios), np.asarray(options.min_neighbors)
+    )
+    errors = int(np.count_nonzero(windows.errors(windows.kept(keep), options.min_kept)))
+    return (errors, *_removed(keep, background))
 
 
-def _shares(removed, n):
-    """Removed share(s) of a group of ``n`` rows, 0.0 when the group is empty (as :func:`filter_removal_rates`)."""
-    removed = np.asarray(removed, dtype=np.int64)
-    return removed / n if n else np.zeros(removed.shape)
-
-
-def _measure(tasks, target, windows, dt, causal, ratios, n_min, min_kept, n_jobs):
+def _measure(tasks, background, windows, options):
     """Score filter settings, sharing the neighbour counts of each (frame, d_xy).
 
     Parameters
@@ -415,11 +413,14 @@ def _measure(tasks, target, windows, dt, causal, ratios, n_min, min_kept, n_jobs
     tasks : list of (columns, d_xy, vr_thresholds)
         Working columns of one frame, one radius d_xy (m) and the Doppler
         thresholds eta_1 (m/s) to score with its counts.
-    target, windows, dt, causal, ratios, n_min, min_kept
-        As in :func:`filter_grid`; ``windows`` the prepared error windows.
-    n_jobs : int or None
-        Tasks processed in parallel (joblib threads; the count kernel
-        releases the GIL).
+    background : ndarray of bool
+        Rows with target -1.
+    windows : _Windows
+        The prepared error windows.
+    options : FilterEvaluationOptions
+        Eq. 1's rule, ``dt``, ``causal``, ``min_kept`` and ``n_jobs`` (tasks
+        processed in parallel, joblib threads; the count kernel releases the
+        GIL).
 
     Yields
     ------
@@ -427,300 +428,25 @@ def _measure(tasks, target, windows, dt, causal, ratios, n_min, min_kept, n_jobs
         Per finished task k (in completion order), int64 arrays over its
         thresholds: error windows, background rows and object rows removed.
     """
-    cap = int(n_min.max())
-    background = target == -1
+    cap = max(options.min_neighbors)
 
     def measure(k):
         c, d_xy, vr_thresholds = tasks[k]
-        counts = _counts(c, d_xy, dt, causal, cap)
-        cells = [_scores(c, counts, vr, background, windows, min_kept, ratios, n_min) for vr in vr_thresholds]
+        # n_jobs=1 inside: the parallelism is over the tasks.
+        counts = _neighbor_counts(
+            c["x"], c["y"], c["t"], c["sequence"], float(d_xy), options.dt, options.causal, cap, 1
+        )
+        cells = [_scores(c, counts, vr, background, windows, options) for vr in vr_thresholds]
         errors, background_removed, objects_removed = (np.array(v, dtype=np.int64) for v in zip(*cells, strict=True))
         return k, errors, background_removed, objects_removed
 
-    yield from Parallel(n_jobs=n_jobs, prefer="threads", return_as="generator_unordered")(
+    yield from Parallel(n_jobs=options.n_jobs, prefer="threads", return_as="generator_unordered")(
         delayed(measure)(k) for k in range(len(tasks))
     )
 
 
-def _check_common(X, target, threshold_ratios, min_neighbors):
-    """What the constraints cannot say: one target per row of X, Eq. 1's rule consistent."""
-    target = _as_target(target, len(X))
-    ratios, n_min = check_filter_rule(threshold_ratios, min_neighbors)
-    return target, ratios, n_min
-
-
-#: Table I's axes: Doppler thresholds eta_1 (m/s) and radii d_xy (m), the defaults of :func:`filter_grid`.
-TABLE_I_VR_THRESHOLDS = (0.05, 0.10, 0.15, 0.20, 0.25, 0.30, 0.35)
-TABLE_I_D_XYS = (0.8, 1.0, 1.2, 1.4, 1.6, 1.8, 2.0)
-
-
-@validate_params(
-    {"vr_thresholds": ["array-like"], "d_xys": ["array-like"]} | _EVALUATION_CONSTRAINTS,
-    prefer_skip_nested_validation=True,
-)
-def filter_grid(
-    X,
-    target,
-    vr_thresholds=TABLE_I_VR_THRESHOLDS,
-    d_xys=TABLE_I_D_XYS,
-    *,
-    frame="frame",
-    dt=0.25,
-    causal=False,
-    threshold_ratios=(1, 5, 10, 50),
-    min_neighbors=(2, 3, 4, 10),
-    window=0.15,
-    min_kept=0.75,
-    n_jobs=None,
-    verbose=0,
-) -> Bunch:
-    """Enumerate the filter's two tuning parameters: the paper's Table I.
-
-    For every pair of Doppler threshold ``eta_1`` (``vr_threshold``) and
-    spatial radius ``d_xy`` this runs the filter of Eq. 1 and measures the
-    errors (:func:`filter_errors`) and the removal rates
-    (:func:`filter_removal_rates`).  The result for a cell equals running
-    ``DopplerDensityFilter(vr_threshold=..., d_xy=..., dt=dt, causal=causal,
-    threshold_ratios=..., min_neighbors=...)`` after
-    ``FrameTransform(frame=frame)``, but the work is shared: the frame
-    transform runs once, the neighbour counts once per ``d_xy`` (they do not
-    depend on the Doppler threshold) and only Eq. 1 itself per cell.
-
-    Parameters
-    ----------
-    X : DataFrame
-        Raw detection table (:mod:`sklearn_radar._schema`), e.g.
-        ``make_scenes(...).data``; :class:`~sklearn_radar.FrameTransform`
-        is applied here.
-    target : array-like of int, shape (n_detections,)
-        Instance id per detection, -1 for background, unique across
-        sequences.
-    vr_thresholds : array-like of float, default=(0.05, 0.10, ..., 0.35)
-        Distinct values of ``eta_1``, m/s, each >= 0 (the paper: 0.05 to
-        0.35 m/s).
-    d_xys : array-like of float, default=(0.8, 1.0, ..., 2.0)
-        Distinct values of ``d_xy``, m, each > 0 (the paper: 0.8 to 2.0 m).
-    frame : {"frame", "car"}, default="frame"
-        Coordinate system: "frame" (FCS) or "car" (CCS).
-    dt : float, default=0.25
-        Neighbour time window, s, >= 0.
-    causal : bool, default=False
-        Count only neighbours at or before a detection's time.
-    threshold_ratios : array-like of float, default=(1, 5, 10, 50)
-        ``eta_1 / eta_i``, each > 0.
-    min_neighbors : array-like of int, default=(2, 3, 4, 10)
-        ``N_i``, each >= 1, one per ratio; the neighbour counts are capped at
-        their maximum.
-    window : float, default=0.15
-        Error window, s, > 0.
-    min_kept : float, default=0.75
-        Share of an object's detections per window that must be kept, in
-        [0, 1].
-    n_jobs : int, default=None
-        Number of ``d_xy`` values processed in parallel (joblib threads; the
-        neighbour-count kernel releases the GIL).  None means 1, -1 all
-        cores.
-    verbose : int or bool, default=0
-        If > 0, print one line per finished ``d_xy`` to stdout.
-
-    Returns
-    -------
-    result : Bunch
-        ``errors`` : DataFrame of int
-            Error count per cell, index ``vr_threshold`` (m/s), columns
-            ``d_xy`` (m): Table I.
-        ``background_removed``, ``objects_removed`` : DataFrame of float
-            Shares in [0, 1] on the same grid.
-        ``frame`` : str
-            The coordinate system used, "frame" (FCS) or "car" (CCS).
-        ``n_background``, ``n_objects`` : int
-            Number of background and object rows.
-        ``elapsed_s`` : float
-            Wall time of the enumeration, s.
-
-    See Also
-    --------
-    filter_settings_table : Table II for chosen settings.
-    plot_filter_errors : heatmap of ``result.errors``.
-
-    Examples
-    --------
-    >>> from sklearn_radar.datasets import make_scenes
-    >>> from sklearn_radar.evaluation import filter_grid
-    >>> scenes = make_scenes(n_sequences=1, duration=3.0, random_state=0)
-    >>> grid = filter_grid(scenes.data, scenes.target, (0.1, 0.2), (1.0, 1.4))
-    >>> grid.errors.shape
-    (2, 2)
-    """
-    start = time.perf_counter()
-    counts = _grid_counts(
-        X,
-        target,
-        vr_thresholds,
-        d_xys,
-        frame,
-        dt,
-        causal,
-        threshold_ratios,
-        min_neighbors,
-        window,
-        min_kept,
-        n_jobs,
-        verbose,
-    )
-    return _grid_result(counts, frame, time.perf_counter() - start)
-
-
-def _grid_counts(
-    X,
-    target,
-    vr_thresholds,
-    d_xys,
-    frame,
-    dt,
-    causal,
-    threshold_ratios,
-    min_neighbors,
-    window,
-    min_kept,
-    n_jobs,
-    verbose,
-    time_eps=None,
-):
-    """The integer counts behind Table I: a Bunch that :func:`_grid_result` turns into shares.
-
-    ``errors``, ``removed_background`` and ``removed_objects`` are int64
-    arrays of shape (n_vr, n_d); ``vr_thresholds`` and ``d_xys`` the checked
-    axes; ``n_background``, ``n_objects`` ints; ``windows`` the error
-    windows (their ``t_abs_max`` and ``time_eps``); ``sequence`` the working
-    sequence column (None without one).
-    """
-    target, ratios, n_min = _check_common(X, target, threshold_ratios, min_neighbors)
-    vr_values = _check_grid(vr_thresholds, "vr_thresholds", allow_zero=True)
-    d_values = _check_grid(d_xys, "d_xys", allow_zero=False)
-    c = _working_columns(X, frame)
-    windows = _Windows(target, c["t"], window, time_eps)  # independent of the filter setting
-
-    errors = np.zeros((len(vr_values), len(d_values)), dtype=np.int64)
-    background = np.zeros(errors.shape, dtype=np.int64)
-    objects = np.zeros(errors.shape, dtype=np.int64)
-    tasks = [(c, d_xy, vr_values) for d_xy in d_values]
-    results = _measure(tasks, target, windows, dt, causal, ratios, n_min, min_kept, n_jobs)
-    for done, (j, cell_errors, cell_background, cell_objects) in enumerate(results, start=1):
-        errors[:, j], background[:, j], objects[:, j] = cell_errors, cell_background, cell_objects
-        if verbose > 0:
-            print(f"filter grid [{frame}] d_xy={d_values[j]:.2f} m: {done}/{len(d_values)} done", flush=True)
-    n_background = int(np.count_nonzero(target == -1))
-    return Bunch(
-        vr_thresholds=vr_values,
-        d_xys=d_values,
-        errors=errors,
-        removed_background=background,
-        removed_objects=objects,
-        n_background=n_background,
-        n_objects=len(target) - n_background,
-        windows=windows,
-        sequence=c["sequence"],
-    )
-
-
-def _grid_result(counts, frame, elapsed_s):
-    """:func:`filter_grid`'s Bunch from the counts of :func:`_grid_counts` (or their sums over sequences)."""
-    index = pd.Index(counts.vr_thresholds, name="vr_threshold")
-    columns = pd.Index(counts.d_xys, name="d_xy")
-    return Bunch(
-        errors=pd.DataFrame(counts.errors, index=index, columns=columns),
-        background_removed=pd.DataFrame(
-            _shares(counts.removed_background, counts.n_background), index=index, columns=columns
-        ),
-        objects_removed=pd.DataFrame(_shares(counts.removed_objects, counts.n_objects), index=index, columns=columns),
-        frame=frame,
-        n_background=counts.n_background,
-        n_objects=counts.n_objects,
-        elapsed_s=elapsed_s,
-    )
-
-
-@validate_params(
-    {"settings": [pd.DataFrame, None]} | _EVALUATION_CONSTRAINTS,
-    prefer_skip_nested_validation=True,
-)
-def filter_settings_table(
-    X,
-    target,
-    settings=None,
-    *,
-    frame="frame",
-    dt=0.25,
-    causal=False,
-    threshold_ratios=(1, 5, 10, 50),
-    min_neighbors=(2, 3, 4, 10),
-    window=0.15,
-    min_kept=0.75,
-    n_jobs=None,
-    verbose=0,
-) -> pd.DataFrame:
-    """Measure chosen filter settings beside the paper's numbers: Table II.
-
-    Parameters
-    ----------
-    X : DataFrame
-        Raw detection table; :class:`~sklearn_radar.FrameTransform` is
-        applied once per distinct frame.
-    target : array-like of int, shape (n_detections,)
-        Instance id per detection, -1 for background.
-    settings : DataFrame, default=None
-        One row per setting with the columns ``vr_threshold`` (m/s),
-        ``d_xy`` (m) and optionally ``frame`` ("frame" or "car"; the
-        ``frame`` argument where absent).  Other columns are carried
-        through.  None means :data:`PAPER_TABLE_II`.
-    frame : {"frame", "car"}, default="frame"
-        Frame of the settings that lack a ``frame`` column.
-    dt, causal, threshold_ratios, min_neighbors, window, min_kept
-        As in :func:`filter_grid`.
-    n_jobs : int, default=None
-        Distinct (frame, ``d_xy``) pairs processed in parallel (threads).
-    verbose : int or bool, default=0
-        If > 0, print one line per finished (frame, ``d_xy``) pair.
-
-    Returns
-    -------
-    table : DataFrame
-        The columns of ``settings`` (for the default: ``frame``,
-        ``vr_threshold``, ``d_xy``, ``paper_removal_rate`` in percent,
-        ``paper_errors``) followed by the measured
-
-        ``removal_rate`` (float, percent of background detections removed),
-        ``object_removal_rate`` (float, percent of object detections
-        removed) and ``errors`` (int, :func:`filter_errors`).
-
-    Examples
-    --------
-    >>> from sklearn_radar.datasets import make_scenes
-    >>> from sklearn_radar.evaluation import filter_settings_table
-    >>> scenes = make_scenes(n_sequences=1, duration=3.0, random_state=0)
-    >>> table = filter_settings_table(scenes.data, scenes.target)
-    >>> list(table.columns)[-3:]
-    ['removal_rate', 'object_removal_rate', 'errors']
-    """
-    counts = _settings_counts(
-        X,
-        target,
-        _settings_rows(settings, frame),
-        dt,
-        causal,
-        threshold_ratios,
-        min_neighbors,
-        window,
-        min_kept,
-        n_jobs,
-        verbose,
-    )
-    return _settings_result(counts)
-
-
 def _settings_rows(settings, frame):
-    """The checked settings table, with a ``frame`` column."""
+    """The checked settings table (Table II's rows), with a ``frame`` column; None means :data:`PAPER_TABLE_II`."""
     table = (PAPER_TABLE_II if settings is None else settings).copy().reset_index(drop=True)
     missing = [name for name in ("vr_threshold", "d_xy") if name not in table.columns]
     if missing:
@@ -735,53 +461,61 @@ def _settings_rows(settings, frame):
     return table
 
 
-def _settings_counts(
-    X, target, table, dt, causal, threshold_ratios, min_neighbors, window, min_kept, n_jobs, verbose, time_eps=None
-):
-    """The integer counts behind Table II, one per row of the checked settings ``table``.
+def _grid_rows(options):
+    """Table I as a settings table: one row per cell, row-major (``vr_threshold`` slow, ``d_xy`` fast)."""
+    vr, d_xy = np.meshgrid(options.vr_thresholds, options.d_xys, indexing="ij")
+    return pd.DataFrame({"frame": options.frame, "vr_threshold": vr.ravel(), "d_xy": d_xy.ravel()})
 
-    A Bunch with ``table``, int64 arrays ``errors``, ``removed_background``
-    and ``removed_objects`` of shape (n_settings,), ``n_background``,
-    ``n_objects``, ``windows`` and ``sequence`` as in :func:`_grid_counts`.
+
+def _count_settings(X, target, table, options, time_eps, label):
+    """The integer counts of the filter settings in the rows of the checked ``table``.
+
+    Each distinct frame is transformed once, the neighbour counts are
+    computed once per (frame, ``d_xy``) (they do not depend on the Doppler
+    threshold) and only Eq. 1 itself per row.  ``label`` names the table in
+    the progress lines.
+
+    Returns
+    -------
+    counts : dict
+        ``errors``, ``removed_background``, ``removed_objects``: int64 arrays
+        of shape (n_rows,); ``n_background``, ``n_objects``: ints;
+        ``windows``: the error windows (their ``t_abs_max`` and
+        ``time_eps``); ``sequence``: the sequence column (None without one).
     """
-    target, ratios, n_min = _check_common(X, target, threshold_ratios, min_neighbors)
+    target = _as_target(target, len(X))
     working = {name: _working_columns(X, name) for name in table["frame"].unique()}
     # t does not depend on the frame, so neither do the error windows.
     first = next(iter(working.values()))
-    windows = _Windows(target, first["t"], window, time_eps)
+    windows = _Windows(target, first["t"], options.window, time_eps)
     groups = list(table.groupby(["frame", "d_xy"], sort=False).groups.items())
     tasks = [
         (working[frame_name], d_xy, table.loc[rows, "vr_threshold"].to_numpy(dtype=np.float64))
         for (frame_name, d_xy), rows in groups
     ]
-    errors, background, objects = (np.zeros(len(table), dtype=np.int64) for _ in range(3))
-    results = _measure(tasks, target, windows, dt, causal, ratios, n_min, min_kept, n_jobs)
+    background = target == -1
+    errors, removed_background, removed_objects = (np.zeros(len(table), dtype=np.int64) for _ in range(3))
+    results = _measure(tasks, background, windows, options)
     for done, (k, cell_errors, cell_background, cell_objects) in enumerate(results, start=1):
         (frame_name, d_xy), rows = groups[k]
         positions = table.index.get_indexer(rows)
-        errors[positions], background[positions], objects[positions] = cell_errors, cell_background, cell_objects
-        if verbose > 0:
-            print(f"filter settings [{frame_name}] d_xy={d_xy:.2f} m: {done}/{len(groups)} done", flush=True)
-    n_background = int(np.count_nonzero(target == -1))
-    return Bunch(
-        table=table,
-        errors=errors,
-        removed_background=background,
-        removed_objects=objects,
-        n_background=n_background,
-        n_objects=len(target) - n_background,
-        windows=windows,
-        sequence=first["sequence"],
-    )
-
-
-def _settings_result(counts):
-    """:func:`filter_settings_table`'s table from the counts of :func:`_settings_counts` (or their sums)."""
-    table = counts.table.copy()
-    table["removal_rate"] = 100.0 * _shares(counts.removed_background, counts.n_background)
-    table["object_removal_rate"] = 100.0 * _shares(counts.removed_objects, counts.n_objects)
-    table["errors"] = counts.errors.astype(np.int64)
-    return table
+        errors[positions], removed_background[positions], removed_objects[positions] = (
+            cell_errors,
+            cell_background,
+            cell_objects,
+        )
+        if options.verbose > 0:
+            print(f"filter {label} [{frame_name}] d_xy={d_xy:.2f} m: {done}/{len(groups)} done", flush=True)
+    n_background = int(np.count_nonzero(background))
+    return {
+        "errors": errors,
+        "removed_background": removed_background,
+        "removed_objects": removed_objects,
+        "n_background": n_background,
+        "n_objects": len(target) - n_background,
+        "windows": windows,
+        "sequence": first["sequence"],
+    }
 
 
 # ----------------------------------------------------------------------------

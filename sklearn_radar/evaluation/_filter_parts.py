@@ -1,19 +1,19 @@
-"""Mergeable per-sequence summaries of the filter evaluation, Tables I and II (issue 14).
+"""Tables I and II and the error windows as combinations of per-sequence parts (issue 14).
 
 The filter of Eq. 1 counts neighbours within a sequence only, and an error
 window belongs to one object, which never spans sequences.  So Table I
-(:func:`~sklearn_radar.evaluation.filter_grid`), Table II
-(:func:`~sklearn_radar.evaluation.filter_settings_table`) and the error
-windows (:func:`~sklearn_radar.evaluation.filter_error_windows`) of a data
-set can be computed one sequence (or one block of whole sequences) at a
-time, where the sequence lives, as a small *part*; the parts are combined
-in one process into the result of the whole table:
+(:func:`filter_grid`), Table II (:func:`filter_settings_table`) and the
+error windows (:func:`filter_error_windows`) of a data set can be computed
+one sequence (or one block of whole sequences) at a time, where the
+sequence lives, as a small *part*; the parts are combined in one process
+into the result of the whole table.  The whole-table functions are that
+combination of one part, the whole data set: there is one implementation.
 
 * a grid or settings part holds, per cell (or setting), the *integer*
   counts of error windows, of background rows removed and of object rows
   removed, and the numbers of background and object rows.  Counts add up,
-  and the combined shares are the same divisions of the same integers as
-  the whole table's, so the result is equal bit for bit.
+  and the combined shares are divisions of the summed integers, so the
+  result does not depend on how the data set was split.
 * an error-windows part holds the sequence's own rows of the windows table;
   the combination concatenates them in object order.
 
@@ -47,23 +47,24 @@ from sklearn.utils import Bunch
 from sklearn.utils._param_validation import Interval, validate_params
 
 from ._filter import (
-    _EVALUATION_CONSTRAINTS,
     _WINDOW_CONSTRAINTS,
-    TABLE_I_D_XYS,
-    TABLE_I_VR_THRESHOLDS,
+    FilterEvaluationOptions,
     _as_keep,
     _as_target,
-    _grid_counts,
-    _grid_result,
-    _settings_counts,
-    _settings_result,
+    _count_settings,
+    _grid_rows,
     _settings_rows,
+    _shares,
     _time_eps,
     _Windows,
     _windows_frame,
 )
 
+__all__ = ["filter_error_windows", "filter_errors", "filter_grid", "filter_settings_table"]
+
 _TIME_EPS_CONSTRAINT = {"time_eps": [Interval(Real, 0, None, closed="neither"), None]}
+_TABLE_CONSTRAINTS = {"X": [pd.DataFrame], "target": ["array-like"], "options": [FilterEvaluationOptions, None]}
+_KEEP_CONSTRAINTS = {"keep": ["array-like"], "target": ["array-like"], "t": ["array-like"]} | _WINDOW_CONSTRAINTS
 
 
 # ----------------------------------------------------------------------------
@@ -71,14 +72,16 @@ _TIME_EPS_CONSTRAINT = {"time_eps": [Interval(Real, 0, None, closed="neither"), 
 # ----------------------------------------------------------------------------
 @dataclass(frozen=True, eq=False, kw_only=True)
 class _Counted:
-    """What every grid and settings part holds besides its counts.
+    """What every grid and settings part holds.
 
     Attributes
     ----------
-    options : tuple
-        The settings that must agree between parts: frame, ``dt`` (s),
-        ``causal``, the rule of Eq. 1, ``window`` (s), ``min_kept`` and the
-        grid axes (m/s, m) or the settings table.
+    options : FilterEvaluationOptions
+        The options the part was computed with; they must agree between
+        parts (``n_jobs`` and ``verbose`` aside).
+    errors, removed_background, removed_objects : ndarray of int64
+        Per cell (or setting): error windows, background rows removed,
+        object rows removed.
     n_background, n_objects : int
         Background rows (target -1) and object rows of the part.
     sequences : ndarray of float64 or None
@@ -92,7 +95,10 @@ class _Counted:
         Wall time of computing the part, s.
     """
 
-    options: tuple
+    options: FilterEvaluationOptions
+    errors: np.ndarray
+    removed_background: np.ndarray
+    removed_objects: np.ndarray
     n_background: int
     n_objects: int
     sequences: np.ndarray | None
@@ -105,27 +111,10 @@ class _Counted:
 class FilterGridPart(_Counted):
     """Table I counts of one sequence (or block of whole sequences), from :func:`filter_grid_parts`.
 
-    Attributes
-    ----------
-    frame : str
-        "frame" (FCS) or "car" (CCS).
-    vr_thresholds : ndarray of float64 of shape (n_vr,)
-        Doppler thresholds eta_1, m/s (the rows).
-    d_xys : ndarray of float64 of shape (n_d,)
-        Spatial radii, m (the columns).
-    errors, removed_background, removed_objects : ndarray of int64 of shape (n_vr, n_d)
-        Per cell: error windows, background rows removed, object rows
-        removed.
-
-    The other attributes are those of every part (``_Counted``).
+    The counts are arrays of shape (n_vr, n_d): rows ``options.vr_thresholds``
+    (m/s), columns ``options.d_xys`` (m), in ``options.frame``.  The other
+    attributes are those of every part (``_Counted``).
     """
-
-    frame: str
-    vr_thresholds: np.ndarray
-    d_xys: np.ndarray
-    errors: np.ndarray
-    removed_background: np.ndarray
-    removed_objects: np.ndarray
 
 
 @dataclass(frozen=True, eq=False, kw_only=True)
@@ -136,18 +125,12 @@ class FilterSettingsPart(_Counted):
     ----------
     table : DataFrame
         The checked settings (with a ``frame`` column), as the result's
-        leading columns.
-    errors, removed_background, removed_objects : ndarray of int64 of shape (n_settings,)
-        Per setting: error windows, background rows removed, object rows
-        removed.
+        leading columns; the counts are arrays of shape (n_settings,).
 
     The other attributes are those of every part (``_Counted``).
     """
 
     table: pd.DataFrame
-    errors: np.ndarray
-    removed_background: np.ndarray
-    removed_objects: np.ndarray
 
 
 @dataclass(frozen=True, eq=False, kw_only=True)
@@ -157,7 +140,7 @@ class ErrorWindowsPart:
     Attributes
     ----------
     windows : DataFrame
-        :func:`~sklearn_radar.evaluation.filter_error_windows` of the part.
+        :func:`filter_error_windows` of the part.
     options : tuple
         ``(window, min_kept)``, s and share.
     t_abs_max, time_eps : float
@@ -171,37 +154,22 @@ class ErrorWindowsPart:
     time_eps: float
 
 
-def _grid_options(frame, dt, causal, threshold_ratios, min_neighbors, window, min_kept):
-    ratios = tuple(np.asarray(threshold_ratios, dtype=np.float64).ravel().tolist())
-    n_min = tuple(np.asarray(min_neighbors, dtype=np.float64).ravel().tolist())
-    return (frame, float(dt), bool(causal), ratios, n_min, float(window), float(min_kept))
+def _counted(counts, options, start):
+    """The fields of :class:`_Counted` from :func:`~._filter._count_settings`'s counts."""
+    windows, sequence = counts["windows"], counts["sequence"]
+    return {
+        "options": options,
+        "n_background": counts["n_background"],
+        "n_objects": counts["n_objects"],
+        "sequences": None if sequence is None else np.unique(sequence),
+        "t_abs_max": windows.t_abs_max,
+        "time_eps": windows.time_eps,
+        "elapsed_s": time.perf_counter() - start,
+    }
 
 
-def _sequences(sequence):
-    return None if sequence is None else np.unique(sequence)
-
-
-@validate_params(
-    {"vr_thresholds": ["array-like"], "d_xys": ["array-like"]} | _EVALUATION_CONSTRAINTS | _TIME_EPS_CONSTRAINT,
-    prefer_skip_nested_validation=True,
-)
-def filter_grid_parts(
-    X,
-    target,
-    vr_thresholds=TABLE_I_VR_THRESHOLDS,
-    d_xys=TABLE_I_D_XYS,
-    *,
-    frame="frame",
-    dt=0.25,
-    causal=False,
-    threshold_ratios=(1, 5, 10, 50),
-    min_neighbors=(2, 3, 4, 10),
-    window=0.15,
-    min_kept=0.75,
-    n_jobs=None,
-    verbose=0,
-    time_eps=None,
-) -> FilterGridPart:
+@validate_params(_TABLE_CONSTRAINTS | _TIME_EPS_CONSTRAINT, prefer_skip_nested_validation=True)
+def filter_grid_parts(X, target, options=None, *, time_eps=None) -> FilterGridPart:
     """Table I counts of one sequence (or block of whole sequences), for :func:`combine_filter_grid`.
 
     Parameters
@@ -211,13 +179,13 @@ def filter_grid_parts(
         column, unless it is the whole data set).
     target : array-like of int, shape (n_detections,)
         Instance id per detection, -1 for background.
-    vr_thresholds, d_xys, frame, dt, causal, threshold_ratios, min_neighbors, window, min_kept, n_jobs, verbose
-        As in :func:`~sklearn_radar.evaluation.filter_grid` (m/s, m, s);
-        every part of one data set needs the same.
+    options : FilterEvaluationOptions, default=None
+        As in :func:`filter_grid`; every part of one data set needs the
+        same.
     time_eps : float, default=None
         Tolerance, s, of placing times into windows; None: the one
-        ``filter_grid`` derives from this part's largest object time.  Give
-        it when :func:`combine_filter_grid` asks for it.
+        derived from this part's largest object time.  Give it when
+        :func:`combine_filter_grid` asks for it.
 
     Returns
     -------
@@ -227,51 +195,25 @@ def filter_grid_parts(
 
     See Also
     --------
-    combine_filter_grid : merges the parts into ``filter_grid``'s Bunch.
+    combine_filter_grid : merges the parts into :func:`filter_grid`'s Bunch.
     """
     start = time.perf_counter()
-    counts = _grid_counts(
-        X, target, vr_thresholds, d_xys, frame, dt, causal, threshold_ratios, min_neighbors, window, min_kept,
-        n_jobs, verbose, time_eps,
-    )  # fmt: skip
-    options = _grid_options(frame, dt, causal, threshold_ratios, min_neighbors, window, min_kept)
+    options = FilterEvaluationOptions() if options is None else options
+    counts = _count_settings(X, target, _grid_rows(options), options, time_eps, "grid")
+    shape = (len(options.vr_thresholds), len(options.d_xys))
     return FilterGridPart(
-        options=(*options, tuple(counts.vr_thresholds.tolist()), tuple(counts.d_xys.tolist())),
-        n_background=counts.n_background,
-        n_objects=counts.n_objects,
-        sequences=_sequences(counts.sequence),
-        t_abs_max=counts.windows.t_abs_max,
-        time_eps=counts.windows.time_eps,
-        elapsed_s=time.perf_counter() - start,
-        frame=frame,
-        vr_thresholds=counts.vr_thresholds,
-        d_xys=counts.d_xys,
-        errors=counts.errors,
-        removed_background=counts.removed_background,
-        removed_objects=counts.removed_objects,
+        errors=counts["errors"].reshape(shape),
+        removed_background=counts["removed_background"].reshape(shape),
+        removed_objects=counts["removed_objects"].reshape(shape),
+        **_counted(counts, options, start),
     )
 
 
 @validate_params(
-    {"settings": [pd.DataFrame, None]} | _EVALUATION_CONSTRAINTS | _TIME_EPS_CONSTRAINT,
+    {"settings": [pd.DataFrame, None]} | _TABLE_CONSTRAINTS | _TIME_EPS_CONSTRAINT,
     prefer_skip_nested_validation=True,
 )
-def filter_settings_table_parts(
-    X,
-    target,
-    settings=None,
-    *,
-    frame="frame",
-    dt=0.25,
-    causal=False,
-    threshold_ratios=(1, 5, 10, 50),
-    min_neighbors=(2, 3, 4, 10),
-    window=0.15,
-    min_kept=0.75,
-    n_jobs=None,
-    verbose=0,
-    time_eps=None,
-) -> FilterSettingsPart:
+def filter_settings_table_parts(X, target, settings=None, options=None, *, time_eps=None) -> FilterSettingsPart:
     """Table II counts of one sequence (or block of whole sequences), for :func:`combine_filter_settings_table`.
 
     Parameters
@@ -280,9 +222,9 @@ def filter_settings_table_parts(
         Raw detection table of whole sequences.
     target : array-like of int, shape (n_detections,)
         Instance id per detection, -1 for background.
-    settings, frame, dt, causal, threshold_ratios, min_neighbors, window, min_kept, n_jobs, verbose
-        As in :func:`~sklearn_radar.evaluation.filter_settings_table`
-        (m/s, m, s); every part of one data set needs the same.
+    settings, options
+        As in :func:`filter_settings_table`; every part of one data set
+        needs the same.
     time_eps : float, default=None
         Tolerance, s, of placing times into windows, as in
         :func:`filter_grid_parts`.
@@ -294,51 +236,29 @@ def filter_settings_table_parts(
 
     See Also
     --------
-    combine_filter_settings_table : merges the parts into ``filter_settings_table``'s table.
+    combine_filter_settings_table : merges the parts into :func:`filter_settings_table`'s table.
     """
     start = time.perf_counter()
-    table = _settings_rows(settings, frame)
-    counts = _settings_counts(
-        X, target, table, dt, causal, threshold_ratios, min_neighbors, window, min_kept, n_jobs, verbose, time_eps
-    )
-    options = _grid_options(frame, dt, causal, threshold_ratios, min_neighbors, window, min_kept)[1:]
+    options = FilterEvaluationOptions() if options is None else options
+    table = _settings_rows(settings, options.frame)
+    counts = _count_settings(X, target, table, options, time_eps, "settings")
     return FilterSettingsPart(
-        options=options,
-        n_background=counts.n_background,
-        n_objects=counts.n_objects,
-        sequences=_sequences(counts.sequence),
-        t_abs_max=counts.windows.t_abs_max,
-        time_eps=counts.windows.time_eps,
-        elapsed_s=time.perf_counter() - start,
         table=table,
-        errors=counts.errors,
-        removed_background=counts.removed_background,
-        removed_objects=counts.removed_objects,
+        errors=counts["errors"],
+        removed_background=counts["removed_background"],
+        removed_objects=counts["removed_objects"],
+        **_counted(counts, options, start),
     )
 
 
-@validate_params(
-    {"keep": ["array-like"], "target": ["array-like"], "t": ["array-like"]}
-    | _WINDOW_CONSTRAINTS
-    | _TIME_EPS_CONSTRAINT,
-    prefer_skip_nested_validation=True,
-)
+@validate_params(_KEEP_CONSTRAINTS | _TIME_EPS_CONSTRAINT, prefer_skip_nested_validation=True)
 def filter_error_windows_parts(keep, target, t, window=0.15, min_kept=0.75, *, time_eps=None) -> ErrorWindowsPart:
     """Error windows of one sequence (or block of whole sequences), for :func:`combine_error_windows`.
 
     Parameters
     ----------
-    keep : array-like of bool, shape (n_detections,)
-        Filter output of the part's rows, False = removed.
-    target : array-like of int, shape (n_detections,)
-        Instance id per detection, -1 for background.
-    t : array-like of float, shape (n_detections,)
-        Detection time, s.
-    window : float, default=0.15
-        Window length, s, > 0.
-    min_kept : float, default=0.75
-        Share of an object's detections per window that must be kept, in
-        [0, 1].
+    keep, target, t, window, min_kept
+        As in :func:`filter_error_windows`, for the part's rows (s).
     time_eps : float, default=None
         Tolerance, s, of placing times into windows, as in
         :func:`filter_grid_parts`.
@@ -401,16 +321,22 @@ def _check_sequences(parts):
         raise ValueError(f"parts: sequence(s) {repeated} lie in more than one part; split the data by sequence")
 
 
-def _sum_counts(parts):
-    return {
-        name: sum(getattr(part, name) for part in parts)
-        for name in ("errors", "removed_background", "removed_objects", "n_background", "n_objects")
-    }
+def _summed(parts):
+    """The parts' counts, summed; the removed shares as divisions of the sums."""
+    total = Bunch(
+        **{
+            name: sum(getattr(part, name) for part in parts)
+            for name in ("errors", "removed_background", "removed_objects", "n_background", "n_objects")
+        }
+    )
+    total.background_removed = _shares(total.removed_background, total.n_background)
+    total.objects_removed = _shares(total.removed_objects, total.n_objects)
+    return total
 
 
 @validate_params({"parts": [list, tuple]}, prefer_skip_nested_validation=True)
 def combine_filter_grid(parts) -> Bunch:
-    """Merge :func:`filter_grid_parts` of whole sequences into ``filter_grid``'s Bunch (Table I).
+    """Merge :func:`filter_grid_parts` of whole sequences into :func:`filter_grid`'s Bunch (Table I).
 
     Parameters
     ----------
@@ -421,12 +347,9 @@ def combine_filter_grid(parts) -> Bunch:
     Returns
     -------
     result : Bunch
-        Equal to :func:`~sklearn_radar.evaluation.filter_grid` of the
-        concatenated sequences: ``errors`` (int), ``background_removed``
-        and ``objects_removed`` (shares in [0, 1], the same divisions of the
-        same integer counts), ``frame``, ``n_background`` and
-        ``n_objects``.  ``elapsed_s`` is the sum of the parts' wall times,
-        s (their compute time, not the wall time of a whole-table run).
+        :func:`filter_grid` of the concatenated sequences.  ``elapsed_s``
+        is the sum of the parts' wall times, s (their compute time, not the
+        wall time of a whole-table run).
 
     Raises
     ------
@@ -437,14 +360,24 @@ def combine_filter_grid(parts) -> Bunch:
     """
     parts = _check_parts(parts, FilterGridPart, "filter_grid_parts")
     _check_sequences(parts)
-    first = parts[0]
-    counts = Bunch(vr_thresholds=first.vr_thresholds, d_xys=first.d_xys, **_sum_counts(parts))
-    return _grid_result(counts, first.frame, float(sum(part.elapsed_s for part in parts)))
+    options, total = parts[0].options, _summed(parts)
+    index = pd.Index(np.asarray(options.vr_thresholds), name="vr_threshold")
+    columns = pd.Index(np.asarray(options.d_xys), name="d_xy")
+    return Bunch(
+        **{
+            name: pd.DataFrame(total[name], index=index, columns=columns)
+            for name in ("errors", "background_removed", "objects_removed")
+        },
+        frame=options.frame,
+        n_background=total.n_background,
+        n_objects=total.n_objects,
+        elapsed_s=float(sum(part.elapsed_s for part in parts)),
+    )
 
 
 @validate_params({"parts": [list, tuple]}, prefer_skip_nested_validation=True)
 def combine_filter_settings_table(parts) -> pd.DataFrame:
-    """Merge :func:`filter_settings_table_parts` of whole sequences into ``filter_settings_table``'s table.
+    """Merge :func:`filter_settings_table_parts` of whole sequences into :func:`filter_settings_table`'s table.
 
     Parameters
     ----------
@@ -455,10 +388,7 @@ def combine_filter_settings_table(parts) -> pd.DataFrame:
     Returns
     -------
     table : DataFrame
-        Equal to :func:`~sklearn_radar.evaluation.filter_settings_table` of
-        the concatenated sequences: the settings' columns, then
-        ``removal_rate`` and ``object_removal_rate`` (percent) and
-        ``errors`` (int).
+        :func:`filter_settings_table` of the concatenated sequences.
 
     Raises
     ------
@@ -471,12 +401,17 @@ def combine_filter_settings_table(parts) -> pd.DataFrame:
         if not part.table.equals(table) or list(part.table.columns) != list(table.columns):
             raise ValueError("parts were computed with different settings tables")
     _check_sequences(parts)
-    return _settings_result(Bunch(table=table, **_sum_counts(parts)))
+    total = _summed(parts)
+    table = table.copy()
+    table["removal_rate"] = 100.0 * total.background_removed
+    table["object_removal_rate"] = 100.0 * total.objects_removed
+    table["errors"] = total.errors.astype(np.int64)
+    return table
 
 
 @validate_params({"parts": [list, tuple]}, prefer_skip_nested_validation=True)
 def combine_error_windows(parts) -> pd.DataFrame:
-    """Merge :func:`filter_error_windows_parts` into ``filter_error_windows``'s table.
+    """Merge :func:`filter_error_windows_parts` into :func:`filter_error_windows`'s table.
 
     The windows of an object lie in its part, so the whole table's rows are
     the parts' rows; the combination puts them in object order (the whole
@@ -491,9 +426,7 @@ def combine_error_windows(parts) -> pd.DataFrame:
     Returns
     -------
     windows : DataFrame
-        Equal to :func:`~sklearn_radar.evaluation.filter_error_windows` of
-        the concatenated rows: ``instance``, ``start_s`` (s), ``n``,
-        ``kept``, ``kept_share`` and ``error``.
+        :func:`filter_error_windows` of the concatenated rows.
 
     Raises
     ------
@@ -513,3 +446,198 @@ def combine_error_windows(parts) -> pd.DataFrame:
         )
     windows = pd.concat([part.windows for part in parts], ignore_index=True)
     return windows.sort_values("instance", kind="stable", ignore_index=True)
+
+
+# ----------------------------------------------------------------------------
+# The whole data set: one part, combined
+# ----------------------------------------------------------------------------
+@validate_params(_KEEP_CONSTRAINTS, prefer_skip_nested_validation=True)
+def filter_error_windows(keep, target, t, window=0.15, min_kept=0.75) -> pd.DataFrame:
+    """Per object and complete time window: detections, kept detections, error flag.
+
+    For each object (``target >= 0``) with first and last detection times
+    ``t0`` and ``t1``, the windows are ``[t0 + k window, t0 + (k + 1) window)``
+    for every ``k >= 0`` with ``t0 + (k + 1) window <= t1``: only complete
+    windows count, so an object present for less than ``window`` has none,
+    and detections after the last complete window are ignored.  A window
+    with ``n > 0`` detections of which ``kept`` survive the filter is an
+    *error* when ``kept / n < min_kept`` (the paper: 75 % within 150 ms).
+
+    Parameters
+    ----------
+    keep : array-like of bool, shape (n_detections,)
+        Filter output, False = removed.
+    target : array-like of int, shape (n_detections,)
+        Instance id per detection, -1 for background (ignored).  Ids must be
+        unique across sequences (as ``make_scenes(...).target`` is).
+    t : array-like of float, shape (n_detections,)
+        Detection time, s (the ``t`` column of
+        :class:`~sklearn_radar.FrameTransform`, i.e. ``timestamp * 1e-6``).
+    window : float, default=0.15
+        Window length, s, > 0.
+    min_kept : float, default=0.75
+        Smallest share of an object's detections in a window that must be
+        kept for the window not to be an error, in [0, 1].
+
+    Returns
+    -------
+    windows : DataFrame
+        One row per complete window that holds at least one detection of
+        its object (empty windows cannot be errors and are not listed),
+        sorted by ``instance`` and ``start_s``, with columns
+
+        ``instance`` (int), ``start_s`` (float, s: ``t0 + k window``),
+        ``n`` (int, detections), ``kept`` (int, detections kept),
+        ``kept_share`` (float, ``kept / n``), ``error`` (bool).
+
+    Notes
+    -----
+    Times are placed into windows with a tolerance of 1 ns (or a few
+    float64 spacings of the largest time, if coarser), so that a detection
+    meant to lie on a window edge (timestamps are integer µs) falls into the
+    window that starts there.  The work is a few sorts of
+    the object rows: no Python loop over objects or detections.
+
+    See Also
+    --------
+    filter_errors : the number of error windows.
+    """
+    return combine_error_windows([filter_error_windows_parts(keep, target, t, window, min_kept)])
+
+
+@validate_params(_KEEP_CONSTRAINTS, prefer_skip_nested_validation=True)
+def filter_errors(keep, target, t, window=0.15, min_kept=0.75) -> int:
+    """Number of (object, time window) cases in which an object lost too many detections.
+
+    The paper's optimisation criterion for the filter (Table I): the number
+    of times a labelled road user kept less than ``min_kept`` (75 %) of its
+    detections during a whole time window of ``window`` (150 ms).  Windows
+    are defined per object from its first detection on, and only complete
+    windows count; see :func:`filter_error_windows` for the exact rule and
+    for the windows themselves.
+
+    Parameters
+    ----------
+    keep, target, t, window, min_kept
+        As in :func:`filter_error_windows` (s).
+
+    Returns
+    -------
+    errors : int
+        ``filter_error_windows(...)["error"].sum()``.
+
+    Examples
+    --------
+    >>> from sklearn_radar.evaluation import filter_errors
+    >>> t = [0.00, 0.05, 0.10, 0.15, 0.20, 0.30]       # one object, s
+    >>> keep = [True, False, False, True, True, True]  # window [0, 0.15): 1 of 3 kept
+    >>> filter_errors(keep, [0] * 6, t)
+    1
+    """
+    return int(filter_error_windows(keep, target, t, window, min_kept)["error"].sum())
+
+
+@validate_params(_TABLE_CONSTRAINTS, prefer_skip_nested_validation=True)
+def filter_grid(X, target, options=None) -> Bunch:
+    """Enumerate the filter's two tuning parameters: the paper's Table I.
+
+    For every pair of Doppler threshold ``eta_1`` (``vr_threshold``) and
+    spatial radius ``d_xy`` of ``options`` this runs the filter of Eq. 1 and
+    measures the errors (:func:`filter_errors`) and the removal rates
+    (:func:`~sklearn_radar.evaluation.filter_removal_rates`).  The work is
+    shared: the frame transform runs once, the neighbour counts once per
+    ``d_xy`` (they do not depend on the Doppler threshold) and only Eq. 1
+    itself per cell.  The result is the combination of one part
+    (:func:`filter_grid_parts`), the whole data set.
+
+    Parameters
+    ----------
+    X : DataFrame
+        Raw detection table (:mod:`sklearn_radar._schema`), e.g.
+        ``make_scenes(...).data``; :class:`~sklearn_radar.FrameTransform`
+        is applied here.
+    target : array-like of int, shape (n_detections,)
+        Instance id per detection, -1 for background, unique across
+        sequences.
+    options : FilterEvaluationOptions, default=None
+        The grid's axes (m/s, m), the frame, Eq. 1's rule, the error window
+        (s) and the parallelism; None: the paper's (Table I).
+
+    Returns
+    -------
+    result : Bunch
+        ``errors`` : DataFrame of int
+            Error count per cell, index ``vr_threshold`` (m/s), columns
+            ``d_xy`` (m): Table I.
+        ``background_removed``, ``objects_removed`` : DataFrame of float
+            Shares in [0, 1] on the same grid.
+        ``frame`` : str
+            The coordinate system used, "frame" (FCS) or "car" (CCS).
+        ``n_background``, ``n_objects`` : int
+            Number of background and object rows.
+        ``elapsed_s`` : float
+            Wall time of the enumeration, s.
+
+    See Also
+    --------
+    filter_settings_table : Table II for chosen settings.
+    plot_filter_errors : heatmap of ``result.errors``.
+
+    Examples
+    --------
+    >>> from sklearn_radar.datasets import make_scenes
+    >>> from sklearn_radar.evaluation import FilterEvaluationOptions, filter_grid
+    >>> scenes = make_scenes(n_sequences=1, duration=3.0, random_state=0)
+    >>> options = FilterEvaluationOptions(vr_thresholds=(0.1, 0.2), d_xys=(1.0, 1.4))
+    >>> grid = filter_grid(scenes.data, scenes.target, options)
+    >>> grid.errors.shape
+    (2, 2)
+    """
+    return combine_filter_grid([filter_grid_parts(X, target, options)])
+
+
+@validate_params({"settings": [pd.DataFrame, None]} | _TABLE_CONSTRAINTS, prefer_skip_nested_validation=True)
+def filter_settings_table(X, target, settings=None, options=None) -> pd.DataFrame:
+    """Measure chosen filter settings beside the paper's numbers: Table II.
+
+    The result is the combination of one part
+    (:func:`filter_settings_table_parts`), the whole data set.
+
+    Parameters
+    ----------
+    X : DataFrame
+        Raw detection table; :class:`~sklearn_radar.FrameTransform` is
+        applied once per distinct frame.
+    target : array-like of int, shape (n_detections,)
+        Instance id per detection, -1 for background.
+    settings : DataFrame, default=None
+        One row per setting with the columns ``vr_threshold`` (m/s),
+        ``d_xy`` (m) and optionally ``frame`` ("frame" or "car";
+        ``options.frame`` where absent).  Other columns are carried
+        through.  None means :data:`PAPER_TABLE_II`.
+    options : FilterEvaluationOptions, default=None
+        Eq. 1's rule, the error window (s), the frame of the settings
+        without one and the parallelism (over distinct (frame, ``d_xy``)
+        pairs); its grid axes are not used.  None: the paper's.
+
+    Returns
+    -------
+    table : DataFrame
+        The columns of ``settings`` (for the default: ``frame``,
+        ``vr_threshold``, ``d_xy``, ``paper_removal_rate`` in percent,
+        ``paper_errors``) followed by the measured
+
+        ``removal_rate`` (float, percent of background detections removed),
+        ``object_removal_rate`` (float, percent of object detections
+        removed) and ``errors`` (int, :func:`filter_errors`).
+
+    Examples
+    --------
+    >>> from sklearn_radar.datasets import make_scenes
+    >>> from sklearn_radar.evaluation import filter_settings_table
+    >>> scenes = make_scenes(n_sequences=1, duration=3.0, random_state=0)
+    >>> table = filter_settings_table(scenes.data, scenes.target)
+    >>> list(table.columns)[-3:]
+    ['removal_rate', 'object_removal_rate', 'errors']
+    """
+    return combine_filter_settings_table([filter_settings_table_parts(X, target, settings, options)])

@@ -17,6 +17,7 @@ import pandas as pd
 from sklearn.pipeline import Pipeline
 from sklearn.utils._param_validation import HasMethods, Interval, validate_params
 
+from .._schema import FRAME_TRANSFORM_READS
 from .._skopt import Integer, Real
 
 __all__ = [
@@ -34,28 +35,15 @@ __all__ = [
 #: eps_t of every stage-1 experiment (Table III caption), s.
 EPS_T = 0.25
 
-#: The detection-table columns that the experiment pipelines read (those of
-#: :class:`~sklearn_radar.FrameTransform`; ``azimuth_sc`` and ``sensor_yaw``
-#: also serve the velocity estimate of stage 2).  With ``memory=``, pass
-#: ``X[list(PIPELINE_COLUMNS)]``: joblib hashes the whole input on every
-#: call, and the string columns ``uuid`` and ``track_id`` make hashing
-#: 250,000 detections take about 1 s (0.03 s for these columns), more than
-#: the frame transform and the filter take (about 0.2 s), measured.
-PIPELINE_COLUMNS = (
-    "range_sc",
-    "azimuth_sc",
-    "vr",
-    "timestamp",
-    "sensor_x",
-    "sensor_y",
-    "sensor_yaw",
-    "ego_x_seq",
-    "ego_y_seq",
-    "ego_yaw_seq",
-    "ego_vx",
-    "ego_yaw_rate",
-    "sequence",
-)
+#: The detection-table columns that the experiment pipelines read: those that
+#: :class:`~sklearn_radar.FrameTransform` reads, as the schema lists them
+#: (``azimuth_sc`` and ``sensor_yaw`` also serve the velocity estimate of
+#: stage 2).  With ``memory=``, pass ``X[list(PIPELINE_COLUMNS)]``: joblib
+#: hashes the whole input on every call, and the string columns ``uuid`` and
+#: ``track_id`` make hashing 250,000 detections take about 1 s (0.03 s for
+#: these columns), more than the frame transform and the filter take (about
+#: 0.2 s), measured.
+PIPELINE_COLUMNS = FRAME_TRANSFORM_READS.names
 
 
 @dataclass(frozen=True)

@@ -6,11 +6,9 @@ segment is one cluster's.  Background (``labels_true == -1``) belongs to no
 ground-truth segment, noise (``labels_pred == -1``) to no predicted segment.
 Segments of different frames or sequences are never compared.
 
-Everything is computed once, vectorised, by :func:`_segment_scores`: the
-(sequence, frame, label) triples are encoded as integer segment ids, the
-intersections are the counts of the (ground-truth id, predicted id) pairs of
-the detections that belong to both kinds of segment, and
-``IoU = |g ∩ p| / (|g| + |p| - |g ∩ p|)``.  No Python loop runs over segments.
+Every score is a ratio of sums and counts over segments, which add up over sequences: each
+function here is the combination (:func:`~sklearn_radar.metrics._parts.combine_instance_parts`) of one part
+(:func:`~sklearn_radar.metrics._parts.instance_parts`), the whole labelling.
 """
 
 from __future__ import annotations
@@ -19,9 +17,11 @@ import warnings
 from numbers import Real
 
 import numpy as np
-import pandas as pd
 from sklearn.utils import Bunch
 from sklearn.utils._param_validation import HasMethods, Interval, StrOptions, validate_params
+
+from ._parts import combine_instance_parts, instance_parts
+from ._segments import _times_and_groups
 
 __all__ = [
     "background_share",
@@ -32,25 +32,11 @@ __all__ = [
     "panoptic_quality_scorer",
 ]
 
-#: Keys of :func:`panoptic_quality`, :func:`instance_coverage` and :func:`background_share`; their union is the
-#: Bunch of :func:`instance_scores`.
+#: Keys of :func:`panoptic_quality`, :func:`instance_coverage` and :func:`background_share`, parts of the Bunch of
+#: :func:`instance_scores`.
 _PQ_KEYS = ("pq", "sq", "rq", "precision", "recall", "tp", "fp", "fn")
 _COVERAGE_KEYS = ("mcov", "mwcov")
 _BACKGROUND_KEYS = ("background_segment_share", "background_cluster_share")
-#: The sums and counts of which every score of :func:`instance_scores` is a ratio (:func:`_scores_from_counts`).
-_COUNT_KEYS = (
-    "tp",
-    "fp",
-    "fn",
-    "iou_sum",
-    "cover_sum",
-    "weighted_cover_sum",
-    "n_object_detections",
-    "n_background_segments",
-    "n_clusters",
-    "n_background_clusters",
-)
-
 #: Scorer metric -> (key of instance_scores, sign).  Searches maximise, so the shares (lower is better) are negated.
 _SCORER_METRICS = {
     "pq": ("pq", 1.0),
@@ -74,181 +60,14 @@ _CONSTRAINTS = {
 }
 
 
-def _codes(values):
-    """Integer codes 0, 1, ... of the distinct values (hash-based, order of first appearance) and their number."""
-    codes, uniques = pd.factorize(values, use_na_sentinel=False)
-    return codes.astype(np.int64, copy=False), len(uniques)
-
-
-def _joint_codes(a, n_a, b, n_b):
-    """Compact codes of the pairs (a, b), for codes ``0 <= a < n_a`` and ``0 <= b < n_b``."""
-    if n_a * n_b < 2**62:  # Python integers: no overflow in the test itself
-        return _codes(a * np.int64(n_b) + b)
-    _, inverse = np.unique(np.stack([a, b], axis=1), axis=0, return_inverse=True)
-    inverse = inverse.ravel().astype(np.int64)
-    return inverse, int(inverse.max()) + 1
-
-
-def _ratio(numerator, denominator):
-    """``numerator / denominator`` as a float, 0.0 when the denominator is 0."""
-    return float(numerator / denominator) if denominator else 0.0
-
-
-def _segment_scores(labels_true, labels_pred, *, times=None, groups=None, frame=0.5):
-    """Every score of :func:`instance_scores` and the counts of :data:`_COUNT_KEYS`, in one pass, without validation."""
-    labels_true = np.asarray(labels_true)
-    labels_pred = np.asarray(labels_pred)
-    n = labels_true.shape[0] if labels_true.ndim == 1 else -1
-    arrays = {"labels_true": labels_true, "labels_pred": labels_pred}
-    if groups is not None:
-        arrays["groups"] = groups = np.asarray(groups)
-    if times is not None:
-        arrays["times"] = times = np.asarray(times, dtype=np.float64)
-    for array in arrays.values():
-        if array.ndim != 1 or array.shape[0] != n:
-            shapes = {key: value.shape for key, value in arrays.items()}
-            raise ValueError(f"{', '.join(arrays)} must be 1-D of equal length, got shapes {shapes}")
-
-    # Sequence, then (sequence, frame) of every detection.
-    seq, n_seq = _codes(groups) if groups is not None else (np.zeros(n, dtype=np.int64), 1 if n else 0)
-    if times is not None and frame is not None:
-        if not np.isfinite(times).all():
-            raise ValueError("times must be finite")
-        start = np.full(n_seq, np.inf)
-        np.minimum.at(start, seq, times)
-        frame_index, n_frame = _codes(np.floor((times - start[seq]) / frame))
-        cell, n_cell = _joint_codes(seq, n_seq, frame_index, n_frame)
-    else:  # one frame per sequence
-        cell, n_cell = seq, n_seq
-
-    # Segment ids: (sequence, frame, label) -> 0 .. n_segments - 1; -1 for background and noise.
-    is_object = labels_true != -1
-    is_cluster = labels_pred != -1
-    true_seg = np.full(n, -1, dtype=np.int64)
-    pred_seg = np.full(n, -1, dtype=np.int64)
-    true_seg[is_object], n_true = _joint_codes(cell[is_object], n_cell, *_codes(labels_true[is_object]))
-    pred_seg[is_cluster], n_pred = _joint_codes(cell[is_cluster], n_cell, *_codes(labels_pred[is_cluster]))
-    true_size = np.bincount(true_seg[is_object], minlength=n_true)
-    pred_size = np.bincount(pred_seg[is_cluster], minlength=n_pred)
-
-    # Intersections: the distinct (ground-truth segment, predicted segment) pairs and their counts.
-    both = is_object & is_cluster
-    pair_code, n_pairs = _joint_codes(true_seg[both], n_true, pred_seg[both], n_pred)
-    inter = np.bincount(pair_code, minlength=n_pairs)
-    first = np.zeros(n_pairs, dtype=np.int64)
-    first[pair_code[::-1]] = np.flatnonzero(both)[::-1]  # one row of each pair (which one does not matter)
-    pair_true, pair_pred = true_seg[first], pred_seg[first]
-    union = true_size[pair_true] + pred_size[pair_pred] - inter
-    iou = inter / np.maximum(union, 1)
-
-    # Panoptic quality: IoU > 0.5, i.e. 2 |g ∩ p| > |g ∪ p| in integers, makes every match unique.
-    matched = 2 * inter > union
-    tp = int(matched.sum())
-
-    # Coverage: best IoU of each ground-truth segment with any predicted segment (0 when none overlaps).
-    cover = np.zeros(n_true)
-    np.maximum.at(cover, pair_true, iou)
-
-    # Background-only predicted segments (per frame) and clusters (per sequence).
-    pred_has_object = np.bincount(pair_pred, minlength=n_pred) > 0
-    cluster, n_clusters = _joint_codes(seq[is_cluster], n_seq, *_codes(labels_pred[is_cluster]))
-    cluster_has_object = np.bincount(cluster[is_object[is_cluster]], minlength=n_clusters) > 0
-
-    return _scores_from_counts(
-        tp=tp,
-        fp=int(n_pred - tp),
-        fn=int(n_true - tp),
-        iou_sum=float(iou[matched].sum()),
-        cover_sum=float(cover.sum()),
-        weighted_cover_sum=float(true_size @ cover),
-        n_object_detections=int(true_size.sum()),
-        n_background_segments=int(n_pred - pred_has_object.sum()),
-        n_clusters=int(n_clusters),
-        n_background_clusters=int(n_clusters - cluster_has_object.sum()),
-    )
-
-
-def _scores_from_counts(
-    *,
-    tp,
-    fp,
-    fn,
-    iou_sum,
-    cover_sum,
-    weighted_cover_sum,
-    n_object_detections,
-    n_background_segments,
-    n_clusters,
-    n_background_clusters,
-):
-    """Every score of :func:`instance_scores` from the sums and counts it is made of; they add up over sequences.
-
-    The one place the ratios are formed: :func:`_segment_scores` and the
-    merge of per-sequence summaries (:mod:`sklearn_radar.metrics._parts`)
-    both end here, so they agree to rounding.  The arguments (the keys of
-    :data:`_COUNT_KEYS`) are returned too, beside the scores, for the
-    summaries; :func:`instance_scores` leaves them out.
-
-    Parameters
-    ----------
-    tp, fp, fn : int
-        Matched pairs, unmatched predicted and unmatched ground-truth
-        segments (per time frame), as in :func:`panoptic_quality`.
-    iou_sum : float
-        Sum of the IoUs of the matched pairs, in [0, tp].
-    cover_sum : float
-        Sum of the coverages of the ``tp + fn`` ground-truth segments.
-    weighted_cover_sum : float
-        Sum of the coverages, each times its segment's number of detections.
-    n_object_detections : int
-        Detections of annotated objects, the sum of the ground-truth
-        segments' sizes.
-    n_background_segments : int
-        Predicted segments (of the ``tp + fp``) without an object detection.
-    n_clusters, n_background_clusters : int
-        Clusters, per sequence, and those without an object detection.
-
-    Returns
-    -------
-    scores : Bunch
-        The keys of :func:`instance_scores`, then those of :data:`_COUNT_KEYS`
-        that it lacks.
-    """
-    n_true, n_pred = tp + fn, tp + fp
-    sq = _ratio(iou_sum, tp)
-    rq = _ratio(tp, tp + 0.5 * fp + 0.5 * fn)
-    return Bunch(
-        pq=sq * rq,
-        sq=sq,
-        rq=rq,
-        precision=_ratio(tp, n_pred),
-        recall=_ratio(tp, n_true),
-        tp=tp,
-        fp=fp,
-        fn=fn,
-        mcov=_ratio(cover_sum, n_true),
-        mwcov=_ratio(weighted_cover_sum, n_object_detections),
-        background_segment_share=_ratio(n_background_segments, n_pred),
-        background_cluster_share=_ratio(n_background_clusters, n_clusters),
-        # Additive over sequences (sklearn_radar.metrics._parts); not in instance_scores.
-        iou_sum=iou_sum,
-        cover_sum=cover_sum,
-        weighted_cover_sum=weighted_cover_sum,
-        n_object_detections=n_object_detections,
-        n_background_segments=n_background_segments,
-        n_clusters=n_clusters,
-        n_background_clusters=n_background_clusters,
-    )
-
-
 @validate_params(_CONSTRAINTS, prefer_skip_nested_validation=True)
 def instance_scores(labels_true, labels_pred, *, times, groups=None, frame=0.5):
     """Panoptic quality, coverage and background shares at once, from one segmentation of the detections.
 
-    Equal to the union of :func:`panoptic_quality`, :func:`instance_coverage`
-    and :func:`background_share` (see them for the formulas), but segments
-    the detections once: the choice for a report that shows them side by
-    side.
+    The union of :func:`panoptic_quality`, :func:`instance_coverage` and
+    :func:`background_share` (see them for the formulas), which are parts of
+    it; it segments the detections once: the choice for a report that shows
+    them side by side.
 
     Parameters
     ----------
@@ -291,8 +110,8 @@ def instance_scores(labels_true, labels_pred, *, times, groups=None, frame=0.5):
     >>> round(scores.pq, 6), scores.mcov, scores.background_cluster_share
     (0.666667, 1.0, 0.5)
     """
-    scores = _segment_scores(labels_true, labels_pred, times=times, groups=groups, frame=frame)
-    return Bunch(**{key: scores[key] for key in _PQ_KEYS + _COVERAGE_KEYS + _BACKGROUND_KEYS})
+    # The whole labelling as one part: one implementation of the scores for it and for merged parts.
+    return combine_instance_parts([instance_parts(labels_true, labels_pred, times=times, groups=groups, frame=frame)])
 
 
 @validate_params(_CONSTRAINTS, prefer_skip_nested_validation=True)
@@ -320,22 +139,9 @@ def panoptic_quality(labels_true, labels_pred, *, times, groups=None, frame=0.5)
 
     Parameters
     ----------
-    labels_true : array-like of shape (n_detections,)
-        Ground-truth instance per detection, -1 for background.
-    labels_pred : array-like of shape (n_detections,)
-        Predicted cluster per detection, -1 for noise.
-    times : array-like of shape (n_detections,) or None
-        Time of each detection in s (e.g. ``timestamp * 1e-6``).  None, or
-        ``frame=None``: every sequence is one frame.
-    groups : array-like of shape (n_detections,), default=None
-        Sequence of each detection: equal labels in different sequences are
-        different segments, and frames start at each sequence's first
-        detection.  None: one sequence.
-    frame : float or None, default=0.5
-        Length of a time frame in s, > 0; detection ``i`` of sequence ``s``
-        lies in frame ``floor((times[i] - min(times of s)) / frame)``.  The
-        default, 500 ms, is the frame of Scheiner et al. (2021).  None: one
-        frame per sequence ("per sequence" evaluation).
+    labels_true, labels_pred, times, groups, frame
+        As in :func:`instance_scores`: ground truth (-1 background),
+        clusters (-1 noise), times (s), sequences and frame length (s).
 
     Returns
     -------
@@ -343,14 +149,9 @@ def panoptic_quality(labels_true, labels_pred, *, times, groups=None, frame=0.5)
         ``pq``, ``sq``, ``rq``, ``precision``, ``recall`` (floats in
         [0, 1]) and the counts ``tp``, ``fp``, ``fn`` (ints).
 
-    Raises
-    ------
-    ValueError
-        If the arrays are not 1-D of equal length or a time is not finite.
-
     See Also
     --------
-    instance_scores : all object-level scores at once.
+    instance_scores : all object-level scores at once, and the errors it raises.
     panoptic_quality_scorer : PQ as a scorer for parameter searches.
 
     References
@@ -369,7 +170,7 @@ def panoptic_quality(labels_true, labels_pred, *, times, groups=None, frame=0.5)
     >>> round(scores.pq, 6), scores.tp, scores.fp, scores.fn
     (0.6, 1, 0, 0)
     """
-    scores = _segment_scores(labels_true, labels_pred, times=times, groups=groups, frame=frame)
+    scores = instance_scores(labels_true, labels_pred, times=times, groups=groups, frame=frame)
     return Bunch(**{key: scores[key] for key in _PQ_KEYS})
 
 
@@ -391,36 +192,18 @@ def instance_coverage(labels_true, labels_pred, *, times, groups=None, frame=0.5
 
     Parameters
     ----------
-    labels_true : array-like of shape (n_detections,)
-        Ground-truth instance per detection, -1 for background.
-    labels_pred : array-like of shape (n_detections,)
-        Predicted cluster per detection, -1 for noise.
-    times : array-like of shape (n_detections,) or None
-        Time of each detection in s (e.g. ``timestamp * 1e-6``).  None, or
-        ``frame=None``: every sequence is one frame.
-    groups : array-like of shape (n_detections,), default=None
-        Sequence of each detection: equal labels in different sequences are
-        different segments, and frames start at each sequence's first
-        detection.  None: one sequence.
-    frame : float or None, default=0.5
-        Length of a time frame in s, > 0; detection ``i`` of sequence ``s``
-        lies in frame ``floor((times[i] - min(times of s)) / frame)``.  The
-        default, 500 ms, is the frame of Scheiner et al. (2021).  None: one
-        frame per sequence ("per sequence" evaluation).
+    labels_true, labels_pred, times, groups, frame
+        As in :func:`instance_scores`: ground truth (-1 background),
+        clusters (-1 noise), times (s), sequences and frame length (s).
 
     Returns
     -------
     scores : Bunch
         ``mcov`` and ``mwcov``, floats in [0, 1].
 
-    Raises
-    ------
-    ValueError
-        If the arrays are not 1-D of equal length or a time is not finite.
-
     See Also
     --------
-    instance_scores : all object-level scores at once.
+    instance_scores : all object-level scores at once, and the errors it raises.
 
     References
     ----------
@@ -436,7 +219,7 @@ def instance_coverage(labels_true, labels_pred, *, times, groups=None, frame=0.5
     >>> float(scores.mcov), float(scores.mwcov)
     (0.75, 0.6666666666666666)
     """
-    scores = _segment_scores(labels_true, labels_pred, times=times, groups=groups, frame=frame)
+    scores = instance_scores(labels_true, labels_pred, times=times, groups=groups, frame=frame)
     return Bunch(**{key: scores[key] for key in _COVERAGE_KEYS})
 
 
@@ -453,22 +236,10 @@ def background_share(labels_true, labels_pred, *, times=None, groups=None, frame
 
     Parameters
     ----------
-    labels_true : array-like of shape (n_detections,)
-        Ground-truth instance per detection, -1 for background.
-    labels_pred : array-like of shape (n_detections,)
-        Predicted cluster per detection, -1 for noise.
-    times : array-like of shape (n_detections,), default=None
-        Time of each detection in s (e.g. ``timestamp * 1e-6``).  None, or
-        ``frame=None``: every sequence is one frame.
-    groups : array-like of shape (n_detections,), default=None
-        Sequence of each detection: equal labels in different sequences are
-        different segments, and frames start at each sequence's first
-        detection.  None: one sequence.
-    frame : float or None, default=0.5
-        Length of a time frame in s, > 0; detection ``i`` of sequence ``s``
-        lies in frame ``floor((times[i] - min(times of s)) / frame)``.  The
-        default, 500 ms, is the frame of Scheiner et al. (2021).  None: one
-        frame per sequence ("per sequence" evaluation).
+    labels_true, labels_pred, times, groups, frame
+        As in :func:`instance_scores`: ground truth (-1 background),
+        clusters (-1 noise), times (s), sequences and frame length (s);
+        here ``times`` may be left out (None: every sequence is one frame).
 
     Returns
     -------
@@ -477,14 +248,9 @@ def background_share(labels_true, labels_pred, *, times=None, groups=None, frame
         when ``times`` or ``frame`` is None) and
         ``background_cluster_share`` (per sequence), floats in [0, 1].
 
-    Raises
-    ------
-    ValueError
-        If the arrays are not 1-D of equal length or a time is not finite.
-
     See Also
     --------
-    instance_scores : all object-level scores at once.
+    instance_scores : all object-level scores at once, and the errors it raises.
 
     Examples
     --------
@@ -494,25 +260,8 @@ def background_share(labels_true, labels_pred, *, times=None, groups=None, frame
     >>> scores.background_cluster_share
     0.5
     """
-    scores = _segment_scores(labels_true, labels_pred, times=times, groups=groups, frame=frame)
+    scores = instance_scores(labels_true, labels_pred, times=times, groups=groups, frame=frame)
     return Bunch(**{key: scores[key] for key in _BACKGROUND_KEYS})
-
-
-def _times_and_groups(X, frame):
-    """Times in s and sequences of the detection table X, for the scorers."""
-    columns = getattr(X, "columns", ())
-    groups = X["sequence"].to_numpy() if "sequence" in columns else None
-    if frame is None:
-        return None, groups
-    if "t" in columns:
-        return X["t"].to_numpy(dtype=np.float64), groups
-    if "timestamp" in columns:
-        stamps = X["timestamp"].to_numpy()
-        return (stamps - stamps.min()) * 1e-6 if len(stamps) else stamps.astype(np.float64), groups
-    raise ValueError(
-        "per-frame instance scores need the time of each detection: X must be a DataFrame with a 't' (s) or "
-        "'timestamp' (µs) column, or use frame=None"
-    )
 
 
 def _instance_score(estimator, X, y, metric, frame):
@@ -523,7 +272,10 @@ def _instance_score(estimator, X, y, metric, frame):
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             labels = estimator.fit_predict(X)
-        score = sign * _segment_scores(np.asarray(y), np.asarray(labels), times=times, groups=groups, frame=frame)[key]
+        scores = combine_instance_parts(
+            [instance_parts(np.asarray(y), np.asarray(labels), times=times, groups=groups, frame=frame)]
+        )
+        score = sign * scores[key]
     except Exception:  # a search must go on; error_score=0 documents the same choice
         return min(0.0, sign)
     return float(score) if np.isfinite(score) else min(0.0, sign)
@@ -552,15 +304,9 @@ class _InstanceScorer:
 def panoptic_quality_scorer(estimator, X, y):
     """Scorer for every scikit-learn search: ``fit_predict`` on X, panoptic quality per 0.5 s frame against y.
 
-    Clusterers have no out-of-sample ``predict``, so the estimator is fitted
-    on the data it is scored on, as by
-    :func:`~sklearn_radar.metrics.radar_v_measure_scorer`.  X is the
-    detection table: the times come from its ``t`` column (s) or else from
-    ``timestamp`` (µs), the sequences from ``sequence`` when it has one.
-    Once its arguments are valid and X has the time column it needs, it
-    never raises and never returns NaN: a failing fit scores the worst value
-    (0.0; -1.0 for a negated share), a degenerate labelling what the
-    function gives it (0.0 for a ratio 0/0).
+    The scorer of ``make_instance_scorer("pq", frame=0.5)``: see
+    :func:`make_instance_scorer` for how it fits the estimator, reads the
+    times and sequences of X and scores a failing fit (0.0).
 
     Parameters
     ----------

@@ -37,18 +37,14 @@ from math import log
 import numpy as np
 import scipy.sparse as sp
 from sklearn.metrics import mutual_info_score
-from sklearn.utils import Bunch
 
-from ._instance import (
-    _BACKGROUND_KEYS,
-    _COUNT_KEYS,
-    _COVERAGE_KEYS,
-    _PQ_KEYS,
+from ._segments import (
+    COUNT_KEYS,
     _codes,
     _joint_codes,
-    _ratio,
+    _panoptic,
     _scores_from_counts,
-    _segment_scores,
+    _segment_counts,
     _times_and_groups,
 )
 from ._v_measure import _unique_per_group
@@ -127,11 +123,8 @@ class InstanceParts(PanopticParts):
 
     Attributes
     ----------
-    tp, fp, fn : int
-        Matched pairs, unmatched predicted and unmatched ground-truth
-        segments (per time frame) of :func:`~sklearn_radar.metrics.panoptic_quality`.
-    iou_sum : float
-        Sum of the IoUs of the matched pairs, in [0, tp].
+    tp, fp, fn, iou_sum
+        As in :class:`PanopticParts`.
     cover_sum : float
         Sum of the coverages (best IoU with any predicted segment) of the
         ``tp + fn`` ground-truth segments, in [0, tp + fn].
@@ -158,7 +151,7 @@ class InstanceParts(PanopticParts):
     @property
     def size(self):
         """Number of values the part holds (10)."""
-        return len(_COUNT_KEYS)
+        return len(COUNT_KEYS)
 
 
 @dataclass(frozen=True)
@@ -231,8 +224,8 @@ def score_parts(objective, labels_true, labels_pred, times=None, *, groups=None,
     """
     _check_objective(objective)
     if objective == "pq":
-        scores = _segment_scores(labels_true, labels_pred, times=times, groups=groups, frame=frame)
-        return PanopticParts(tp=scores.tp, fp=scores.fp, fn=scores.fn, iou_sum=scores.iou_sum)
+        counts = _segment_counts(labels_true, labels_pred, times=times, groups=groups, frame=frame)
+        return PanopticParts(**{key: counts[key] for key in ("tp", "fp", "fn", "iou_sum")})
 
     labels_true = np.asarray(labels_true)
     labels_pred = np.asarray(labels_pred)
@@ -316,7 +309,7 @@ def _combine_panoptic(parts):
     fp = sum(part.fp for part in parts)
     fn = sum(part.fn for part in parts)
     iou_sum = float(sum(part.iou_sum for part in parts))
-    return _ratio(iou_sum, tp) * _ratio(tp, tp + 0.5 * fp + 0.5 * fn)
+    return _panoptic(tp, fp, fn, iou_sum)[0]
 
 
 def combine_parts(objective, parts, *, beta=1.0):
@@ -430,21 +423,10 @@ def instance_parts(labels_true, labels_pred, *, times, frame=0.5, groups=None):
 
     Parameters
     ----------
-    labels_true : array-like of shape (n_detections,)
-        Ground-truth instance per detection, -1 for background.
-    labels_pred : array-like of shape (n_detections,)
-        Predicted cluster per detection, -1 for noise.
-    times : array-like of shape (n_detections,) or None
-        Time of each detection in s; frames are counted from the sequence's
-        first detection, ``floor((times - min(times)) / frame)``.  None: the
-        sequence is one frame.
-    frame : float or None, default=0.5
-        Length of a time frame in s, > 0 (500 ms: Scheiner et al. 2021);
-        None: one frame per sequence.
-    groups : array-like of shape (n_detections,), default=None
-        Sequence of each detection, when the labelling covers several
-        sequences: the part then equals the merge of their parts.  None: one
-        sequence.
+    labels_true, labels_pred, times, frame, groups
+        As in :func:`~sklearn_radar.metrics.instance_scores`, for one
+        sequence; with ``groups``, for several, and the part then equals the
+        merge of their parts.
 
     Returns
     -------
@@ -460,8 +442,7 @@ def instance_parts(labels_true, labels_pred, *, times, frame=0.5, groups=None):
     """
     if frame is not None and not frame > 0:
         raise ValueError(f"frame must be > 0 s or None, got {frame!r}")
-    scores = _segment_scores(labels_true, labels_pred, times=times, groups=groups, frame=frame)
-    return InstanceParts(**{key: scores[key] for key in _COUNT_KEYS})
+    return InstanceParts(**_segment_counts(labels_true, labels_pred, times=times, groups=groups, frame=frame))
 
 
 def combine_instance_parts(parts):
@@ -500,15 +481,14 @@ def combine_instance_parts(parts):
         If a part is not an :class:`InstanceParts` (e.g. a
         :class:`FailedPart`, whose error it names).
     """
-    totals = dict.fromkeys(_COUNT_KEYS, 0)
+    totals = dict.fromkeys(COUNT_KEYS, 0)
     for part in parts:
         if not isinstance(part, InstanceParts):
             detail = f": {part.error}" if isinstance(part, FailedPart) else ""
             raise ValueError(f"parts must be InstanceParts, got {type(part).__name__}{detail}")
-        for key in _COUNT_KEYS:
+        for key in COUNT_KEYS:
             totals[key] += getattr(part, key)
     totals["iou_sum"] = float(totals["iou_sum"])
     totals["cover_sum"] = float(totals["cover_sum"])
     totals["weighted_cover_sum"] = float(totals["weighted_cover_sum"])
-    scores = _scores_from_counts(**totals)
-    return Bunch(**{key: scores[key] for key in _PQ_KEYS + _COVERAGE_KEYS + _BACKGROUND_KEYS})
+    return _scores_from_counts(**totals)

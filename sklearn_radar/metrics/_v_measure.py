@@ -82,11 +82,6 @@ def radar_homogeneity_completeness_v_measure(labels_true, labels_pred, *, groups
     >>> radar_homogeneity_completeness_v_measure([0, 0, 1, 1], [0, 0, 0, 0])
     (0.0, 1.0, 0.0)
     """
-    return _radar_homogeneity_completeness_v_measure(labels_true, labels_pred, groups=groups, beta=beta)
-
-
-def _radar_homogeneity_completeness_v_measure(labels_true, labels_pred, *, groups=None, beta=1.0):
-    """:func:`radar_homogeneity_completeness_v_measure` without its parameter validation."""
     labels_true = _unique_per_group(labels_true, groups)
     labels_pred = _unique_per_group(labels_pred, groups)
     if labels_true.shape != labels_pred.shape or labels_true.ndim != 1:
@@ -115,15 +110,8 @@ def radar_v_measure(labels_true, labels_pred, *, groups=None, beta=1.0):
 
     Parameters
     ----------
-    labels_true : array-like of shape (n_detections,)
-        Ground-truth instance per detection, -1 for background.
-    labels_pred : array-like of shape (n_detections,)
-        Predicted cluster per detection, -1 for noise.
-    groups : array-like of shape (n_detections,), default=None
-        Sequence of each detection: equal ids in different sequences are
-        different clusters (and instances).
-    beta : float, default=1.0
-        Weight of homogeneity in the V-measure, >= 0, as in scikit-learn.
+    labels_true, labels_pred, groups, beta
+        As in :func:`radar_homogeneity_completeness_v_measure`.
 
     Returns
     -------
@@ -141,12 +129,7 @@ def radar_v_measure(labels_true, labels_pred, *, groups=None, beta=1.0):
     >>> round(radar_v_measure([0, 0, -1, -1], [5, 5, 7, 8]), 6)  # clustered background costs nothing
     1.0
     """
-    return _radar_v_measure(labels_true, labels_pred, groups=groups, beta=beta)
-
-
-def _radar_v_measure(labels_true, labels_pred, *, groups=None, beta=1.0):
-    """:func:`radar_v_measure` without its parameter validation, for the scorer called once per fold."""
-    return _radar_homogeneity_completeness_v_measure(labels_true, labels_pred, groups=groups, beta=beta)[2]
+    return radar_homogeneity_completeness_v_measure(labels_true, labels_pred, groups=groups, beta=beta)[2]
 
 
 # Not skipping nested validation: the scorer fits ``estimator``, whose parameters
@@ -198,7 +181,7 @@ def radar_v_measure_scorer(estimator, X, y):
             warnings.simplefilter("ignore")
             labels = estimator.fit_predict(X)
         groups = X["sequence"].to_numpy() if hasattr(X, "columns") and "sequence" in X.columns else None
-        score = _radar_v_measure(np.asarray(y), labels, groups=groups)
+        score = radar_v_measure(np.asarray(y), labels, groups=groups)
     except Exception:  # a search must go on; error_score=0 documents the same choice
         return 0.0
     return float(score) if np.isfinite(score) else 0.0

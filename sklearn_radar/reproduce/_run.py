@@ -52,6 +52,7 @@ from .._skopt import Integer, Real
 from ..cluster import SequenceDBSCAN, SequenceHDBSCAN, WindowedDBSCAN, WindowedHDBSCAN
 from ..datasets import format_statistics
 from ..datasets._statistics import combine_statistics, statistics_parts
+from ..evaluation import FilterEvaluationOptions
 from ..evaluation._filter_parts import (
     combine_error_windows,
     combine_filter_grid,
@@ -644,8 +645,11 @@ def _filter_parts(sequence, n_jobs=None):
     """One sequence's share of the filter evaluation: Table I per frame, Table II, the error windows."""
     data, target = sequence.scenes.data, sequence.scenes.target
     return {
-        "grids": {frame: filter_grid_parts(data, target, frame=frame, n_jobs=n_jobs, verbose=0) for frame in FRAMES},
-        "table_ii": filter_settings_table_parts(data, target, n_jobs=n_jobs),
+        "grids": {
+            frame: filter_grid_parts(data, target, FilterEvaluationOptions(frame=frame, n_jobs=n_jobs))
+            for frame in FRAMES
+        },
+        "table_ii": filter_settings_table_parts(data, target, options=FilterEvaluationOptions(n_jobs=n_jobs)),
         "windows": _sequence_error_windows(sequence),
     }
 

@@ -13,6 +13,7 @@ from sklearn_radar import DopplerDensityFilter, FrameTransform
 from sklearn_radar.datasets import make_scenes
 from sklearn_radar.evaluation import (
     PAPER_TABLE_II,
+    FilterEvaluationOptions,
     filter_error_windows,
     filter_errors,
     filter_grid,
@@ -23,6 +24,10 @@ from sklearn_radar.evaluation import (
 
 VR_SUBSET = (0.05, 0.10, 0.35)
 D_SUBSET = (0.8, 1.4, 2.0)
+
+
+def _options(vr_thresholds=VR_SUBSET, d_xys=D_SUBSET, **options):
+    return FilterEvaluationOptions(vr_thresholds=vr_thresholds, d_xys=d_xys, **options)
 
 
 # ----------------------------------------------------------------------------
@@ -158,8 +163,7 @@ def scenes():
 @pytest.fixture(scope="module")
 def grids(scenes):
     return {
-        frame: filter_grid(scenes.data, scenes.target, VR_SUBSET, D_SUBSET, frame=frame, n_jobs=1)
-        for frame in ("frame", "car")
+        frame: filter_grid(scenes.data, scenes.target, _options(frame=frame, n_jobs=1)) for frame in ("frame", "car")
     }
 
 
@@ -209,19 +213,19 @@ def test_errors_monotone_in_vr_threshold(scenes, grids, frame):
 
 
 def test_grid_parallel_equals_serial(scenes, grids):
-    parallel = filter_grid(scenes.data, scenes.target, VR_SUBSET, D_SUBSET, frame="car", n_jobs=2)
+    parallel = filter_grid(scenes.data, scenes.target, _options(frame="car", n_jobs=2))
     for name in ("errors", "background_removed", "objects_removed"):
         pd.testing.assert_frame_equal(parallel[name], grids["car"][name])
 
 
 def test_grid_verbose_prints_progress(scenes, capsys):
-    filter_grid(scenes.data, scenes.target, (0.1,), (0.8, 1.4), frame="car", verbose=1)
+    filter_grid(scenes.data, scenes.target, _options((0.1,), (0.8, 1.4), frame="car", verbose=1))
     lines = capsys.readouterr().out.strip().splitlines()
     assert len(lines) == 2
     assert all(line.startswith("filter grid [car] d_xy=") for line in lines)
     assert any("d_xy=1.40 m" in line for line in lines)
     assert lines[-1].endswith("2/2 done")
-    filter_grid(scenes.data, scenes.target, (0.1,), (0.8,), frame="car", verbose=0)
+    filter_grid(scenes.data, scenes.target, _options((0.1,), (0.8,), frame="car", verbose=0))
     assert capsys.readouterr().out == ""
 
 
@@ -230,10 +234,40 @@ def test_grid_rejects_bad_input(scenes):
         filter_grid(scenes.data.to_numpy(), scenes.target)
     with pytest.raises(ValueError, match="lengths"):
         filter_grid(scenes.data, scenes.target[:-1])
-    with pytest.raises(ValueError, match="d_xys"):
-        filter_grid(scenes.data, scenes.target, d_xys=(0.0, 1.0))
-    with pytest.raises(ValueError, match="equal length"):
-        filter_grid(scenes.data, scenes.target, min_neighbors=(2, 3))
+    with pytest.raises(ValueError, match="options"):
+        filter_grid(scenes.data, scenes.target, {"frame": "car"})
+
+
+@pytest.mark.parametrize(
+    "options, message",
+    [
+        ({"d_xys": (0.0, 1.0)}, r"d_xys must be finite and > 0"),
+        ({"vr_thresholds": (0.1, 0.1)}, "vr_thresholds must not repeat"),
+        ({"vr_thresholds": ()}, "vr_thresholds must not be empty"),
+        ({"min_neighbors": (2, 3)}, "equal length"),
+        ({"min_neighbors": (2.5, 3, 4, 10)}, "min_neighbors must be integers"),
+        ({"threshold_ratios": (1, 0, 10, 50)}, "threshold_ratios must be positive"),
+        ({"frame": "world"}, "'frame' parameter of FilterEvaluationOptions"),
+        ({"dt": -0.1}, "'dt' parameter"),
+        ({"window": 0.0}, "'window' parameter"),
+        ({"min_kept": 1.5}, "'min_kept' parameter"),
+        ({"n_jobs": 1.5}, "'n_jobs' parameter"),
+    ],
+)
+def test_options_are_checked_when_made(options, message):
+    with pytest.raises(ValueError, match=message):
+        FilterEvaluationOptions(**options)
+
+
+def test_options_are_frozen_and_compare_by_what_changes_the_results():
+    options = FilterEvaluationOptions(vr_thresholds=[0.1, 0.2], d_xys=np.array([1, 2]), threshold_ratios=(1, 5, 10, 50))
+    assert options.vr_thresholds == (0.1, 0.2) and options.d_xys == (1.0, 2.0)
+    assert options.threshold_ratios == (1.0, 5.0, 10.0, 50.0) and options.min_neighbors == (2, 3, 4, 10)
+    same = FilterEvaluationOptions(vr_thresholds=(0.1, 0.2), d_xys=(1.0, 2.0), n_jobs=2, verbose=1)
+    assert options == same and hash(options) == hash(same)
+    assert options != FilterEvaluationOptions(vr_thresholds=(0.1, 0.2), d_xys=(1.0, 2.0), causal=True)
+    with pytest.raises(AttributeError):
+        options.frame = "car"
 
 
 # ----------------------------------------------------------------------------
@@ -289,7 +323,7 @@ def test_settings_table(scenes):
 
 def test_settings_table_custom_settings(scenes):
     settings = pd.DataFrame({"vr_threshold": [0.05, 0.35], "d_xy": [2.0, 2.0], "note": ["a", "b"]})
-    table = filter_settings_table(scenes.data, scenes.target, settings, frame="car")
+    table = filter_settings_table(scenes.data, scenes.target, settings, _options(frame="car"))
     assert table["frame"].tolist() == ["car", "car"]
     assert table["note"].tolist() == ["a", "b"]
     assert table.loc[1, "removal_rate"] >= table.loc[0, "removal_rate"]  # larger eta_1 removes more

@@ -1,6 +1,5 @@
 """Per-sequence parts of the filter evaluation: combined, they give Tables I and II of the whole data set (issue 14)."""
 
-import inspect
 import pickle
 
 import numpy as np
@@ -11,7 +10,7 @@ from hypothesis import strategies as st
 
 from sklearn_radar import DopplerDensityFilter, FrameTransform
 from sklearn_radar.datasets import make_scenes
-from sklearn_radar.evaluation import filter_error_windows, filter_grid, filter_settings_table
+from sklearn_radar.evaluation import FilterEvaluationOptions, filter_error_windows, filter_grid, filter_settings_table
 from sklearn_radar.evaluation._filter_parts import (
     FilterGridPart,
     combine_error_windows,
@@ -23,6 +22,10 @@ from sklearn_radar.evaluation._filter_parts import (
 )
 
 GRID = {"vr_thresholds": (0.0, 0.1, 0.35), "d_xys": (0.8, 1.4)}
+
+
+def _options(**options):
+    return FilterEvaluationOptions(**GRID | options)
 
 
 @pytest.fixture(scope="module")
@@ -62,26 +65,27 @@ def _assert_same_grid(whole, combined):
 @pytest.mark.parametrize("frame", ["frame", "car"])
 def test_grid_parts_combine_to_the_whole_grid(scenes, variant, frame):
     X, target = _variants(scenes)[variant]
-    whole = filter_grid(X, target, **GRID, frame=frame)
-    parts = [filter_grid_parts(Xs, ts, **GRID, frame=frame) for Xs, ts in _pieces(X, target)]
+    whole = filter_grid(X, target, _options(frame=frame))
+    parts = [filter_grid_parts(Xs, ts, _options(frame=frame)) for Xs, ts in _pieces(X, target)]
     _assert_same_grid(whole, combine_filter_grid(parts[::-1]))
     assert whole.errors.to_numpy().sum() > 0 or variant != "as simulated"  # the comparison covers errors
 
 
 def test_grid_parts_with_the_default_grid_and_blocks(scenes):
     whole = filter_grid(scenes.data, scenes.target)
-    parts = [filter_grid_parts(X, t, n_jobs=2) for X, t in _pieces(scenes.data, scenes.target, [[2], [1, 3]])]
+    parts = [
+        filter_grid_parts(X, t, FilterEvaluationOptions(n_jobs=2))
+        for X, t in _pieces(scenes.data, scenes.target, [[2], [1, 3]])
+    ]
     _assert_same_grid(whole, combine_filter_grid(parts))
 
 
-def test_grid_parts_have_the_grid_defaults():
-    grid = inspect.signature(filter_grid).parameters
-    parts = inspect.signature(filter_grid_parts).parameters
-    assert list(parts)[: len(grid)] == list(grid)
-    assert all(parts[name].default == grid[name].default for name in grid)
-    settings_params = inspect.signature(filter_settings_table).parameters
-    settings_parts = inspect.signature(filter_settings_table_parts).parameters
-    assert all(settings_parts[name].default == settings_params[name].default for name in settings_params)
+def test_parts_need_the_same_options_but_not_the_same_parallelism(scenes):
+    pieces = _pieces(scenes.data, scenes.target)
+    parts = [filter_grid_parts(X, t, _options(n_jobs=k + 1, verbose=k)) for k, (X, t) in enumerate(pieces)]
+    _assert_same_grid(filter_grid(scenes.data, scenes.target, _options()), combine_filter_grid(parts))
+    with pytest.raises(ValueError, match="different options"):
+        combine_filter_grid([parts[0], filter_grid_parts(*pieces[1], _options(min_kept=0.5))])
 
 
 @pytest.mark.parametrize("variant", ["as simulated", "a sequence without objects", "a sequence without background"])
@@ -94,11 +98,9 @@ def test_settings_parts_combine_to_the_whole_table(scenes, variant):
 
 def test_settings_parts_with_custom_settings(scenes):
     settings = pd.DataFrame({"vr_threshold": [0.2, 0.05, 0.2], "d_xy": [1.0, 1.0, 1.8], "note": ["a", "b", "c"]})
-    whole = filter_settings_table(scenes.data, scenes.target, settings, frame="car", min_kept=0.5)
-    parts = [
-        filter_settings_table_parts(X, t, settings, frame="car", min_kept=0.5)
-        for X, t in _pieces(scenes.data, scenes.target)
-    ]
+    options = FilterEvaluationOptions(frame="car", min_kept=0.5)
+    whole = filter_settings_table(scenes.data, scenes.target, settings, options)
+    parts = [filter_settings_table_parts(X, t, settings, options) for X, t in _pieces(scenes.data, scenes.target)]
     pd.testing.assert_frame_equal(combine_filter_settings_table(parts), whole, check_exact=True)
 
 
@@ -174,7 +176,7 @@ def test_time_tolerance_must_be_the_whole_data_sets():
 
 
 def test_parts_are_small_and_picklable(scenes):
-    part = filter_grid_parts(scenes.data, scenes.target, **GRID)
+    part = filter_grid_parts(scenes.data, scenes.target, _options())
     again = pickle.loads(pickle.dumps(part))
     assert isinstance(again, FilterGridPart)
     _assert_same_grid(combine_filter_grid([part]), combine_filter_grid([again]))
@@ -183,7 +185,7 @@ def test_parts_are_small_and_picklable(scenes):
 
 def test_bad_parts(scenes):
     pieces = _pieces(scenes.data, scenes.target)
-    grid = [filter_grid_parts(X, t, **GRID) for X, t in pieces]
+    grid = [filter_grid_parts(X, t, _options()) for X, t in pieces]
     table = [filter_settings_table_parts(X, t) for X, t in pieces]
     for combine in (combine_filter_grid, combine_filter_settings_table, combine_error_windows):
         with pytest.raises(ValueError, match="parts must not be empty"):
@@ -193,13 +195,13 @@ def test_bad_parts(scenes):
     with pytest.raises(ValueError, match=r"sequence\(s\) \[1\.0\]"):
         combine_filter_grid([grid[0], grid[0]])
     with pytest.raises(ValueError, match="different options"):
-        combine_filter_grid([grid[0], filter_grid_parts(*pieces[1], **GRID, frame="car")])
+        combine_filter_grid([grid[0], filter_grid_parts(*pieces[1], _options(frame="car"))])
     with pytest.raises(ValueError, match="different options"):
-        combine_filter_grid([grid[0], filter_grid_parts(*pieces[1], (0.1,), (1.4,))])
+        combine_filter_grid([grid[0], filter_grid_parts(*pieces[1], _options(vr_thresholds=(0.1,), d_xys=(1.4,)))])
     with pytest.raises(ValueError, match="different settings"):
         settings = pd.DataFrame({"vr_threshold": [0.1], "d_xy": [1.4]})
         combine_filter_settings_table([table[0], filter_settings_table_parts(*pieces[1], settings)])
-    without = [filter_grid_parts(X.drop(columns="sequence"), t, **GRID) for X, t in pieces[:2]]
+    without = [filter_grid_parts(X.drop(columns="sequence"), t, _options()) for X, t in pieces[:2]]
     with pytest.raises(ValueError, match="no column 'sequence'"):
         combine_filter_grid(without)
     windows = [filter_error_windows_parts([True, True], [4, 4], [0.0, 0.2]) for _ in range(2)]
@@ -228,9 +230,9 @@ def test_grid_and_settings_parts_on_random_blocks(small, blocks, wiped, frame, c
     target = np.where(np.isin(sequence, [s + 1 for s in range(4) if wiped[s]]), -1, small.target)
     grouping = [[s + 1 for s in range(4) if blocks[s] == b] for b in range(3)]
     pieces = _pieces(X, target, [block for block in grouping if block])
-    options = {"frame": frame, "causal": causal, "dt": 0.1}
-    whole = filter_grid(X, target, **GRID, **options)
-    _assert_same_grid(whole, combine_filter_grid([filter_grid_parts(Xs, ts, **GRID, **options) for Xs, ts in pieces]))
-    table = filter_settings_table(X, target, causal=causal, dt=0.1)
-    parts = [filter_settings_table_parts(Xs, ts, causal=causal, dt=0.1) for Xs, ts in pieces]
+    options = _options(frame=frame, causal=causal, dt=0.1)
+    whole = filter_grid(X, target, options)
+    _assert_same_grid(whole, combine_filter_grid([filter_grid_parts(Xs, ts, options) for Xs, ts in pieces]))
+    table = filter_settings_table(X, target, options=options)
+    parts = [filter_settings_table_parts(Xs, ts, options=options) for Xs, ts in pieces]
     pd.testing.assert_frame_equal(combine_filter_settings_table(parts), table, check_exact=True)
