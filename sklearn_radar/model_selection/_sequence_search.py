@@ -685,10 +685,10 @@ class SequenceSearchCV(MetaEstimatorMixin, BaseEstimator):
         return self
 
     def _check_target_and_groups(self, X, y, groups):
+        if y is None:  # scikit-learn's wording
+            raise ValueError(f"{type(self).__name__} requires y to be passed, but the target y is None")
         if groups is None:
             raise ValueError("groups is required: the sequence of each detection, so that folds never split one")
-        if y is None:
-            raise ValueError("y is required: the target instance of each detection (-1 for background)")
         y, groups = column_or_1d(y), column_or_1d(groups)
         check_consistent_length(X, y, groups)
         n_sequences = len(np.unique(groups))

@@ -228,7 +228,7 @@ def test_verbose_prints_a_line_per_candidate_and_a_callback_stops_the_search(sce
         ({"search_spaces": {}}, {}, "search_spaces"),
         ({"cv": 5}, {}, "cv=5"),
         ({}, {"groups": None}, "groups"),
-        ({}, {"y": None}, "y is required"),
+        ({}, {"y": None}, "requires y"),
     ],
 )
 def test_bad_parameters_raise_a_value_error_naming_them(scenes, params, fit_kwargs, message):
