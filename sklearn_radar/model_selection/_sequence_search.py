@@ -565,13 +565,14 @@ class SequenceSearchCV(MetaEstimatorMixin, BaseEstimator):
     >>> from sklearn_radar.experiments import experiment_pipeline, search_space
     >>> from sklearn_radar.metrics import precluster_target
     >>> from sklearn_radar.model_selection import SequenceSearchCV
-    >>> scenes = make_scenes(n_sequences=3, duration=3.0, random_state=0)
-    >>> y = precluster_target(scenes.data, scenes.target)
-    >>> search = SequenceSearchCV(experiment_pipeline(3), search_space(3), n_iter=4,
-    ...                           n_initial_points=3, cv=3, random_state=0)
-    >>> search = search.fit(scenes.data, y, groups=scenes.groups)
-    >>> bool(0.0 <= search.best_score_ <= 1.0), len(search.cv_results_["params"])
-    (True, 4)
+    >>> data = make_scenes(n_sequences=3, duration=3.0, random_state=0)
+    >>> search = SequenceSearchCV(experiment_pipeline(3), search_space(3), n_iter=4, n_initial_points=3)
+    >>> search.fit(data.data, precluster_target(data.data, data.target), data.groups).n_splits_
+    3
+    >>> sorted(search.best_params_)
+    ['cluster__eps_vr', 'cluster__eps_xy', 'cluster__min_samples', 'cluster__vr_min']
+    >>> search.cv_results_["rank_test_score"].shape
+    (4,)
     """
 
     _parameter_constraints: ClassVar[dict] = {
