@@ -244,3 +244,20 @@ def test_rows_of_unequal_lengths_are_refused(scenes):
     search = SequenceSearchCV(experiment_pipeline(3), search_space(3), n_iter=2, n_initial_points=2, cv=2)
     with pytest.raises(ValueError, match="inconsistent numbers of samples"):
         search.fit(X, target[:-1], groups[:-1])
+
+
+def test_what_the_common_checks_cannot_call_holds_with_groups(scenes):
+    # The estimator checks call fit without groups (expected failures in tests/test_common.py): the same
+    # properties with groups.  Fitting returns self, is idempotent, leaves the parameters alone and pickles.
+    X, target, groups = scenes
+    search = SequenceSearchCV(experiment_pipeline(3), search_space(3), n_iter=2, n_initial_points=2, cv=2)
+    search.set_params(random_state=4, refit=False)
+    params = search.get_params()
+    assert search.fit(X, target, groups) is search
+    first = search.cv_results_
+    search.fit(X, target, groups)
+    assert search.cv_results_["params"] == first["params"]
+    np.testing.assert_array_equal(search.cv_results_["mean_test_score"], first["mean_test_score"])
+    assert search.get_params() == params
+    restored = pickle.loads(pickle.dumps(search))
+    assert restored.best_params_ == search.best_params_ and restored.best_score_ == search.best_score_
