@@ -561,12 +561,12 @@ class SequenceSearchCV(MetaEstimatorMixin, BaseEstimator):
 
     Examples
     --------
-    >>> from sklearn_radar.datasets import make_scenes
-    >>> from sklearn_radar.experiments import experiment_pipeline, search_space
+    >>> from sklearn_radar import datasets, experiments
     >>> from sklearn_radar.metrics import precluster_target
     >>> from sklearn_radar.model_selection import SequenceSearchCV
-    >>> data = make_scenes(n_sequences=3, duration=3.0, random_state=0)
-    >>> search = SequenceSearchCV(experiment_pipeline(3), search_space(3), n_iter=4, n_initial_points=3)
+    >>> data = datasets.make_scenes(n_sequences=3, duration=3.0, random_state=0)
+    >>> pipeline, space = experiments.experiment_pipeline(3), experiments.search_space(3)
+    >>> search = SequenceSearchCV(pipeline, space, n_iter=4, n_initial_points=3)
     >>> search.fit(data.data, precluster_target(data.data, data.target), data.groups).n_splits_
     3
     >>> sorted(search.best_params_)
