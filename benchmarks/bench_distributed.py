@@ -116,8 +116,7 @@ def speedup(scales, n_iter, repeats, number=8):
 
     from sklearn_radar._distributed import connect_cluster
     from sklearn_radar.experiments import experiment_pipeline, search_space
-    from sklearn_radar.model_selection._sequence_search import SearchData, sequence_folds
-    from sklearn_radar.reproduce._run import _fixed_stage0
+    from sklearn_radar.model_selection._sequence_search import SearchData, fixed_prefix, sequence_folds
 
     print(
         f"## 1. Speed-up: a {n_iter}-iteration search of #{number} (30 random candidates, then guided), "
@@ -130,7 +129,7 @@ def speedup(scales, n_iter, repeats, number=8):
     with connect_cluster(workers=2) as cluster, threadpool_limits(limits=1, user_api="blas"):
         for scale in scales:
             X, target, groups = _training_half(scale)
-            stage0, searched, prefix = _fixed_stage0(experiment_pipeline(number), search_space(number))
+            stage0, searched, prefix = fixed_prefix(experiment_pipeline(number), search_space(number))
             space = {key[len(prefix) :]: dimension for key, dimension in search_space(number).items()}
             folds = sequence_folds(groups, 3)
             times = {"1 process": [], "2 workers": []}

@@ -13,9 +13,20 @@ discarded "constant liar" point.  A guided step fits one Gaussian process
 instead of three (measured: about 3x less time in skopt per guided step);
 the candidates are chosen by the same model and acquisition, from different
 random draws.  Batches of ``n_points > 1`` keep skopt's constant-liar strategy.
+
+:meth:`Optimizer.ask_random` (the random phase asked at once, which lets a
+search evaluate those candidates concurrently) reads skopt's private
+``Optimizer._n_initial_points`` and ``_initial_samples`` and relies on
+``ask()`` drawing a random point from the random state alone.  That holds
+for :data:`SUPPORTED_VERSION` (tested in ``tests/test_skopt.py``); with any
+other release :data:`RELIES_ON_INTERNALS` is false, and a search asks its
+random candidates one at a time: the same candidates, fewer at a time.
 """
 
+import warnings
+
 try:
+    import skopt
     from skopt import BayesSearchCV as _SkoptBayesSearchCV
     from skopt import Optimizer as _SkoptOptimizer
     from skopt.space import Categorical, Integer, Real
@@ -25,19 +36,32 @@ except ImportError as error:  # pragma: no cover - exercised only on a broken in
         "sklearn-radar needs scikit-optimize==0.10.2 for Bayesian optimisation: pip install 'scikit-optimize==0.10.2'"
     ) from error
 
+#: The scikit-optimize release whose Optimizer internals :meth:`Optimizer.ask_random` relies on.
+SUPPORTED_VERSION = "0.10.2"
+#: Whether the installed skopt is that release: the one version check of the internals.
+RELIES_ON_INTERNALS = skopt.__version__ == SUPPORTED_VERSION
+if not RELIES_ON_INTERNALS:  # pragma: no cover - only with another skopt installed
+    warnings.warn(
+        f"scikit-optimize {skopt.__version__} is not {SUPPORTED_VERSION}: searches ask their random candidates "
+        "one at a time (same candidates, less concurrency)",
+        stacklevel=2,
+    )
+
 
 class Optimizer(_SkoptOptimizer):
     """skopt's Optimizer; ``ask(n_points=1)`` returns the point of the last ``tell`` (no refit on a copy)."""
 
     def ask(self, n_points=None, strategy="cl_min"):
         if n_points == 1:
-            return [self._ask()]
+            return [super().ask()]  # skopt's single point: the one its last tell chose
         return super().ask(n_points=n_points, strategy=strategy)
 
     @property
     def n_random_left(self):
-        """Random points still to come before the Gaussian process guides (0 when it guides)."""
-        return max(self._n_initial_points, 0) if self.base_estimator_ is not None else 0
+        """Random points still to come before the Gaussian process guides (0 when it guides, or when unknown)."""
+        if not RELIES_ON_INTERNALS or self.base_estimator_ is None:
+            return 0
+        return max(self._n_initial_points, 0)
 
     def ask_random(self, n_points):
         """The next ``n_points`` random points: those ``n_points`` single-point ``ask``/``tell`` rounds would get.
@@ -46,9 +70,9 @@ class Optimizer(_SkoptOptimizer):
         nothing from it before the Gaussian process is fitted: so they can be
         evaluated all at once, then told one by one in this order.
         """
-        if self._initial_samples is not None or n_points > self.n_random_left:
+        if not RELIES_ON_INTERNALS or self._initial_samples is not None or n_points > self.n_random_left:
             raise ValueError(f"n_points={n_points} random points are not ahead (only {self.n_random_left})")
-        return [self._ask() for _ in range(n_points)]
+        return [_SkoptOptimizer.ask(self) for _ in range(n_points)]
 
 
 class BayesSearchCV(_SkoptBayesSearchCV):
@@ -65,4 +89,13 @@ class BayesSearchCV(_SkoptBayesSearchCV):
         return optimizer
 
 
-__all__ = ["BayesSearchCV", "Categorical", "Integer", "Optimizer", "Real", "dimensions_aslist"]
+__all__ = [
+    "RELIES_ON_INTERNALS",
+    "SUPPORTED_VERSION",
+    "BayesSearchCV",
+    "Categorical",
+    "Integer",
+    "Optimizer",
+    "Real",
+    "dimensions_aslist",
+]

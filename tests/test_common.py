@@ -5,8 +5,15 @@ import pytest
 from sklearn.utils.estimator_checks import parametrize_with_checks
 
 from sklearn_radar import ClusterMerger, DopplerDensityFilter, FrameTransform, RadarDBSCAN, config_context
+from sklearn_radar._skopt import Real
 from sklearn_radar.cluster import SequenceDBSCAN, SequenceHDBSCAN, WindowedDBSCAN, WindowedHDBSCAN
+from sklearn_radar.model_selection import SequenceSearchCV
 
+#: A small search of RadarDBSCAN's eps_xy (m), two random candidates on two folds.
+_SEARCH = SequenceSearchCV(
+    RadarDBSCAN(metric="xy", vr_min=-np.inf), {"eps_xy": Real(0.5, 2.0)}, n_iter=2, n_initial_points=2, cv=2
+)
+_SEARCH_REPR = repr(_SEARCH)
 #: {repr of the estimator below: {check name: reason}}.  Keep every entry justified.
 _BY_DESIGN_NOISE = (
     "RadarDBSCAN's default vr_min = 0.4 m/s (the paper's expert setting) lets only moving detections be "
@@ -17,6 +24,13 @@ _SEQUENCE_GATE_NOISE = (
     "The per-sequence baselines' default Doppler gate vr_min = 0.4 m/s (as the paper's expert) makes every "
     "detection with |v_r| <= 0.4 m/s noise; the check's blobs have no Doppler column (v_r = 0), so every point "
     "is noise by design. The same check passes with vr_min=-inf (second instance of each)."
+)
+_NEEDS_GROUPS = (
+    "SequenceSearchCV.fit needs groups (the sequence of each detection: its folds are whole sequences, as "
+    "GroupKFold's, which raises without groups too), and the checks call fit(X, y) without them: fit raises a "
+    "ValueError naming groups before anything the check looks at.  As a meta-estimator it leaves X to the searched "
+    "estimator (as scikit-learn's searches do), so the input checks' messages are not its own.  Its search is "
+    "tested against BayesSearchCV in tests/model_selection/test_sequence_search.py."
 )
 EXPECTED_FAILED_CHECKS = {
     "DopplerDensityFilter()": {
@@ -36,6 +50,36 @@ EXPECTED_FAILED_CHECKS = {
     "SequenceHDBSCAN()": {
         "check_clustering": _SEQUENCE_GATE_NOISE,
         "check_clustering(readonly_memmap=True)": _SEQUENCE_GATE_NOISE,
+    },
+    _SEARCH_REPR: {
+        "check_complex_data": _NEEDS_GROUPS,
+        "check_dict_unchanged": _NEEDS_GROUPS,
+        "check_dont_overwrite_parameters": _NEEDS_GROUPS,
+        "check_dtype_object": _NEEDS_GROUPS,
+        "check_estimator_sparse_array": _NEEDS_GROUPS,
+        "check_estimator_sparse_matrix": _NEEDS_GROUPS,
+        "check_estimator_sparse_tag": _NEEDS_GROUPS,
+        "check_estimators_dtypes": _NEEDS_GROUPS,
+        "check_estimators_empty_data_messages": _NEEDS_GROUPS,
+        "check_estimators_fit_returns_self": _NEEDS_GROUPS,
+        "check_estimators_nan_inf": _NEEDS_GROUPS,
+        "check_estimators_overwrite_params": _NEEDS_GROUPS,
+        "check_estimators_pickle": _NEEDS_GROUPS,
+        "check_estimators_pickle(readonly_memmap=True)": _NEEDS_GROUPS,
+        "check_f_contiguous_array_estimator": _NEEDS_GROUPS,
+        "check_fit2d_1feature": _NEEDS_GROUPS,
+        "check_fit2d_1sample": _NEEDS_GROUPS,
+        "check_fit2d_predict1d": _NEEDS_GROUPS,
+        "check_fit_check_is_fitted": _NEEDS_GROUPS,
+        "check_fit_idempotent": _NEEDS_GROUPS,
+        "check_fit_score_takes_y": _NEEDS_GROUPS,
+        "check_methods_sample_order_invariance": _NEEDS_GROUPS,
+        "check_methods_subset_invariance": _NEEDS_GROUPS,
+        "check_n_features_in": _NEEDS_GROUPS,
+        "check_n_features_in_after_fitting": _NEEDS_GROUPS,
+        "check_pipeline_consistency": _NEEDS_GROUPS,
+        "check_positive_only_tag_during_fit": _NEEDS_GROUPS,
+        "check_readonly_memmap_input": _NEEDS_GROUPS,
     },
     "ClusterMerger()": {
         "check_clustering": "Its default stage 1 is RadarDBSCAN() with vr_min = 0.4 m/s: " + _BY_DESIGN_NOISE,
@@ -97,6 +141,7 @@ CHECKS = _strict(
             SequenceDBSCAN(vr_min=-np.inf),
             SequenceHDBSCAN(),
             SequenceHDBSCAN(vr_min=-np.inf),
+            _SEARCH,
         ],
         expected_failed_checks=_expected_failed_checks,
     )

@@ -164,6 +164,19 @@ def _fit_progress_bayes_search(klass):
     return search.fit(raw, target)
 
 
+def _fit_sequence_search(klass):
+    """Two random candidates of experiment #3's search, two folds of one simulated sequence each."""
+    from sklearn_radar import instance_target
+    from sklearn_radar.datasets import make_scenes
+    from sklearn_radar.experiments import experiment_pipeline, search_space
+    from sklearn_radar.metrics import precluster_target
+
+    raw = make_scenes(n_sequences=2, duration=2.0, random_state=0).data
+    target = precluster_target(raw, instance_target(raw["track_id"], raw["sequence"]))
+    search = klass(experiment_pipeline(3), search_space(3), n_iter=2, n_initial_points=2, cv=2, random_state=0)
+    return search.fit(raw, target, raw["sequence"])
+
+
 #: How each estimator class of the public API is fitted: on the raw table or on FrameTransform's output.
 FIT = {
     "sklearn_radar.preprocessing.FrameTransform": lambda klass: klass().fit(_detections()[0]),
@@ -175,6 +188,7 @@ FIT = {
     "sklearn_radar.cluster.SequenceDBSCAN": lambda klass: klass().fit(_detections()[1]),
     "sklearn_radar.cluster.SequenceHDBSCAN": lambda klass: klass().fit(_detections()[1]),
     "sklearn_radar.model_selection.ProgressBayesSearchCV": _fit_progress_bayes_search,
+    "sklearn_radar.model_selection.SequenceSearchCV": _fit_sequence_search,
 }
 
 

@@ -1,13 +1,15 @@
-"""The scikit-optimize shim works with the installed scikit-learn and numpy."""
+"""The scikit-optimize shim works with the installed scikit-learn and numpy, and skopt behaves as it relies on."""
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from sklearn.cluster import DBSCAN
 from sklearn.datasets import make_blobs
 from sklearn.metrics import v_measure_score
 from sklearn.model_selection import GroupKFold
 
-from sklearn_radar._skopt import BayesSearchCV, Integer, Real
+from sklearn_radar._skopt import BayesSearchCV, Categorical, Integer, Real
 
 
 def _fit_predict_v_measure(estimator, X, y):
@@ -108,3 +110,56 @@ def test_more_random_points_than_are_ahead_is_an_error():
     optimizer = Optimizer([Real(0.0, 1.0)], n_initial_points=3, random_state=0)
     with pytest.raises(ValueError, match="n_points=4"):
         optimizer.ask_random(4)
+
+
+def test_the_internals_are_relied_on_only_with_the_pinned_release():
+    # A new skopt must fail here first: then check that the tests below still hold and raise the version.
+    import skopt
+
+    from sklearn_radar import _skopt
+
+    assert skopt.__version__ == _skopt.SUPPORTED_VERSION == "0.10.2"
+    assert _skopt.RELIES_ON_INTERNALS
+
+
+@settings(max_examples=8, deadline=None)  # a guided point costs a Gaussian process fit (about 1 s)
+@given(seed=st.integers(0, 2**31 - 1), n_initial=st.integers(1, 6), n_guided=st.integers(0, 1))
+def test_the_random_phase_asked_at_once_is_plain_skopts_ask_and_tell(seed, n_initial, n_guided):
+    # The behaviour ask_random reads from skopt's internals: its points (then the guided ones) are those of a
+    # plain skopt.Optimizer asked and told one point at a time with the same seed.
+    import skopt
+
+    from sklearn_radar._skopt import Optimizer
+
+    space = [Real(0.0, 2.0), Integer(1, 9), Categorical(["a", "b", "c"])]
+    plain = skopt.Optimizer(space, n_initial_points=n_initial, random_state=seed, acq_optimizer="sampling")
+    expected = []
+    for _ in range(n_initial + n_guided):
+        point = plain.ask()
+        expected.append(point)
+        plain.tell(point, _categorical_objective(point))
+
+    ours = Optimizer(space, n_initial_points=n_initial, random_state=seed, acq_optimizer="sampling")
+    points = ours.ask_random(n_initial)
+    for point in points:
+        ours.tell(point, _categorical_objective(point))
+    for _ in range(n_guided):
+        (point,) = ours.ask(n_points=1)
+        points.append(point)
+        ours.tell(point, _categorical_objective(point))
+    assert points == expected
+
+
+def _categorical_objective(point):
+    return _objective(point[:2]) + {"a": 0.0, "b": 0.3, "c": -0.2}[point[2]]
+
+
+def test_without_the_pinned_release_random_points_are_asked_one_at_a_time(monkeypatch):
+    from sklearn_radar import _skopt
+
+    monkeypatch.setattr(_skopt, "RELIES_ON_INTERNALS", False)
+    optimizer = _skopt.Optimizer([Real(0.0, 1.0)], n_initial_points=3, random_state=0)
+    assert optimizer.n_random_left == 0
+    with pytest.raises(ValueError, match="n_points=1"):
+        optimizer.ask_random(1)
+    assert len(optimizer.ask(n_points=1)) == 1

@@ -14,6 +14,7 @@ ORDER = (
     "plot_range_adaptive_min_points.py",
     "plot_merging_modes.py",
     "plot_tuning.py",
+    "plot_sequence_search.py",
     "plot_streaming.py",
     "plot_radarscenes_io.py",
 )

@@ -76,6 +76,7 @@ from ..model_selection._sequence_search import (
     search_and_score_start,
     sized_sequence_folds,
 )
+from ..model_selection._sequence_search import fixed_prefix as _fixed_stage0
 from ..preprocessing import DopplerDensityFilter, FrameTransform
 from ._constants import (
     ALL_EXPERIMENTS,
@@ -854,23 +855,6 @@ def _without_cache(estimator):
     if hasattr(estimator, "steps"):
         return clone(estimator).set_params(memory=None)
     return estimator
-
-
-def _fixed_stage0(estimator, space):
-    """(stage 0, last step, its parameter prefix) of a pipeline whose search tunes only the last step, else None.
-
-    Stage 0 (frame transform, filter) then computes the same for every
-    candidate, so the search can run on its output once, with the last step
-    alone as the estimator.
-    """
-    steps = getattr(estimator, "steps", None)
-    if not steps or len(steps) < 2:
-        return None
-    name, last = steps[-1]
-    prefix = f"{name}__"
-    if not all(key.startswith(prefix) for key in space):
-        return None
-    return clone(estimator[:-1]).set_params(memory=None), clone(last), prefix
 
 
 def _with_cluster_gate(space, stage, objective):
