@@ -81,6 +81,30 @@ class Points(NamedTuple):
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
+def _box_offset(i, j, dx, dy, points):
+    """The rotated box of Eq. 3: the larger of |along| and |across|, m, of the offset (dx, dy) in the box axes.
+
+    Box axes: the car frame of the later detection of the pair (the newest
+    scan of a sliding window); at equal times, the larger over both
+    detections' frames (symmetric in i and j; one heading per scan makes
+    them equal).
+    """
+    k, other = (i, j) if points.t[i] >= points.t[j] else (j, i)
+    offset = _offset_in_car_axes(k, dx, dy, points)
+    if points.t[i] == points.t[j] and (points.cos_h[i] != points.cos_h[j] or points.sin_h[i] != points.sin_h[j]):
+        offset = max(offset, _offset_in_car_axes(other, dx, dy, points))
+    return offset
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _offset_in_car_axes(k, dx, dy, points):
+    """The larger of |along| and |across|, m, of the offset (dx, dy) in the car axes of point k."""
+    along = points.cos_h[k] * dx + points.sin_h[k] * dy
+    across = points.cos_h[k] * dy - points.sin_h[k] * dx
+    return max(abs(along), abs(across))
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
 def _spatial_neighbor(i, j, points, crit):
     """Eqs. 3-5 without the time criterion (strict inequalities, as printed in the paper)."""
     dx = points.x[j] - points.x[i]
@@ -90,18 +114,7 @@ def _spatial_neighbor(i, j, points, crit):
     if crit.metric == BOX_UNROTATED:  # every heading is 0: the box axes are the x-y axes
         return abs(dx) < eps_xy and abs(dy) < eps_xy and abs(dv) < eps_vr
     if crit.metric == BOX:
-        # Box axes: the car frame of the later detection of the pair (the newest scan of a sliding window);
-        # at equal times, both detections' frames (symmetric in i and j; one heading per scan makes them equal).
-        k, other = (i, j) if points.t[i] >= points.t[j] else (j, i)
-        along = points.cos_h[k] * dx + points.sin_h[k] * dy
-        across = points.cos_h[k] * dy - points.sin_h[k] * dx
-        if not (abs(along) < eps_xy and abs(across) < eps_xy and abs(dv) < eps_vr):
-            return False
-        if points.t[i] != points.t[j] or (points.cos_h[i] == points.cos_h[j] and points.sin_h[i] == points.sin_h[j]):
-            return True
-        along = points.cos_h[other] * dx + points.sin_h[other] * dy
-        across = points.cos_h[other] * dy - points.sin_h[other] * dx
-        return abs(along) < eps_xy and abs(across) < eps_xy
+        return abs(dv) < eps_vr and _box_offset(i, j, dx, dy, points) < eps_xy
     if crit.metric == XY:
         return dx * dx + dy * dy < eps_xy * eps_xy and abs(dv) < eps_vr
     return dx * dx + dy * dy + dv * dv / (crit.vr_scale * crit.vr_scale) < crit.eps_xyv * crit.eps_xyv
@@ -117,15 +130,7 @@ def _pair_distance(i, j, points, crit):
     if crit.metric == BOX_UNROTATED:
         return max(abs(dx) / eps_xy, abs(dy) / eps_xy, dv / eps_vr)
     if crit.metric == BOX:
-        k, other = (i, j) if points.t[i] >= points.t[j] else (j, i)
-        along = abs(points.cos_h[k] * dx + points.sin_h[k] * dy)
-        across = abs(points.cos_h[k] * dy - points.sin_h[k] * dx)
-        distance = max(along / eps_xy, across / eps_xy, dv / eps_vr)
-        if points.t[i] == points.t[j]:  # as _spatial_neighbor: both frames count at equal times
-            along = abs(points.cos_h[other] * dx + points.sin_h[other] * dy)
-            across = abs(points.cos_h[other] * dy - points.sin_h[other] * dx)
-            distance = max(distance, along / eps_xy, across / eps_xy)
-        return distance
+        return max(_box_offset(i, j, dx, dy, points) / eps_xy, dv / eps_vr)
     if crit.metric == XY:
         return max(math.sqrt(dx * dx + dy * dy) / eps_xy, dv / eps_vr)
     return math.sqrt(dx * dx + dy * dy + dv * dv / (crit.vr_scale * crit.vr_scale)) / crit.eps_xyv
@@ -150,7 +155,7 @@ def _advance(times, position, end, bound, inclusive):
     return position + np.searchsorted(times[position:end], bound, side="left")
 
 
-@numba.njit(cache=True, nogil=True)  # not inlined (3 call sites): its callees are, inside it
+@numba.njit(cache=True, nogil=True)  # not inlined (3 call sites, those of _slot_window): its callees are, inside it
 def _window(times, start, end, lo, hi, fresh, t_low, t_high):
     """Positions [lo, hi) of a time-sorted run within [t_low, t_high].
 
@@ -162,6 +167,31 @@ def _window(times, start, end, lo, hi, fresh, t_low, t_high):
         return time_range(times, start, end, t_low, t_high)
     lo = _advance(times, lo, end, t_low, False)
     hi = _advance(times, max(hi, lo), end, t_high, True)
+    return lo, hi
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _slot_window(windows, slot, cell, own, times, run_start, run_end, t_low, t_high):
+    """Positions [lo, hi) of the run of ``cell``, slot ``slot`` of the 3 x 3 cells around ``own``, in [t_low, t_high].
+
+    ``windows`` (3 x 9: lo, hi and the cell ``own`` they were found for,
+    per slot) keeps each slot's last answer, so that the points of one cell,
+    visited in time order, move it forward only.  Empty for no cell (-1) or
+    an empty run.
+    """
+    if cell < 0 or run_end[cell] == run_start[cell]:
+        return 0, 0
+    lo, hi = _window(
+        times,
+        run_start[cell],
+        run_end[cell],
+        windows[0, slot],
+        windows[1, slot],
+        windows[2, slot] != own,
+        t_low,
+        t_high,
+    )
+    windows[0, slot], windows[1, slot], windows[2, slot] = lo, hi, own
     return lo, hi
 
 
@@ -189,9 +219,7 @@ def _dbscan_sorted(points, min_points, can_be_core, cell_x, cell_y, cell_keys, c
     n_cells = len(cell_keys)
     cells = neighbor_cells(cell_keys, cell_start, cell_x, cell_y)
     point_cell = point_cells(cell_start, cell_end, n)
-    lo = np.zeros(9, dtype=np.int64)
-    hi = np.zeros(9, dtype=np.int64)
-    owner = np.full(9, -1, dtype=np.int64)  # the cell whose points the window of each slot was last found for
+    windows = np.full((3, 9), -1, dtype=np.int64)  # per slot: lo, hi and the cell they were found for (none yet)
 
     # Pass 1: core points, counting neighbours up to the number needed (own cell first).
     core = np.zeros(n, dtype=np.bool_)
@@ -205,14 +233,8 @@ def _dbscan_sorted(points, min_points, can_be_core, cell_x, cell_y, cell_keys, c
             if count >= need:
                 break
             k = _OWN_FIRST[kk]
-            c = cells[own, k]
-            if c < 0:
-                continue
-            lo[k], hi[k] = _window(
-                t, cell_start[c], cell_end[c], lo[k], hi[k], owner[k] != own, t[i] - eps_t, t[i] + eps_t
-            )
-            owner[k] = own
-            for j in range(lo[k], hi[k]):
+            lo, hi = _slot_window(windows, k, cells[own, k], own, t, cell_start, cell_end, t[i] - eps_t, t[i] + eps_t)
+            for j in range(lo, hi):
                 if j == i:
                     continue
                 if _spatial_neighbor(i, j, points, crit):
@@ -243,21 +265,18 @@ def _dbscan_sorted(points, min_points, can_be_core, cell_x, cell_y, cell_keys, c
         points.sin_h[core_position],
     )
     parent = np.arange(n)
-    owner[:] = -1
+    windows[2, :] = -1
     for position in range(len(core_position)):
         i = core_position[position]
         own = point_cell[i]
         root_i = find(parent, i)  # stays i's root: only unions with i happen until the next i
         for k in range(9):
             c = cells[own, k]
-            if c < own or core_end[c] == core_start[c]:
+            if c < own:
                 continue
-            lo[k], hi[k] = _window(
-                core_t, core_start[c], core_end[c], lo[k], hi[k], owner[k] != own, t[i] - eps_t, t[i] + eps_t
-            )
-            owner[k] = own
+            lo, hi = _slot_window(windows, k, c, own, core_t, core_start, core_end, t[i] - eps_t, t[i] + eps_t)
             # In its own cell, i meets only the core points after it (the earlier ones met i).
-            for m in range(max(lo[k], position + 1) if c == own else lo[k], hi[k]):
+            for m in range(max(lo, position + 1) if c == own else lo, hi):
                 if _spatial_neighbor(position, m, core_points, crit):
                     root_j = find(parent, core_position[m])  # union_keep_smaller(parent, i, j) with i's root known
                     if root_j < root_i:
@@ -268,7 +287,7 @@ def _dbscan_sorted(points, min_points, can_be_core, cell_x, cell_y, cell_keys, c
 
     # Pass 3: roots; a non-core point takes its closest core neighbour's.
     roots = np.full(n, -1, dtype=np.int64)
-    owner[:] = -1
+    windows[2, :] = -1
     for i in range(n):
         if core[i]:
             roots[i] = find(parent, i)
@@ -277,14 +296,10 @@ def _dbscan_sorted(points, min_points, can_be_core, cell_x, cell_y, cell_keys, c
         # np.int64, not the literal -1: numba would also compile find() for the argument type Literal[int](-1).
         closest, closest_distance = np.int64(-1), np.inf
         for k in range(9):
-            c = cells[own, k]
-            if c < 0 or core_end[c] == core_start[c]:
-                continue
-            lo[k], hi[k] = _window(
-                core_t, core_start[c], core_end[c], lo[k], hi[k], owner[k] != own, t[i] - eps_t, t[i] + eps_t
+            lo, hi = _slot_window(
+                windows, k, cells[own, k], own, core_t, core_start, core_end, t[i] - eps_t, t[i] + eps_t
             )
-            owner[k] = own
-            for m in range(lo[k], hi[k]):
+            for m in range(lo, hi):
                 j = core_position[m]
                 if _spatial_neighbor(i, j, points, crit):
                     d = _pair_distance(i, j, points, crit)
@@ -464,16 +479,25 @@ def _causal_sequence(points, min_points, can_be_core, crit):
 # Python wrappers: the estimator's only entry points, called with keyword arguments.
 
 
-def criterion_of(estimator, heading=None) -> Criterion:
-    """The neighbourhood criterion (Eqs. 3-5 and the time window) of a RadarDBSCAN's parameters.
+def criterion_of(*, metric, eps_xy, eps_vr, vr_scale, eps_xyv, eps_t, heading=None) -> Criterion:
+    """The neighbourhood criterion (Eqs. 3-5 and the time window) as the kernels' :class:`Criterion`.
 
-    The one place where the parameters become the kernels' :class:`Criterion`.
+    The one place where thresholds become a :class:`Criterion`.
 
     Parameters
     ----------
-    estimator : RadarDBSCAN
-        Its ``metric``, ``eps_xy`` (m), ``eps_vr`` (m/s), ``vr_scale`` (m/s),
-        ``eps_xyv`` (m) and ``eps_t`` (s, None for no time limit) are read.
+    metric : {"box", "xy", "xyv"}
+        Eq. 3, 4 or 5.
+    eps_xy : float
+        Spatial threshold of Eqs. 3 and 4, m.
+    eps_vr : float
+        Doppler threshold of Eqs. 3 and 4, m/s.
+    vr_scale : float
+        eps'_vr of Eq. 5, m/s.
+    eps_xyv : float
+        Threshold of Eq. 5, m.
+    eps_t : float or None
+        Time threshold, s; None for no time limit.
     heading : array-like of float, default=None
         Car heading, rad, of every point the criterion will be applied to.
         When given and all 0, the box of Eq. 3 is ``BOX_UNROTATED`` (the same
@@ -484,16 +508,16 @@ def criterion_of(estimator, heading=None) -> Criterion:
     -------
     criterion : Criterion
     """
-    metric = METRIC_CODES[estimator.metric]
-    if metric == BOX and heading is not None and not np.any(heading):
-        metric = BOX_UNROTATED
+    code = METRIC_CODES[metric]
+    if code == BOX and heading is not None and not np.any(heading):
+        code = BOX_UNROTATED
     return Criterion(
-        metric=metric,
-        eps_xy=float(estimator.eps_xy),
-        eps_vr=float(estimator.eps_vr),
-        vr_scale=float(estimator.vr_scale),
-        eps_xyv=float(estimator.eps_xyv),
-        eps_t=np.inf if estimator.eps_t is None else float(estimator.eps_t),
+        metric=code,
+        eps_xy=float(eps_xy),
+        eps_vr=float(eps_vr),
+        vr_scale=float(vr_scale),
+        eps_xyv=float(eps_xyv),
+        eps_t=np.inf if eps_t is None else float(eps_t),
     )
 
 
