@@ -81,7 +81,7 @@ class Points(NamedTuple):
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def _box_offset(i, j, dx, dy, points):
+def _box_offset(dx, dy, t_i, t_j, cos_i, sin_i, cos_j, sin_j):
     """The rotated box of Eq. 3: the larger of |along| and |across|, m, of the offset (dx, dy) in the box axes.
 
     Box axes: the car frame of the later detection of the pair (the newest
@@ -89,19 +89,18 @@ def _box_offset(i, j, dx, dy, points):
     detections' frames (symmetric in i and j; one heading per scan makes
     them equal).
     """
-    k, other = (i, j) if points.t[i] >= points.t[j] else (j, i)
-    offset = _offset_in_car_axes(k, dx, dy, points)
-    if points.t[i] == points.t[j] and (points.cos_h[i] != points.cos_h[j] or points.sin_h[i] != points.sin_h[j]):
-        offset = max(offset, _offset_in_car_axes(other, dx, dy, points))
+    if t_i < t_j:
+        cos_i, sin_i, cos_j, sin_j = cos_j, sin_j, cos_i, sin_i
+    offset = _offset_in_car_axes(cos_i, sin_i, dx, dy)
+    if t_i == t_j and (cos_i != cos_j or sin_i != sin_j):
+        offset = max(offset, _offset_in_car_axes(cos_j, sin_j, dx, dy))
     return offset
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def _offset_in_car_axes(k, dx, dy, points):
-    """The larger of |along| and |across|, m, of the offset (dx, dy) in the car axes of point k."""
-    along = points.cos_h[k] * dx + points.sin_h[k] * dy
-    across = points.cos_h[k] * dy - points.sin_h[k] * dx
-    return max(abs(along), abs(across))
+def _offset_in_car_axes(cos_h, sin_h, dx, dy):
+    """The larger of |along| and |across|, m, of the offset (dx, dy) in the car axes of heading (cos_h, sin_h)."""
+    return max(abs(cos_h * dx + sin_h * dy), abs(cos_h * dy - sin_h * dx))
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -114,7 +113,13 @@ def _spatial_neighbor(i, j, points, crit):
     if crit.metric == BOX_UNROTATED:  # every heading is 0: the box axes are the x-y axes
         return abs(dx) < eps_xy and abs(dy) < eps_xy and abs(dv) < eps_vr
     if crit.metric == BOX:
-        return abs(dv) < eps_vr and _box_offset(i, j, dx, dy, points) < eps_xy
+        return (
+            abs(dv) < eps_vr
+            and _box_offset(
+                dx, dy, points.t[i], points.t[j], points.cos_h[i], points.sin_h[i], points.cos_h[j], points.sin_h[j]
+            )
+            < eps_xy
+        )
     if crit.metric == XY:
         return dx * dx + dy * dy < eps_xy * eps_xy and abs(dv) < eps_vr
     return dx * dx + dy * dy + dv * dv / (crit.vr_scale * crit.vr_scale) < crit.eps_xyv * crit.eps_xyv
@@ -130,7 +135,13 @@ def _pair_distance(i, j, points, crit):
     if crit.metric == BOX_UNROTATED:
         return max(abs(dx) / eps_xy, abs(dy) / eps_xy, dv / eps_vr)
     if crit.metric == BOX:
-        return max(_box_offset(i, j, dx, dy, points) / eps_xy, dv / eps_vr)
+        return max(
+            _box_offset(
+                dx, dy, points.t[i], points.t[j], points.cos_h[i], points.sin_h[i], points.cos_h[j], points.sin_h[j]
+            )
+            / eps_xy,
+            dv / eps_vr,
+        )
     if crit.metric == XY:
         return max(math.sqrt(dx * dx + dy * dy) / eps_xy, dv / eps_vr)
     return math.sqrt(dx * dx + dy * dy + dv * dv / (crit.vr_scale * crit.vr_scale)) / crit.eps_xyv
@@ -155,44 +166,22 @@ def _advance(times, position, end, bound, inclusive):
     return position + np.searchsorted(times[position:end], bound, side="left")
 
 
-@numba.njit(cache=True, nogil=True)  # not inlined (3 call sites, those of _slot_window): its callees are, inside it
-def _window(times, start, end, lo, hi, fresh, t_low, t_high):
-    """Positions [lo, hi) of a time-sorted run within [t_low, t_high].
+@numba.njit(cache=True, nogil=True)  # not inlined (3 call sites): its callees are, inside it
+def _window(times, start, end, lo, hi, owner, own, t_low, t_high):
+    """Positions [lo, hi) of a time-sorted run within [t_low, t_high], and the cell they are found for.
 
-    ``fresh``: the first query of this run for the current cell (two binary
-    searches); otherwise ``lo`` and ``hi`` are the previous answer for an
-    earlier or equal time and only move forward.
+    The one window walk of :func:`_dbscan_sorted`'s passes.  ``lo``, ``hi``
+    are the slot's previous answer, found for the points of cell ``owner``.
+    For the first point of a new cell ``own`` they are found afresh (two
+    binary searches); for the next points of the cell, visited in time
+    order, they only move forward (a few steps).
     """
-    if fresh:
-        return time_range(times, start, end, t_low, t_high)
+    if owner != own:
+        lo, hi = time_range(times, start, end, t_low, t_high)
+        return lo, hi, own
     lo = _advance(times, lo, end, t_low, False)
     hi = _advance(times, max(hi, lo), end, t_high, True)
-    return lo, hi
-
-
-@numba.njit(cache=True, nogil=True, inline="always")
-def _slot_window(windows, slot, cell, own, times, run_start, run_end, t_low, t_high):
-    """Positions [lo, hi) of the run of ``cell``, slot ``slot`` of the 3 x 3 cells around ``own``, in [t_low, t_high].
-
-    ``windows`` (3 x 9: lo, hi and the cell ``own`` they were found for,
-    per slot) keeps each slot's last answer, so that the points of one cell,
-    visited in time order, move it forward only.  Empty for no cell (-1) or
-    an empty run.
-    """
-    if cell < 0 or run_end[cell] == run_start[cell]:
-        return 0, 0
-    lo, hi = _window(
-        times,
-        run_start[cell],
-        run_end[cell],
-        windows[0, slot],
-        windows[1, slot],
-        windows[2, slot] != own,
-        t_low,
-        t_high,
-    )
-    windows[0, slot], windows[1, slot], windows[2, slot] = lo, hi, own
-    return lo, hi
+    return lo, hi, own
 
 
 #: Order in which pass 1 visits the 3 x 3 neighbour cells: its own cell (slot 4) first, where neighbours are likeliest.
@@ -219,7 +208,9 @@ def _dbscan_sorted(points, min_points, can_be_core, cell_x, cell_y, cell_keys, c
     n_cells = len(cell_keys)
     cells = neighbor_cells(cell_keys, cell_start, cell_x, cell_y)
     point_cell = point_cells(cell_start, cell_end, n)
-    windows = np.full((3, 9), -1, dtype=np.int64)  # per slot: lo, hi and the cell they were found for (none yet)
+    lo = np.zeros(9, dtype=np.int64)
+    hi = np.zeros(9, dtype=np.int64)
+    owner = np.full(9, -1, dtype=np.int64)  # the cell whose points the window of each slot was last found for
 
     # Pass 1: core points, counting neighbours up to the number needed (own cell first).
     core = np.zeros(n, dtype=np.bool_)
@@ -233,8 +224,13 @@ def _dbscan_sorted(points, min_points, can_be_core, cell_x, cell_y, cell_keys, c
             if count >= need:
                 break
             k = _OWN_FIRST[kk]
-            lo, hi = _slot_window(windows, k, cells[own, k], own, t, cell_start, cell_end, t[i] - eps_t, t[i] + eps_t)
-            for j in range(lo, hi):
+            c = cells[own, k]
+            if c < 0:
+                continue
+            lo[k], hi[k], owner[k] = _window(
+                t, cell_start[c], cell_end[c], lo[k], hi[k], owner[k], own, t[i] - eps_t, t[i] + eps_t
+            )
+            for j in range(lo[k], hi[k]):
                 if j == i:
                     continue
                 if _spatial_neighbor(i, j, points, crit):
@@ -265,18 +261,20 @@ def _dbscan_sorted(points, min_points, can_be_core, cell_x, cell_y, cell_keys, c
         points.sin_h[core_position],
     )
     parent = np.arange(n)
-    windows[2, :] = -1
+    owner[:] = -1
     for position in range(len(core_position)):
         i = core_position[position]
         own = point_cell[i]
         root_i = find(parent, i)  # stays i's root: only unions with i happen until the next i
         for k in range(9):
             c = cells[own, k]
-            if c < own:
+            if c < own or core_end[c] == core_start[c]:
                 continue
-            lo, hi = _slot_window(windows, k, c, own, core_t, core_start, core_end, t[i] - eps_t, t[i] + eps_t)
+            lo[k], hi[k], owner[k] = _window(
+                core_t, core_start[c], core_end[c], lo[k], hi[k], owner[k], own, t[i] - eps_t, t[i] + eps_t
+            )
             # In its own cell, i meets only the core points after it (the earlier ones met i).
-            for m in range(max(lo, position + 1) if c == own else lo, hi):
+            for m in range(max(lo[k], position + 1) if c == own else lo[k], hi[k]):
                 if _spatial_neighbor(position, m, core_points, crit):
                     root_j = find(parent, core_position[m])  # union_keep_smaller(parent, i, j) with i's root known
                     if root_j < root_i:
@@ -287,7 +285,7 @@ def _dbscan_sorted(points, min_points, can_be_core, cell_x, cell_y, cell_keys, c
 
     # Pass 3: roots; a non-core point takes its closest core neighbour's.
     roots = np.full(n, -1, dtype=np.int64)
-    windows[2, :] = -1
+    owner[:] = -1
     for i in range(n):
         if core[i]:
             roots[i] = find(parent, i)
@@ -296,10 +294,13 @@ def _dbscan_sorted(points, min_points, can_be_core, cell_x, cell_y, cell_keys, c
         # np.int64, not the literal -1: numba would also compile find() for the argument type Literal[int](-1).
         closest, closest_distance = np.int64(-1), np.inf
         for k in range(9):
-            lo, hi = _slot_window(
-                windows, k, cells[own, k], own, core_t, core_start, core_end, t[i] - eps_t, t[i] + eps_t
+            c = cells[own, k]
+            if c < 0 or core_end[c] == core_start[c]:
+                continue
+            lo[k], hi[k], owner[k] = _window(
+                core_t, core_start[c], core_end[c], lo[k], hi[k], owner[k], own, t[i] - eps_t, t[i] + eps_t
             )
-            for m in range(lo, hi):
+            for m in range(lo[k], hi[k]):
                 j = core_position[m]
                 if _spatial_neighbor(i, j, points, crit):
                     d = _pair_distance(i, j, points, crit)
