@@ -61,16 +61,15 @@ def call_labels():
 
 
 def call_radar_dbscan_kernels():
-    from types import SimpleNamespace
-
     from sklearn_radar._neighbors import build_grid
     from sklearn_radar.cluster import _radar_dbscan_kernels as k
 
     x, y, v, t = _points()
     heading = np.linspace(0.0, 0.3, len(x))
     for metric in ("box", "xy", "xyv"):  # one compiled kernel serves every metric (a run-time code)
-        params = SimpleNamespace(metric=metric, eps_xy=1.5, eps_vr=1.0, vr_scale=1.0, eps_xyv=1.5, eps_t=0.25)
-        crit = k.criterion_of(params, heading)
+        crit = k.criterion_of(
+            metric=metric, eps_xy=1.5, eps_vr=1.0, vr_scale=1.0, eps_xyv=1.5, eps_t=0.25, heading=heading
+        )
         grid = build_grid(x, y, t, 1.5)
         o = grid.order
         points = k.points_of(x=x[o], y=y[o], v=v[o], t=t[o], heading=heading[o])

@@ -14,8 +14,13 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-_KEY_SHIFT = np.int64(2**32)
-_KEY_OFFSET = np.int64(2**31)
+#: A cell key packs the x and y cell coordinates into one int64, y in the low ``_Y_BITS`` bits (shifted to be
+#: non-negative), so the keys sort as (x, y).  Everything below derives from this one number.
+_Y_BITS = 32
+_KEY_SHIFT = np.int64(2**_Y_BITS)
+_KEY_OFFSET = np.int64(2 ** (_Y_BITS - 1))
+#: Cell coordinates must lie in [-CELL_COORDINATE_BOUND, CELL_COORDINATE_BOUND) for their key not to overflow.
+CELL_COORDINATE_BOUND = float(2 ** (_Y_BITS - 1))
 
 
 @dataclass
@@ -33,8 +38,10 @@ class GridIndex:
     cell_end: np.ndarray  # one past the last
 
 
-#: Cell coordinates must lie in [-2**31, 2**31): the cell key packs x and y into one int64.
-_MAX_CELLS = 2.0**31
+@numba.njit(cache=True, nogil=True, inline="always")
+def cell_key(cell_x, cell_y):
+    """The int64 key of grid cell (cell_x, cell_y); keys sort as (x, y).  ``cell_key.py_func`` serves numpy arrays."""
+    return cell_x * _KEY_SHIFT + (cell_y + _KEY_OFFSET)
 
 
 def build_grid(x, y, t, cell_size) -> GridIndex:
@@ -50,10 +57,7 @@ def build_grid(x, y, t, cell_size) -> GridIndex:
     x, y, t = (np.ascontiguousarray(a, dtype=np.float64) for a in (x, y, t))
     cell_x = _cell_coordinates(x, cell_size, "x")
     cell_y = _cell_coordinates(y, cell_size, "y")
-    keys = cell_x * _KEY_SHIFT + (cell_y + _KEY_OFFSET)
-    order = _cell_time_order(cell_x, cell_y, t)
-    keys = keys[order]
-    first = np.flatnonzero(np.r_[True, keys[1:] != keys[:-1]]) if len(keys) else np.zeros(0, np.int64)
+    order, cell_keys, cell_start, cell_end = cell_runs(cell_x, cell_y, t)
     return GridIndex(
         order=order,
         x=x[order],
@@ -61,13 +65,39 @@ def build_grid(x, y, t, cell_size) -> GridIndex:
         t=t[order],
         cell_x=cell_x[order],
         cell_y=cell_y[order],
-        cell_keys=keys[first],
-        cell_start=first.astype(np.int64),
-        cell_end=np.r_[first[1:], len(keys)].astype(np.int64),
+        cell_keys=cell_keys,
+        cell_start=cell_start,
+        cell_end=cell_end,
     )
 
 
-def _cell_time_order(cell_x, cell_y, t):
+def cell_runs(cell_x, cell_y, t):
+    """Items sorted by (grid cell, ``t``, row), as runs of equal cells: the cell table of a grid.
+
+    Parameters
+    ----------
+    cell_x, cell_y : ndarray of int64, shape (n,)
+        Cell coordinates of each item, within ``[-CELL_COORDINATE_BOUND, CELL_COORDINATE_BOUND)``.
+    t : ndarray, shape (n,)
+        Order of the items within a cell (the time, s, of a point).
+
+    Returns
+    -------
+    order : ndarray of int64, shape (n,)
+        Sorted position -> item.
+    cell_keys : ndarray of int64
+        :func:`cell_key` of each occupied cell, ascending.
+    cell_start, cell_end : ndarray of int64
+        First sorted position of each occupied cell, and one past its last.
+    """
+    keys = cell_key.py_func(cell_x, cell_y)
+    order = _cell_time_order(cell_x, cell_y, t, keys)
+    keys = keys[order]
+    first = np.flatnonzero(np.r_[True, keys[1:] != keys[:-1]]) if len(keys) else np.zeros(0, np.int64)
+    return order, keys[first], first.astype(np.int64), np.r_[first[1:], len(keys)].astype(np.int64)
+
+
+def _cell_time_order(cell_x, cell_y, t, keys):
     """``np.lexsort((t, keys))``: by cell (x major, y minor), then time, then row; linear when the grid is compact.
 
     When the occupied bounding box has at most about 16 cells per point, a
@@ -81,7 +111,7 @@ def _cell_time_order(cell_x, cell_y, t):
     width = int(cell_y.max() - y_low) + 1
     n_boxes = (int(cell_x.max() - x_low) + 1) * width
     if n_boxes > 16 * n + 65536:  # a sparse bounding box: the counts would cost more than the sort
-        return np.lexsort((t, cell_x * _KEY_SHIFT + (cell_y + _KEY_OFFSET)))
+        return np.lexsort((t, keys))
     by_time = np.arange(n) if np.all(t[1:] >= t[:-1]) else np.argsort(t, kind="stable")
     return _counting_order((cell_x - x_low) * width + (cell_y - y_low), by_time, n_boxes)
 
@@ -105,11 +135,12 @@ def _cell_coordinates(values, cell_size, name):
     """``floor(values / cell_size)`` as int64; ValueError names the column when it cannot be one."""
     with np.errstate(over="ignore", invalid="ignore"):
         cells = np.floor(values / cell_size)
-    if len(cells) and not np.all((cells >= -_MAX_CELLS) & (cells < _MAX_CELLS)):
+    if len(cells) and not np.all((cells >= -CELL_COORDINATE_BOUND) & (cells < CELL_COORDINATE_BOUND)):
         worst = float(np.max(np.abs(values)))
         raise ValueError(
             f"column {name!r} holds a coordinate of magnitude {worst:.3g} m, beyond the neighbour grid's reach "
-            f"of {_MAX_CELLS * cell_size:.3g} m (2**31 cells of {cell_size:g} m); shift the data nearer the origin, "
+            f"of {CELL_COORDINATE_BOUND * cell_size:.3g} m (2**{_Y_BITS - 1} cells of {cell_size:g} m); shift the data "
+            f"nearer the origin, "
             f"or, if that is no position in m (another column read as {name!r}, e.g. a plain array in another "
             f"layout than the working detection array), pass the detection table as a DataFrame"
         )
@@ -161,7 +192,7 @@ def neighbor_cells(cell_keys, cell_start, cell_x, cell_y):
     for c in range(n_cells):
         first = cell_start[c]
         for dx in range(-1, 2):
-            low = (cell_x[first] + dx) * 4294967296 + (cell_y[first] - 1 + 2147483648)
+            low = cell_key(cell_x[first] + dx, cell_y[first] - 1)
             q = position[dx + 1]
             while q < n_cells and cell_keys[q] < low:
                 q += 1

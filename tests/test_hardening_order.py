@@ -7,7 +7,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from sklearn_radar import ClusterMerger, RadarDBSCAN
-from sklearn_radar.cluster._radar_dbscan_kernels import _pair_distance, _spatial_neighbor, criterion_of, points_of
+from sklearn_radar.cluster._radar_dbscan_kernels import _pair_distance, _spatial_neighbor, points_of
 
 
 def _same_partition(a, b):
@@ -45,7 +45,7 @@ def test_box_pair_distance_agrees_with_the_criterion_and_is_symmetric():
         t=rng.choice([0.0, 0.05], n),
         heading=rng.choice([0.0, 0.3, 1.2, -2.0], n),
     )
-    crit = criterion_of(RadarDBSCAN(metric="box", eps_xy=1.0, eps_vr=1.5))
+    crit = RadarDBSCAN(metric="box", eps_xy=1.0, eps_vr=1.5)._kernel_criterion()
     for _ in range(3000):
         i, j = rng.integers(0, n, 2)
         neighbor = _spatial_neighbor(i, j, points, crit)

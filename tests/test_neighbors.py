@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from sklearn_radar._labels import consecutive_labels, rank_by_first_appearance
-from sklearn_radar._neighbors import build_grid, neighbor_cells
+from sklearn_radar._neighbors import CELL_COORDINATE_BOUND, build_grid, cell_key, neighbor_cells
 
 
 def _grid_problem(seed):
@@ -52,3 +52,14 @@ def test_consecutive_labels_number_clusters_by_first_row(seed):
         if r >= 0:
             first.setdefault(r, len(first))
     assert consecutive_labels(roots).tolist() == [first[r] if r >= 0 else -1 for r in roots.tolist()]
+
+
+def test_cell_keys_sort_as_x_then_y_over_the_whole_coordinate_range():
+    bound = int(CELL_COORDINATE_BOUND)
+    cells = np.array([-bound, -bound + 1, -1, 0, 1, bound - 2, bound - 1], dtype=np.int64)
+    cell_x, cell_y = (grid.ravel() for grid in np.meshgrid(cells, cells, indexing="ij"))  # x major, y minor
+    keys = cell_key.py_func(cell_x, cell_y)
+    assert np.all(np.diff(keys) > 0)
+    assert [cell_key(a, b) for a, b in zip(cell_x, cell_y, strict=True)] == keys.tolist()  # compiled = numpy
+    with pytest.raises(ValueError, match="'y'"):
+        build_grid(np.zeros(2), np.array([0.0, CELL_COORDINATE_BOUND]), np.zeros(2), 1.0)

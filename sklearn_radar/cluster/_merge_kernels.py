@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from .._neighbors import time_range
+from .._neighbors import CELL_COORDINATE_BOUND, cell_key, cell_runs, time_range
 from .._union_find import find, union_keep_smaller
 
 
@@ -110,13 +110,7 @@ def _time_compatible_pairs(by_start, start, end, eps_t2):
     return np.array(first_a, dtype=np.int64), np.array(second_b, dtype=np.int64)
 
 
-_MAX_CELLS = 64  # a cluster whose reach covers more grid cells is compared with every other one
-
-
-@numba.njit(cache=True, nogil=True)
-def _cell_key(cx, cy):
-    """Hash of a grid cell; collisions only add candidates, which the box test then drops."""
-    return cx * np.int64(73856093) ^ cy * np.int64(19349663)
+_MAX_CLUSTER_CELLS = 64  # a cluster whose reach covers more grid cells is compared with every other one
 
 
 @numba.njit(cache=True, nogil=True)
@@ -131,59 +125,79 @@ def _boxes_close(a, b, lo_x, hi_x, lo_y, hi_y, half):
 
 
 @numba.njit(cache=True, nogil=True)
-def _candidate_pairs(by_start, start, end, eps_t2, lo_x, hi_x, lo_y, hi_y, half, side):
+def _reach_cells(by_start, lo_x, hi_x, lo_y, hi_y, half, side):
+    """The grid cells each cluster reaches, and the entries of the grid of :func:`_candidate_pairs`.
+
+    Cells have ``side`` m.  A cluster's reach is its box ``[lo_x, hi_x] x
+    [lo_y, hi_y]`` (m) expanded by ``half`` (m); ``reach`` holds its cells
+    ``[x0, x1] x [y0, y1]`` with one spare cell each side (rounding cannot
+    hide a pair), and ``large`` flags the clusters whose reach covers more
+    than ``_MAX_CLUSTER_CELLS`` cells or lies beyond the cell keys' range.
+    Each other cluster is entered in the cells of its reach (without the
+    spare ring), in the order of ``by_start``.
+
+    Returns
+    -------
+    reach : ndarray of int64, shape (n, 4)
+        (x0, x1, y0, y1) per cluster; 0 for a large one.
+    large : ndarray of bool, shape (n,)
+    entry_x, entry_y, entry_cluster, entry_rank : ndarray of int64
+        The cell, the cluster and its position in ``by_start`` of every entry.
+    """
+    n = len(by_start)
+    reach = np.zeros((n, 4), dtype=np.int64)
+    large = np.zeros(n, dtype=np.bool_)
+    n_entries = 0
+    for c in range(n):
+        fx0 = np.floor((lo_x[c] - half[c]) / side) - 1.0
+        fx1 = np.floor((hi_x[c] + half[c]) / side) + 1.0
+        fy0 = np.floor((lo_y[c] - half[c]) / side) - 1.0
+        fy1 = np.floor((hi_y[c] + half[c]) / side) + 1.0
+        in_range = fx0 >= -CELL_COORDINATE_BOUND and fx1 < CELL_COORDINATE_BOUND  # False for nan and inf
+        if not (in_range and fy0 >= -CELL_COORDINATE_BOUND and fy1 < CELL_COORDINATE_BOUND):
+            large[c] = True
+            continue
+        if (fx1 - fx0 + 1.0) * (fy1 - fy0 + 1.0) > _MAX_CLUSTER_CELLS:
+            large[c] = True
+            continue
+        reach[c, 0], reach[c, 1], reach[c, 2], reach[c, 3] = int(fx0), int(fx1), int(fy0), int(fy1)
+        n_entries += (reach[c, 1] - reach[c, 0] - 1) * (reach[c, 3] - reach[c, 2] - 1)
+    entry_x = np.empty(n_entries, dtype=np.int64)
+    entry_y = np.empty(n_entries, dtype=np.int64)
+    entry_cluster = np.empty(n_entries, dtype=np.int64)
+    entry_rank = np.empty(n_entries, dtype=np.int64)
+    k = 0
+    for position in range(n):
+        c = by_start[position]
+        if large[c]:
+            continue
+        for cx in range(reach[c, 0] + 1, reach[c, 1]):
+            for cy in range(reach[c, 2] + 1, reach[c, 3]):
+                entry_x[k], entry_y[k], entry_cluster[k], entry_rank[k] = cx, cy, c, position
+                k += 1
+    return reach, large, entry_x, entry_y, entry_cluster, entry_rank
+
+
+@numba.njit(cache=True, nogil=True)
+def _candidate_pairs(by_start, start, end, eps_t2, lo_x, hi_x, lo_y, hi_y, half, reach, large, grid):
     """The pairs of :func:`_time_compatible_pairs` (same order) whose boxes are less than ``half[a] + half[b]`` apart.
 
     ``by_start`` orders the clusters (a pair's a comes first); the boxes
     ``[lo_x, hi_x] x [lo_y, hi_y]`` (m) bound each cluster, ``half`` is the
-    reach of each cluster (m, inf for unbounded).  A uniform grid of cells
-    of ``side`` (m, :func:`_cell_side`) over the boxes expanded by ``half``
-    gives each cluster its spatial neighbours; a cluster covering more than
-    ``_MAX_CELLS`` cells is compared with all.  Memory is linear in the
-    clusters plus the pairs returned.
+    reach of each cluster (m, inf for unbounded).  ``reach`` and ``large``
+    are those of :func:`_reach_cells`; ``grid`` = (cell keys, cell start,
+    cell end, cluster of each sorted entry) is the cell table
+    (:func:`sklearn_radar._neighbors.cell_runs`) of its entries, so a
+    cluster finds its spatial neighbours in the cells of its reach; a large
+    one is compared with all.  Memory is linear in the clusters plus the
+    pairs returned.
     """
+    cell_keys, cell_start, cell_end, members = grid
     n = len(by_start)
     rank = np.empty(n, dtype=np.int64)
     for position in range(n):
         rank[by_start[position]] = position
-    cell_x0 = np.zeros(n, dtype=np.int64)
-    cell_x1 = np.zeros(n, dtype=np.int64)
-    cell_y0 = np.zeros(n, dtype=np.int64)
-    cell_y1 = np.zeros(n, dtype=np.int64)
-    large = np.zeros(n, dtype=np.bool_)
-    n_entries = 0
-    for c in range(n):
-        fx0 = np.floor((lo_x[c] - half[c]) / side) - 1.0  # one spare cell each side: rounding cannot hide a pair
-        fx1 = np.floor((hi_x[c] + half[c]) / side) + 1.0
-        fy0 = np.floor((lo_y[c] - half[c]) / side) - 1.0
-        fy1 = np.floor((hi_y[c] + half[c]) / side) + 1.0
-        if not (abs(fx0) < 1e15 and abs(fx1) < 1e15 and abs(fy0) < 1e15 and abs(fy1) < 1e15):
-            large[c] = True
-            continue
-        if (fx1 - fx0 + 1.0) * (fy1 - fy0 + 1.0) > _MAX_CELLS:
-            large[c] = True
-            continue
-        cell_x0[c], cell_x1[c], cell_y0[c], cell_y1[c] = int(fx0), int(fx1), int(fy0), int(fy1)
-        n_entries += (cell_x1[c] - cell_x0[c] - 1) * (cell_y1[c] - cell_y0[c] - 1)
-    # Each small cluster is entered in the cells of its own expanded box (without the spare ring), by rank.
-    keys = np.empty(n_entries, dtype=np.int64)
-    members = np.empty(n_entries, dtype=np.int64)
-    k = 0
-    large_by_rank = []
-    for position in range(n):
-        c = by_start[position]
-        if large[c]:
-            large_by_rank.append(c)
-            continue
-        for cx in range(cell_x0[c] + 1, cell_x1[c]):
-            for cy in range(cell_y0[c] + 1, cell_y1[c]):
-                keys[k] = _cell_key(cx, cy)
-                members[k] = c
-                k += 1
-    order = np.argsort(keys, kind="mergesort")  # stable: by rank within a cell
-    keys = keys[order]
-    members = members[order]
-
+    large_by_rank = [by_start[position] for position in range(n) if large[by_start[position]]]
     first_a, second_b = [], []
     seen = np.full(n, -1, dtype=np.int64)
     found = np.empty(n, dtype=np.int64)
@@ -197,14 +211,14 @@ def _candidate_pairs(by_start, start, end, eps_t2, lo_x, hi_x, lo_y, hi_y, half,
                     found[n_found] = a
                     n_found += 1
         else:
-            for cx in range(cell_x0[b], cell_x1[b] + 1):
-                for cy in range(cell_y0[b], cell_y1[b] + 1):
-                    key = _cell_key(cx, cy)
-                    m = np.searchsorted(keys, key)
-                    while m < len(keys) and keys[m] == key:
+            for cx in range(reach[b, 0], reach[b, 1] + 1):
+                # The cells (cx, y0..y1) are the keys in [key(cx, y0), key(cx, y1)]: one search per column.
+                q = np.searchsorted(cell_keys, cell_key(cx, reach[b, 2]))
+                last = cell_key(cx, reach[b, 3])
+                while q < len(cell_keys) and cell_keys[q] <= last:
+                    for m in range(cell_start[q], cell_end[q]):
                         a = members[m]
-                        m += 1
-                        if rank[a] >= position:
+                        if rank[a] >= position:  # a cell's entries are in rank order
                             break
                         if seen[a] == b:
                             continue
@@ -212,6 +226,7 @@ def _candidate_pairs(by_start, start, end, eps_t2, lo_x, hi_x, lo_y, hi_y, half,
                         if end[a] > start[b] - eps_t2 and _boxes_close(a, b, lo_x, hi_x, lo_y, hi_y, half):
                             found[n_found] = a
                             n_found += 1
+                    q += 1
             for a in large_by_rank:
                 if rank[a] >= position:
                     break
@@ -250,7 +265,7 @@ def _max_speeds(scan_t, scan_x, scan_y, scan_start, scan_end):
 
 
 def _cell_side(lo_x, hi_x, lo_y, hi_y, half):
-    """Grid cell side of :func:`_candidate_pairs`, m: the median finite expanded extent of the clusters (else 1).
+    """Grid cell side of :func:`_reach_cells`, m: the median finite expanded extent of the clusters (else 1).
 
     At least one grid cell per typical cluster.  The extent of a cluster is
     the larger side of its box (numba's ``max``: the first unless the second
@@ -314,7 +329,12 @@ def candidate_pairs(runs, eps_t2, eps_d, mode):
         half = (0.5 * float(eps_d) + reach) * (1.0 + 1e-6) + 1e-9 * scale
     half = np.ascontiguousarray(np.where(np.isnan(half), np.inf, half))
     side = _cell_side(lo_x, hi_x, lo_y, hi_y, half)  # in numpy: numba's median would compile for about 1 s
-    return _candidate_pairs(by_start, start, end, float(eps_t2), lo_x, hi_x, lo_y, hi_y, half, side)
+    reach, large, entry_x, entry_y, entry_cluster, entry_rank = _reach_cells(
+        by_start, lo_x, hi_x, lo_y, hi_y, half, side
+    )
+    order, cell_keys, cell_start, cell_end = cell_runs(entry_x, entry_y, entry_rank)
+    grid = (cell_keys, cell_start, cell_end, entry_cluster[order])
+    return _candidate_pairs(by_start, start, end, float(eps_t2), lo_x, hi_x, lo_y, hi_y, half, reach, large, grid)
 
 
 def time_compatible_pairs(runs, eps_t2):

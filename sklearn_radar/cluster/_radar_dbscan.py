@@ -340,7 +340,7 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
             points=points,
             min_points=min_points[rows_sorted],
             can_be_core=can_be_core[rows_sorted],
-            criterion=criterion_of(self, heading),
+            criterion=self._kernel_criterion(heading),
         )
         # Express each emitted id as the (time-sorted) position of the first detection that carried it.
         first_carrier = np.full(len(rows), -1, dtype=np.int64)
@@ -363,9 +363,21 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
             grid=grid,
             min_points=min_points[rows][order],
             can_be_core=can_be_core[rows][order],
-            criterion=criterion_of(self, heading),
+            criterion=self._kernel_criterion(heading),
         )
         return (rows, *_unsort(order, sorted_roots, sorted_core))
+
+    def _kernel_criterion(self, heading=None):
+        """The kernels' criterion of these parameters, for points of car heading ``heading`` (rad; None: unknown)."""
+        return criterion_of(
+            metric=self.metric,
+            eps_xy=self.eps_xy,
+            eps_vr=self.eps_vr,
+            vr_scale=self.vr_scale,
+            eps_xyv=self.eps_xyv,
+            eps_t=self.eps_t,
+            heading=heading,
+        )
 
     def _cell_size(self, heading):
         """Grid cell side, m: the largest spatial reach of the criterion."""
@@ -475,7 +487,7 @@ class ScanStream:
         self.clusterer = clusterer
         self._windows = {}
         self._next_id = 0
-        self._criterion = criterion_of(clusterer)  # the headings of future scans are unknown: the rotated box
+        self._criterion = clusterer._kernel_criterion()  # the headings of future scans are unknown: the rotated box
 
     def update(self, x, y, v_r, t, *, sequence=0, keep=None, range_sc=None, heading=None):
         """Labels of one or more new scans (-1: noise), in the order given.

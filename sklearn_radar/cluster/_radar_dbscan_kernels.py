@@ -81,6 +81,29 @@ class Points(NamedTuple):
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
+def _box_offset(dx, dy, t_i, t_j, cos_i, sin_i, cos_j, sin_j):
+    """The rotated box of Eq. 3: the larger of |along| and |across|, m, of the offset (dx, dy) in the box axes.
+
+    Box axes: the car frame of the later detection of the pair (the newest
+    scan of a sliding window); at equal times, the larger over both
+    detections' frames (symmetric in i and j; one heading per scan makes
+    them equal).
+    """
+    if t_i < t_j:
+        cos_i, sin_i, cos_j, sin_j = cos_j, sin_j, cos_i, sin_i
+    offset = _offset_in_car_axes(cos_i, sin_i, dx, dy)
+    if t_i == t_j and (cos_i != cos_j or sin_i != sin_j):
+        offset = max(offset, _offset_in_car_axes(cos_j, sin_j, dx, dy))
+    return offset
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _offset_in_car_axes(cos_h, sin_h, dx, dy):
+    """The larger of |along| and |across|, m, of the offset (dx, dy) in the car axes of heading (cos_h, sin_h)."""
+    return max(abs(cos_h * dx + sin_h * dy), abs(cos_h * dy - sin_h * dx))
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
 def _spatial_neighbor(i, j, points, crit):
     """Eqs. 3-5 without the time criterion (strict inequalities, as printed in the paper)."""
     dx = points.x[j] - points.x[i]
@@ -90,18 +113,13 @@ def _spatial_neighbor(i, j, points, crit):
     if crit.metric == BOX_UNROTATED:  # every heading is 0: the box axes are the x-y axes
         return abs(dx) < eps_xy and abs(dy) < eps_xy and abs(dv) < eps_vr
     if crit.metric == BOX:
-        # Box axes: the car frame of the later detection of the pair (the newest scan of a sliding window);
-        # at equal times, both detections' frames (symmetric in i and j; one heading per scan makes them equal).
-        k, other = (i, j) if points.t[i] >= points.t[j] else (j, i)
-        along = points.cos_h[k] * dx + points.sin_h[k] * dy
-        across = points.cos_h[k] * dy - points.sin_h[k] * dx
-        if not (abs(along) < eps_xy and abs(across) < eps_xy and abs(dv) < eps_vr):
-            return False
-        if points.t[i] != points.t[j] or (points.cos_h[i] == points.cos_h[j] and points.sin_h[i] == points.sin_h[j]):
-            return True
-        along = points.cos_h[other] * dx + points.sin_h[other] * dy
-        across = points.cos_h[other] * dy - points.sin_h[other] * dx
-        return abs(along) < eps_xy and abs(across) < eps_xy
+        return (
+            abs(dv) < eps_vr
+            and _box_offset(
+                dx, dy, points.t[i], points.t[j], points.cos_h[i], points.sin_h[i], points.cos_h[j], points.sin_h[j]
+            )
+            < eps_xy
+        )
     if crit.metric == XY:
         return dx * dx + dy * dy < eps_xy * eps_xy and abs(dv) < eps_vr
     return dx * dx + dy * dy + dv * dv / (crit.vr_scale * crit.vr_scale) < crit.eps_xyv * crit.eps_xyv
@@ -117,15 +135,13 @@ def _pair_distance(i, j, points, crit):
     if crit.metric == BOX_UNROTATED:
         return max(abs(dx) / eps_xy, abs(dy) / eps_xy, dv / eps_vr)
     if crit.metric == BOX:
-        k, other = (i, j) if points.t[i] >= points.t[j] else (j, i)
-        along = abs(points.cos_h[k] * dx + points.sin_h[k] * dy)
-        across = abs(points.cos_h[k] * dy - points.sin_h[k] * dx)
-        distance = max(along / eps_xy, across / eps_xy, dv / eps_vr)
-        if points.t[i] == points.t[j]:  # as _spatial_neighbor: both frames count at equal times
-            along = abs(points.cos_h[other] * dx + points.sin_h[other] * dy)
-            across = abs(points.cos_h[other] * dy - points.sin_h[other] * dx)
-            distance = max(distance, along / eps_xy, across / eps_xy)
-        return distance
+        return max(
+            _box_offset(
+                dx, dy, points.t[i], points.t[j], points.cos_h[i], points.sin_h[i], points.cos_h[j], points.sin_h[j]
+            )
+            / eps_xy,
+            dv / eps_vr,
+        )
     if crit.metric == XY:
         return max(math.sqrt(dx * dx + dy * dy) / eps_xy, dv / eps_vr)
     return math.sqrt(dx * dx + dy * dy + dv * dv / (crit.vr_scale * crit.vr_scale)) / crit.eps_xyv
@@ -151,18 +167,21 @@ def _advance(times, position, end, bound, inclusive):
 
 
 @numba.njit(cache=True, nogil=True)  # not inlined (3 call sites): its callees are, inside it
-def _window(times, start, end, lo, hi, fresh, t_low, t_high):
-    """Positions [lo, hi) of a time-sorted run within [t_low, t_high].
+def _window(times, start, end, lo, hi, owner, own, t_low, t_high):
+    """Positions [lo, hi) of a time-sorted run within [t_low, t_high], and the cell they are found for.
 
-    ``fresh``: the first query of this run for the current cell (two binary
-    searches); otherwise ``lo`` and ``hi`` are the previous answer for an
-    earlier or equal time and only move forward.
+    The one window walk of :func:`_dbscan_sorted`'s passes.  ``lo``, ``hi``
+    are the slot's previous answer, found for the points of cell ``owner``.
+    For the first point of a new cell ``own`` they are found afresh (two
+    binary searches); for the next points of the cell, visited in time
+    order, they only move forward (a few steps).
     """
-    if fresh:
-        return time_range(times, start, end, t_low, t_high)
+    if owner != own:
+        lo, hi = time_range(times, start, end, t_low, t_high)
+        return lo, hi, own
     lo = _advance(times, lo, end, t_low, False)
     hi = _advance(times, max(hi, lo), end, t_high, True)
-    return lo, hi
+    return lo, hi, own
 
 
 #: Order in which pass 1 visits the 3 x 3 neighbour cells: its own cell (slot 4) first, where neighbours are likeliest.
@@ -208,10 +227,9 @@ def _dbscan_sorted(points, min_points, can_be_core, cell_x, cell_y, cell_keys, c
             c = cells[own, k]
             if c < 0:
                 continue
-            lo[k], hi[k] = _window(
-                t, cell_start[c], cell_end[c], lo[k], hi[k], owner[k] != own, t[i] - eps_t, t[i] + eps_t
+            lo[k], hi[k], owner[k] = _window(
+                t, cell_start[c], cell_end[c], lo[k], hi[k], owner[k], own, t[i] - eps_t, t[i] + eps_t
             )
-            owner[k] = own
             for j in range(lo[k], hi[k]):
                 if j == i:
                     continue
@@ -252,10 +270,9 @@ def _dbscan_sorted(points, min_points, can_be_core, cell_x, cell_y, cell_keys, c
             c = cells[own, k]
             if c < own or core_end[c] == core_start[c]:
                 continue
-            lo[k], hi[k] = _window(
-                core_t, core_start[c], core_end[c], lo[k], hi[k], owner[k] != own, t[i] - eps_t, t[i] + eps_t
+            lo[k], hi[k], owner[k] = _window(
+                core_t, core_start[c], core_end[c], lo[k], hi[k], owner[k], own, t[i] - eps_t, t[i] + eps_t
             )
-            owner[k] = own
             # In its own cell, i meets only the core points after it (the earlier ones met i).
             for m in range(max(lo[k], position + 1) if c == own else lo[k], hi[k]):
                 if _spatial_neighbor(position, m, core_points, crit):
@@ -280,10 +297,9 @@ def _dbscan_sorted(points, min_points, can_be_core, cell_x, cell_y, cell_keys, c
             c = cells[own, k]
             if c < 0 or core_end[c] == core_start[c]:
                 continue
-            lo[k], hi[k] = _window(
-                core_t, core_start[c], core_end[c], lo[k], hi[k], owner[k] != own, t[i] - eps_t, t[i] + eps_t
+            lo[k], hi[k], owner[k] = _window(
+                core_t, core_start[c], core_end[c], lo[k], hi[k], owner[k], own, t[i] - eps_t, t[i] + eps_t
             )
-            owner[k] = own
             for m in range(lo[k], hi[k]):
                 j = core_position[m]
                 if _spatial_neighbor(i, j, points, crit):
@@ -464,16 +480,25 @@ def _causal_sequence(points, min_points, can_be_core, crit):
 # Python wrappers: the estimator's only entry points, called with keyword arguments.
 
 
-def criterion_of(estimator, heading=None) -> Criterion:
-    """The neighbourhood criterion (Eqs. 3-5 and the time window) of a RadarDBSCAN's parameters.
+def criterion_of(*, metric, eps_xy, eps_vr, vr_scale, eps_xyv, eps_t, heading=None) -> Criterion:
+    """The neighbourhood criterion (Eqs. 3-5 and the time window) as the kernels' :class:`Criterion`.
 
-    The one place where the parameters become the kernels' :class:`Criterion`.
+    The one place where thresholds become a :class:`Criterion`.
 
     Parameters
     ----------
-    estimator : RadarDBSCAN
-        Its ``metric``, ``eps_xy`` (m), ``eps_vr`` (m/s), ``vr_scale`` (m/s),
-        ``eps_xyv`` (m) and ``eps_t`` (s, None for no time limit) are read.
+    metric : {"box", "xy", "xyv"}
+        Eq. 3, 4 or 5.
+    eps_xy : float
+        Spatial threshold of Eqs. 3 and 4, m.
+    eps_vr : float
+        Doppler threshold of Eqs. 3 and 4, m/s.
+    vr_scale : float
+        eps'_vr of Eq. 5, m/s.
+    eps_xyv : float
+        Threshold of Eq. 5, m.
+    eps_t : float or None
+        Time threshold, s; None for no time limit.
     heading : array-like of float, default=None
         Car heading, rad, of every point the criterion will be applied to.
         When given and all 0, the box of Eq. 3 is ``BOX_UNROTATED`` (the same
@@ -484,16 +509,16 @@ def criterion_of(estimator, heading=None) -> Criterion:
     -------
     criterion : Criterion
     """
-    metric = METRIC_CODES[estimator.metric]
-    if metric == BOX and heading is not None and not np.any(heading):
-        metric = BOX_UNROTATED
+    code = METRIC_CODES[metric]
+    if code == BOX and heading is not None and not np.any(heading):
+        code = BOX_UNROTATED
     return Criterion(
-        metric=metric,
-        eps_xy=float(estimator.eps_xy),
-        eps_vr=float(estimator.eps_vr),
-        vr_scale=float(estimator.vr_scale),
-        eps_xyv=float(estimator.eps_xyv),
-        eps_t=np.inf if estimator.eps_t is None else float(estimator.eps_t),
+        metric=code,
+        eps_xy=float(eps_xy),
+        eps_vr=float(eps_vr),
+        vr_scale=float(vr_scale),
+        eps_xyv=float(eps_xyv),
+        eps_t=np.inf if eps_t is None else float(eps_t),
     )
 
 

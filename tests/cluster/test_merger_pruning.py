@@ -61,6 +61,20 @@ def test_pruned_pairs_give_the_same_merges_as_all_time_compatible_pairs(seed, ep
     assert kept_positions == sorted(kept_positions)
 
 
+def test_clusters_beyond_the_cell_keys_range_are_compared_with_all():
+    # 1e12 m: beyond 2**31 grid cells of a few metres, where a cell key would overflow.
+    labels, x, y, t = _random_clusters(np.random.default_rng(0), 60, spread=15.0, offset=1e12)
+    runs = cluster_runs(labels, x, y, t)
+    all_a, all_b = time_compatible_pairs(runs, 0.35)
+    frames_all = velocity_frames(runs, all_a, all_b, 0.94, 0.35)
+    a, b = candidate_pairs(runs, 0.35, 0.94, "velocity")
+    frames = velocity_frames(runs, a, b, 0.94, 0.35)
+    assert len(frames_all) > 0
+    np.testing.assert_array_equal(
+        np.c_[a[frames[:, 0]], b[frames[:, 0]]], np.c_[all_a[frames_all[:, 0]], all_b[frames_all[:, 0]]]
+    )
+
+
 def test_spread_out_clusters_give_a_linear_number_of_candidate_pairs():
     n = 20000
     labels = np.arange(2 * n) // 2

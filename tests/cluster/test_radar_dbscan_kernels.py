@@ -18,12 +18,22 @@ from sklearn_radar.cluster._radar_dbscan_kernels import (
 )
 
 
-def test_criterion_holds_the_estimators_thresholds_as_floats():
-    model = RadarDBSCAN(metric="xyv", eps_xy=1.5, eps_vr=2, vr_scale=3, eps_xyv=0.7, eps_t=0.3)
-    criterion = criterion_of(model, np.zeros(4))
+def test_criterion_holds_the_thresholds_as_floats():
+    criterion = criterion_of(metric="xyv", eps_xy=1.5, eps_vr=2, vr_scale=3, eps_xyv=0.7, eps_t=0.3)
     assert criterion == Criterion(metric=XYV, eps_xy=1.5, eps_vr=2.0, vr_scale=3.0, eps_xyv=0.7, eps_t=0.3)
     assert all(type(value) is float for value in criterion[1:])
-    assert criterion_of(RadarDBSCAN(eps_t=None)).eps_t == np.inf
+    assert criterion_of(metric="xy", eps_xy=1, eps_vr=1, vr_scale=1, eps_xyv=1, eps_t=None).eps_t == np.inf
+
+
+def test_the_estimator_passes_its_parameters_as_plain_values():
+    model = RadarDBSCAN(metric="xyv", eps_xy=1.5, eps_vr=2, vr_scale=3, eps_xyv=0.7, eps_t=None)
+    expected = Criterion(metric=XYV, eps_xy=1.5, eps_vr=2.0, vr_scale=3.0, eps_xyv=0.7, eps_t=np.inf)
+    assert model._kernel_criterion(np.zeros(4)) == expected
+
+
+def test_the_kernel_module_reads_no_estimator():
+    with pytest.raises(TypeError):
+        criterion_of(RadarDBSCAN())  # keyword values only
 
 
 @pytest.mark.parametrize(
@@ -37,12 +47,12 @@ def test_criterion_holds_the_estimators_thresholds_as_floats():
     ],
 )
 def test_the_box_needs_no_rotation_only_when_every_heading_is_zero(metric, heading, expected):
-    assert criterion_of(RadarDBSCAN(metric=metric), heading).metric == expected
+    assert RadarDBSCAN(metric=metric)._kernel_criterion(heading).metric == expected
 
 
 def test_the_stream_uses_the_same_criterion_object():
     model = RadarDBSCAN(metric="xy", eps_xy=0.8, eps_t=None)
-    assert ScanStream(model)._criterion == criterion_of(model)
+    assert ScanStream(model)._criterion == model._kernel_criterion()
 
 
 def test_points_are_contiguous_float64_with_the_heading_as_cosine_and_sine():
