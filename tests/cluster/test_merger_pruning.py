@@ -86,11 +86,12 @@ def test_spread_out_clusters_give_a_linear_number_of_candidate_pairs():
         assert len(a) < 10 * n  # all time-compatible pairs: n (n - 1) / 2 = 2e8
 
 
-def test_the_issue_case_runs_in_seconds_and_little_memory():
-    # Issue 15, item 1: 20k two-point clusters alive at once took 52 s and 5.2 GB.
+def test_the_issue_case_runs_in_little_memory():
+    # Issue 15, item 1: 20k two-point clusters alive at once took 52 s and 5.2 GB.  Memory only: the project's
+    # tests never time (the machine is shared); the pair count above is what keeps the time linear.
     script = textwrap.dedent(
         """
-        import resource, time
+        import resource
         import numpy as np, pandas as pd
         from sklearn_radar import ClusterMerger, RadarDBSCAN
         n = 40000; k = np.arange(n) // 2
@@ -99,15 +100,12 @@ def test_the_issue_case_runs_in_seconds_and_little_memory():
         for mode in ("continuation", "velocity"):
             X["azimuth_sc"] = 0.3; X["sensor_yaw"] = 0.0
             model = ClusterMerger(mode=mode, stage1=RadarDBSCAN(metric="xy", eps_xy=0.5, min_samples=2, vr_min=-np.inf))
-            model.fit(X.iloc[:100])  # compile
-            start = time.perf_counter()
             model.fit(X)
-            print(time.perf_counter() - start)
+            assert len(model.labels_) == n
         print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)
         """
     )
     result = subprocess.run([sys.executable, "-c", script], capture_output=True, text=True, timeout=60)
     assert result.returncode == 0, result.stderr
-    *seconds, peak_mb = (float(line) for line in result.stdout.split())
-    assert max(seconds) < 2.0
+    peak_mb = float(result.stdout.split()[-1])
     assert peak_mb < 800
