@@ -62,8 +62,11 @@ class ObjectIds:
 class ObjectList:
     """The live objects of one sequence after a scan: plain arrays, one entry per object.
 
-    An object is live when it has detections in the last ``eps_t`` seconds
-    (stage 1's window); its figures are computed from those detections.
+    An object is live when it was updated (given detections, or merged)
+    within the last ``eps_t`` seconds, stage 1's window; its figures are
+    computed at its last update from its detections of the ``eps_t``
+    seconds before it, and carried unchanged until the next one (so a scan
+    costs the estimates of the objects it sees, not of all).
 
     Attributes
     ----------
@@ -117,33 +120,72 @@ def empty_object_list():
     )
 
 
-def object_list(object_ids, sequence, now_us, x, y, v_r, los, timestamp_us, first_us):
-    """The object list of the given rows (the live window of a sequence), grouped by object id."""
-    if len(object_ids) == 0:
-        return empty_object_list()
+#: The figures of an object kept between scans, in the order of :func:`object_figures`' columns.
+FIGURES = ("x", "y", "vx", "vy", "velocity_known", "extent_x", "extent_y", "n_detections", "last_update")
+
+
+def object_figures(object_ids, x, y, v_r, los, timestamp_us):
+    """Per object of the given rows: its id and the figures of :data:`FIGURES`, as arrays."""
     ids, group, count = np.unique(object_ids, return_inverse=True, return_counts=True)
     group = group.ravel()
 
-    def per_object(reduce, values):
-        out = np.full(len(ids), -np.inf if reduce is np.maximum else np.inf)
+    def per_object(reduce, values, start):
+        out = np.full(len(ids), start)
         reduce.at(out, group, values)
         return out
 
     vx, vy, _, _ = _estimate_velocities(v_r, los, group)
-    last = np.zeros(len(ids), dtype=np.int64)
-    np.maximum.at(last, group, timestamp_us)
-    first = np.array([first_us[i] for i in ids.tolist()], dtype=np.int64)
-    return ObjectList(
-        object_id=ids.astype(np.int64),
-        sequence=np.full(len(ids), sequence, dtype=np.int64),
-        x=np.bincount(group, x) / count,
-        y=np.bincount(group, y) / count,
-        vx=vx,
-        vy=vy,
-        velocity_known=np.isfinite(vx) & np.isfinite(vy),
-        extent_x=per_object(np.maximum, x) - per_object(np.minimum, x),
-        extent_y=per_object(np.maximum, y) - per_object(np.minimum, y),
-        n_detections=count.astype(np.int64),
-        age=(now_us - first) * 1e-6,
-        last_update=last,
-    )
+    figures = {
+        "x": np.bincount(group, x) / count,
+        "y": np.bincount(group, y) / count,
+        "vx": vx,
+        "vy": vy,
+        "velocity_known": np.isfinite(vx) & np.isfinite(vy),
+        "extent_x": per_object(np.maximum, x, -np.inf) - per_object(np.minimum, x, np.inf),
+        "extent_y": per_object(np.maximum, y, -np.inf) - per_object(np.minimum, y, np.inf),
+        "n_detections": count.astype(np.int64),
+        "last_update": per_object(np.maximum, timestamp_us, np.iinfo(np.int64).min),
+    }
+    return ids, figures
+
+
+class ObjectTable:
+    """The object list of one sequence, kept up to date: an object's figures change only when it is updated.
+
+    An object is updated at a scan that gives it detections (or merges it);
+    its figures are then computed from its detections of the ``eps_t``
+    seconds before.  It is listed while its last update is at most ``eps_t``
+    old, as stage 1 forgets it after that.
+    """
+
+    def __init__(self):
+        self.records = {}  # object id -> tuple of FIGURES values
+
+    def update(self, ids, figures, gone):
+        """Store the figures of the updated objects; drop the merged-away ids in ``gone``."""
+        for object_id in gone:
+            self.records.pop(object_id, None)
+        if len(ids) == 0:
+            return
+        columns = [figures[name].tolist() for name in FIGURES]
+        for k, object_id in enumerate(ids.tolist()):
+            self.records[object_id] = tuple(column[k] for column in columns)
+
+    def listed(self, sequence, now_us, oldest_us, first_us):
+        """The ObjectList of the objects updated at or after ``oldest_us`` (us); forgets the older ones."""
+        for object_id in [o for o, record in self.records.items() if record[-1] < oldest_us]:
+            del self.records[object_id]
+        if not self.records:
+            return empty_object_list()
+        ids = np.fromiter(self.records, dtype=np.int64, count=len(self.records))
+        values = list(zip(*self.records.values(), strict=True))
+        figures = {name: np.array(column) for name, column in zip(FIGURES, values, strict=True)}
+        first = np.array([first_us[i] for i in ids.tolist()], dtype=np.int64)
+        return ObjectList(
+            object_id=ids,
+            sequence=np.full(len(ids), sequence, dtype=np.int64),
+            **{name: figures[name] for name in FIGURES if name not in ("n_detections", "last_update")},
+            n_detections=figures["n_detections"].astype(np.int64),
+            age=(now_us - first) * 1e-6,
+            last_update=figures["last_update"].astype(np.int64),
+        )

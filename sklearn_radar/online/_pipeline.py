@@ -14,7 +14,7 @@ from ..cluster import ClusterMerger, RadarDBSCAN, ScanStream
 from ..preprocessing import DopplerDensityFilter, FrameTransform
 from ._filter import FilterWindow
 from ._merger import MergeWindow
-from ._objects import ObjectIds, ObjectList, empty_object_list, object_list
+from ._objects import ObjectIds, ObjectList, ObjectTable, empty_object_list, object_figures
 
 #: The raw columns a scan must hold (the detection table's, see :mod:`sklearn_radar._schema`).
 SCAN_COLUMNS = tuple(name for name in RAW_LAYOUT.columns if name != "sequence")
@@ -57,6 +57,7 @@ class _Sequence:
     def __init__(self, filter_, merger, eps_t):
         self.filter = None if filter_ is None else FilterWindow(filter_)
         self.merge = MergeWindow(merger, eps_t)
+        self.objects = ObjectTable()
         self.last_us = None
         self.sensor_us = {}
 
@@ -234,7 +235,9 @@ class OnlinePipeline:
             labels=labels,
             object_ids=self._ids.of(labels),
             keep=keep,
-            objects=self._objects(state, sequence, us, float(t[0])) if objects else empty_object_list(),
+            objects=self._objects(state, sequence, us, float(t[0]), labels, aliases)
+            if objects
+            else empty_object_list(),
             aliases=[alias for alias in aliases if alias is not None],
             merges=merges,
         )
@@ -257,21 +260,23 @@ class OnlinePipeline:
             aliases += [self._ids.merge(a, b, state.last_us, "stage2") for a, b in decided]
         return _empty_result([alias for alias in aliases if alias is not None], merges)
 
-    def _objects(self, state, sequence, now_us, now):
-        rows = state.merge.recent(now - self._eps_t)
-        if len(rows["label"]) == 0:
-            return empty_object_list()
-        return object_list(
-            self._ids.of(rows["label"]),
-            sequence,
-            now_us,
-            rows["x"],
-            rows["y"],
-            rows["v_r"],
-            rows["los"],
-            rows["us"],
-            self._ids.first_us,
-        )
+    def _objects(self, state, sequence, now_us, now, labels, aliases):
+        """The scan's object list: the objects it updated (detected or merged) get new figures."""
+        updated = set(self._ids.of(labels[labels >= 0]).tolist())
+        updated |= {alias[1] for alias in aliases if alias is not None}
+        gone = [alias[2] for alias in aliases if alias is not None]
+        if updated:
+            rows = state.merge.recent(now - self._eps_t)
+            ids = self._ids.of(rows["label"])
+            mine = np.isin(ids, np.fromiter(updated, dtype=np.int64))
+            found, figures = object_figures(
+                ids[mine], rows["x"][mine], rows["y"][mine], rows["v_r"][mine], rows["los"][mine], rows["us"][mine]
+            )
+            state.objects.update(found, figures, gone)
+        else:
+            state.objects.update(np.zeros(0, dtype=np.int64), {}, gone)
+        oldest_us = now_us - round(self._eps_t * 1e6)
+        return state.objects.listed(sequence, now_us, oldest_us, self._ids.first_us)
 
 
 def _empty_result(aliases, merges):
