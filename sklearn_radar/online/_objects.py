@@ -68,7 +68,7 @@ class ObjectList:
     seconds before it, and carried unchanged until the next one (so a scan
     costs the estimates of the objects it sees, not of all).
 
-    Attributes
+    Parameters
     ----------
     object_id : ndarray of int64
         Persistent id (see :class:`OnlinePipeline`).
@@ -108,7 +108,13 @@ class ObjectList:
         return len(self.object_id)
 
     def to_frame(self):
-        """The list as a DataFrame, one row per object, a column per attribute."""
+        """The list as a DataFrame.
+
+        Returns
+        -------
+        frame : DataFrame
+            One row per object, a column per field, in the order above.
+        """
         return pd.DataFrame({field.name: getattr(self, field.name) for field in fields(self)})
 
 

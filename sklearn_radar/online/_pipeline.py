@@ -24,7 +24,7 @@ SCAN_COLUMNS = tuple(name for name in RAW_LAYOUT.columns if name != "sequence")
 class ScanResult:
     """What :meth:`OnlinePipeline.update` returns for one scan.
 
-    Attributes
+    Parameters
     ----------
     labels : ndarray of int64, shape (n_detections,)
         Stage-1 cluster of each detection (-1: noise), as the offline causal stage 1 gives it.
