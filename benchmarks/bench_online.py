@@ -32,6 +32,9 @@ import time
 
 import numpy as np
 
+#: What each child process times.
+KINDS = {0: "all stages", 1: "with objects", 2: "stage 1 only"}
+
 
 def minute_of_data(k, difficulty="realistic"):
     """The k-th minute of the recording: a simulated 60 s sequence, its timestamps shifted by k minutes."""
@@ -52,8 +55,37 @@ def retained_rows(online):
     return rows, len(online._ids.root)
 
 
+def stage1_alone(online, data, wall, cpu):
+    """The reference: ScanStream alone on the working columns of the same scans (computed offline)."""
+    from sklearn_radar.cluster import ScanStream
+    from sklearn_radar.online._replay import scan_order
+
+    work = online.causal_pipeline()[:-1].fit_transform(data)
+    stage1 = online._stage1.clusterer
+    stream = ScanStream(stage1)
+    names = ("x", "y", "v_r", "t", "keep", "range_sc", "heading")
+    columns = {name: work[name].to_numpy() for name in names if name in work.columns}
+    for rows in scan_order(data):
+        scan = {name: values[rows] for name, values in columns.items()}
+        start_cpu, start = time.thread_time(), time.perf_counter()
+        stream.update(
+            scan["x"],
+            scan["y"],
+            scan["v_r"],
+            scan["t"][0],
+            keep=scan.get("keep"),
+            range_sc=scan["range_sc"],
+            heading=scan["heading"],
+        )
+        wall.append(time.perf_counter() - start)
+        cpu.append(time.thread_time() - start_cpu)
+
+
 def run(number, minutes, objects):
-    """Child process: stream ``minutes`` minutes with experiment ``number``; print the figures as JSON."""
+    """Child process: stream ``minutes`` minutes with experiment ``number``; print the figures as JSON.
+
+    ``objects`` 2 times stage 1 alone (ScanStream) on the same scans instead.
+    """
     from sklearn_radar.experiments import experiment_pipeline
     from sklearn_radar.online import OnlinePipeline
     from sklearn_radar.online._replay import scan_order
@@ -63,11 +95,15 @@ def run(number, minutes, objects):
     recorded = 0.0
     for k in range(minutes):
         data = minute_of_data(k)
+        if objects == 2:
+            stage1_alone(online, data, wall, cpu)
+            recorded += (data["timestamp"].max() - data["timestamp"].min()) * 1e-6
+            continue
         columns = {name: data[name].to_numpy() for name in data.columns}
         for rows in scan_order(data):
             scan = {name: values[rows] for name, values in columns.items()}
             start_cpu, start = time.thread_time(), time.perf_counter()
-            online.update(scan, objects=objects)
+            online.update(scan, objects=bool(objects))
             wall.append(time.perf_counter() - start)
             cpu.append(time.thread_time() - start_cpu)
         recorded += (data["timestamp"].max() - data["timestamp"].min()) * 1e-6
@@ -99,17 +135,20 @@ def main():
     args = parser.parse_args()
     if args.child:
         number, minutes, objects = args.child
-        run(number, minutes, bool(objects))
+        run(number, minutes, objects)
         return
     print(f"OnlinePipeline, realistic preset, 4 sensors, {args.minutes} min of recording per setting")
     for number in args.experiments:
-        for objects in (0, 1):
+        for objects in (2, 0, 1):  # stage 1 alone, then the four stages, then with the object list
             child = [sys.executable, __file__, "--child", str(number), str(args.minutes), str(objects)]
             out = subprocess.run(child, capture_output=True, text=True, check=True).stdout
             f = json.loads(out.strip().splitlines()[-1])
-            first, last = f["after_minutes"]["1"], f["after_minutes"][str(args.minutes)]
+            unknown = {"rss_mb": float("nan"), "rows": 0, "ids": 0}  # stage 1 alone: not measured
+            first = f["after_minutes"].get("1", unknown)
+            last = f["after_minutes"].get(str(args.minutes), unknown)
             print(
-                f"#{number:<2} objects={'yes' if objects else 'no ':3}  scans {f['n_scans']}  "
+                f"#{number:<2} {KINDS[objects]:12}  "
+                f"scans {f['n_scans']}  "
                 f"wall p50/p99/max {f['wall_us'][0]:.0f}/{f['wall_us'][1]:.0f}/{f['wall_us'][2]:.0f} us  "
                 f"cpu p50/p99/max {f['cpu_us'][0]:.0f}/{f['cpu_us'][1]:.0f}/{f['cpu_us'][2]:.0f} us  "
                 f"real-time factor {f['real_time_factor_wall']:.0f} (cpu {f['real_time_factor_cpu']:.0f})  "

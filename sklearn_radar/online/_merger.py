@@ -58,23 +58,25 @@ class MergeWindow:
 
     def add(self, labels, t, x, y, v_r, los, timestamp_us):
         """Append a scan's clustered rows (``labels >= 0``) and register the clusters it starts."""
-        clustered = labels >= 0
-        if not clustered.any():
+        clustered = np.flatnonzero(labels >= 0)
+        if len(clustered) == 0:
             return
         new = {"label": labels[clustered], "t": t[clustered], "x": x[clustered], "y": y[clustered]}
         new["v_r"], new["los"] = v_r[clustered], los[clustered]
-        new["us"] = np.full(int(clustered.sum()), timestamp_us, dtype=np.int64)
+        new["us"] = np.full(len(clustered), timestamp_us, dtype=np.int64)
         for name, values in new.items():
             self.rows[name] = np.concatenate([self.rows[name], values])
-        for label in np.unique(new["label"]).tolist():
-            mine = new["label"] == label
+        now = float(new["t"][0])
+        keys = [new[name] for name in ("t", "x", "y", "v_r", *(("los",) if self.velocity else ()))]
+        order = np.lexsort((*keys[::-1], new["label"]))  # by label, then the offline first-detection keys
+        sorted_labels = new["label"][order]
+        first = order[np.r_[True, sorted_labels[1:] != sorted_labels[:-1]]]
+        for label, row in zip(new["label"][first].tolist(), first.tolist(), strict=True):
             cluster = self.clusters.get(label)
             if cluster is not None:
-                cluster.latest = float(new["t"][mine][0])
+                cluster.latest = now
                 continue
-            keys = [new[name][mine] for name in ("t", "x", "y", "v_r", *(("los",) if self.velocity else ()))]
-            first = np.lexsort(keys[::-1])[0]
-            key = tuple(float(values[first]) for values in keys)
+            key = tuple(float(values[row]) for values in keys)
             self.clusters[label] = _Cluster(key=key, start=key[0], latest=key[0], decided=self.merger is None)
 
     def decide(self, now, growing):

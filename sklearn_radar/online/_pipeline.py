@@ -332,20 +332,22 @@ def _read_scan(scan):
     missing = [name for name in SCAN_COLUMNS if name not in names]
     if missing:
         raise ValueError(f"OnlinePipeline.update: the scan lacks the column(s) {missing}")
-    columns = [np.asarray(scan[name], dtype=np.float64).ravel() for name in SCAN_COLUMNS]
+    columns = [np.ravel(scan[name]) for name in SCAN_COLUMNS]
     n = len(columns[0])
-    for name, values in zip(SCAN_COLUMNS, columns, strict=True):
-        if len(values) != n:
-            raise ValueError(f"OnlinePipeline.update: column {name!r} has {len(values)} values, not {n}")
-    block = np.vstack(columns)  # one finiteness test for all columns
-    if not np.isfinite(block).all():
-        bad = SCAN_COLUMNS[int(np.flatnonzero(~np.isfinite(block).all(axis=1))[0])]
+    lengths = [len(values) for values in columns]
+    if min(lengths) != n or max(lengths) != n:
+        name = SCAN_COLUMNS[next(i for i, length in enumerate(lengths) if length != n)]
+        raise ValueError(f"OnlinePipeline.update: column {name!r} has another length than 'range_sc' ({n})")
+    block = np.array(columns, dtype=np.float64)  # one conversion and one finiteness test for all columns
+    finite = np.isfinite(block)
+    if not finite.all():
+        bad = SCAN_COLUMNS[int(np.flatnonzero(~finite.all(axis=1))[0])]
         raise ValueError(f"OnlinePipeline.update: column {bad!r} holds values that are not finite")
     c = dict(zip(SCAN_COLUMNS, block, strict=True))
     for name in ("sequence", "sensor_id"):
-        values = np.asarray(scan[name]).ravel() if name in names else np.zeros(n, dtype=np.int64)
+        values = np.ravel(scan[name]) if name in names else np.zeros(n, dtype=np.int64)
         if len(values) != n:
-            raise ValueError(f"OnlinePipeline.update: column {name!r} has {len(values)} values, not {n}")
+            raise ValueError(f"OnlinePipeline.update: column {name!r} has another length than 'range_sc' ({n})")
         c[name] = values
     for name in ("timestamp", "sequence"):
         if n and (c[name].min() != c[name].max()):
