@@ -112,7 +112,7 @@ class MergeWindow:
     def _accepted(self, pairs):
         """The pairs the offline criterion merges, computed by its kernels on the retained rows."""
         involved = np.unique(np.array(pairs, dtype=np.int64).ravel())
-        rows = np.flatnonzero(np.isin(self.rows["label"], involved))
+        rows = np.flatnonzero((self.rows["label"][:, None] == involved).any(axis=1))  # few clusters: no sort
         r = {name: values[rows] for name, values in self.rows.items()}
         extra = (r["v_r"], r["los"]) if self.velocity else (r["v_r"],)
         runs = cluster_runs(r["label"], r["x"], r["y"], r["t"], extra)

@@ -51,6 +51,8 @@ class ObjectIds:
 
     def forget(self, labels):
         """Drop stage-1 ids no window retains (an object's first time goes with its last cluster)."""
+        if not labels:
+            return
         for label in labels:
             self.root.pop(label, None)
         alive = set(self.root.values())
