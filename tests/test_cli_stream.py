@@ -92,3 +92,15 @@ def test_objects_and_out_must_differ(folder, params_file, tmp_path, capsys):
     assert main(_argv(folder, params_file, out, "--objects", str(out))) == 1
     assert "same file" in _one_line_error(capsys)
     assert not out.exists()
+
+
+def test_from_params_builds_the_saved_pipeline(params_file):
+    online = OnlinePipeline.from_params(params_file)
+    saved = _pipeline(load_params(params_file), params_file)
+    leaves = [
+        {key: value for key, value in pipeline.get_params().items() if not hasattr(value, "get_params")}
+        for pipeline in (online.pipeline, saved)
+    ]
+    assert leaves[0] == leaves[1]
+    merger = online.pipeline.steps[-1][1]
+    assert merger.eps_d == paper_params(13)["merge__eps_d"] and merger.stage1.eps_xyv == STAGE1["eps_xyv"]

@@ -216,3 +216,25 @@ def test_object_list_of_a_hand_made_target():
     assert objects.last_update[0] == 450_000
     frame = objects.to_frame()
     assert list(frame.columns)[:3] == ["object_id", "sequence", "x"] and len(frame) == 1
+
+
+def test_the_windows_keep_a_bounded_span_of_time():
+    """Memory stays flat: no window keeps detections older than its span, however long the stream runs."""
+    data = make_scenes(n_sequences=1, duration=12.0, random_state=7, difficulty="realistic").data
+    online = OnlinePipeline(experiment_pipeline(13))
+    merger = online._merger
+    eps_t, eps_t2 = 0.25, float(merger.eps_t2)
+    # Stage 2 keeps max(eps_t2, 4 eps_t) + 0.05 s before the oldest undecided cluster, which is at most
+    # eps_t2 + eps_t (+ one scan gap) old: a bound that does not grow with the recording.
+    bound = max(eps_t2, 4 * eps_t) + 0.05 + eps_t2 + eps_t + 0.1
+    columns = {name: data[name].to_numpy() for name in data.columns if name not in ("uuid", "track_id")}
+    spans = []
+    for rows in scans_in_time_order(data):
+        online.update({name: values[rows] for name, values in columns.items()}, objects=False)
+        now = columns["timestamp"][rows[0]] * 1e-6
+        state = online._sequences[int(columns["sequence"][rows[0]])]
+        kept = [state.merge.rows["t"], online._stage1._windows[float(columns["sequence"][rows[0]])].points.t]
+        spans.append(max(now - times.min() for times in kept if len(times)))
+        assert len(online._ids.root) <= len(state.merge.clusters) + len(online._stage1._windows)
+    assert max(spans) <= bound
+    assert max(spans) > 0.5 * bound  # the check sees windows that do fill
