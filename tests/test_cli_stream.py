@@ -98,7 +98,11 @@ def test_from_params_builds_the_saved_pipeline(params_file):
     online = OnlinePipeline.from_params(params_file)
     saved = _pipeline(load_params(params_file), params_file)
     leaves = [
-        {key: value for key, value in pipeline.get_params().items() if not hasattr(value, "get_params")}
+        {
+            key: value
+            for key, value in pipeline.get_params().items()
+            if not hasattr(value, "get_params") and key != "steps"
+        }
         for pipeline in (online.pipeline, saved)
     ]
     assert leaves[0] == leaves[1]
