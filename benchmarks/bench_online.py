@@ -81,6 +81,14 @@ def stage1_alone(online, data, wall, cpu):
         cpu.append(time.thread_time() - start_cpu)
 
 
+def current_rss_mb():
+    """Resident set size now, MB (Linux: /proc/self/statm)."""
+    import os
+
+    with open("/proc/self/statm") as statm:
+        return int(statm.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
+
+
 def run(number, minutes, objects):
     """Child process: stream ``minutes`` minutes with experiment ``number``; print the figures as JSON.
 
@@ -131,6 +139,7 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--minutes", type=int, default=10)
     parser.add_argument("--experiments", type=int, nargs="+", default=[1, 13, 12])
+    parser.add_argument("--kinds", type=int, nargs="+", default=[2, 0, 1], help="2: stage 1 alone, 0: all, 1: +objects")
     parser.add_argument("--child", nargs=3, type=int, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
@@ -139,11 +148,16 @@ def main():
         return
     print(f"OnlinePipeline, realistic preset, 4 sensors, {args.minutes} min of recording per setting")
     for number in args.experiments:
-        for objects in (2, 0, 1):  # stage 1 alone, then the four stages, then with the object list
+        for objects in args.kinds:  # stage 1 alone, the four stages, the four stages with the object list
             child = [sys.executable, __file__, "--child", str(number), str(args.minutes), str(objects)]
             out = subprocess.run(child, capture_output=True, text=True, check=True).stdout
             f = json.loads(out.strip().splitlines()[-1])
-            unknown = {"rss_mb": float("nan"), "rows": 0, "ids": 0}  # stage 1 alone: not measured
+            unknown = {
+                "rss_mb": float("nan"),
+                "rss_now_mb": float("nan"),
+                "rows": 0,
+                "ids": 0,
+            }  # stage 1 alone: not measured
             first = f["after_minutes"].get("1", unknown)
             last = f["after_minutes"].get(str(args.minutes), unknown)
             print(
@@ -153,6 +167,7 @@ def main():
                 f"cpu p50/p99/max {f['cpu_us'][0]:.0f}/{f['cpu_us'][1]:.0f}/{f['cpu_us'][2]:.0f} us  "
                 f"real-time factor {f['real_time_factor_wall']:.0f} (cpu {f['real_time_factor_cpu']:.0f})  "
                 f"peak RSS {first['rss_mb']:.0f} -> {last['rss_mb']:.0f} MB, "
+                f"RSS now {first['rss_now_mb']:.0f} -> {last['rss_now_mb']:.0f} MB, "
                 f"rows kept {first['rows']} -> {last['rows']}, ids {first['ids']} -> {last['ids']}"
             )
 
