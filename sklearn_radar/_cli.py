@@ -373,19 +373,19 @@ def _stream(args) -> int:
 
     summary = stream_radarscenes(args.data, args.params, args.out, objects=args.objects, experiment=args.experiment)
     print(f"streamed experiment #{summary['experiment']} of {_shown(args.params)}: {_setting(summary['params'])}")
-    latency = summary["latency"] * 1e6
-    p50, p99 = np.percentile(latency, [50, 99]) if len(latency) else (0.0, 0.0)
-    worst = latency.max() if len(latency) else 0.0
     print(
         f"{summary['n_detections']} detections in {summary['n_scans']} scans, {summary['n_objects']} objects "
         f"({summary['n_aliases']} merges made aliases)"
     )
-    print(f"latency per scan: p50 {p50:.0f} us, p99 {p99:.0f} us, max {worst:.0f} us")
-    busy = float(summary["latency"].sum())
+    for name, seconds in (("wall", summary["latency"]), ("cpu", summary["cpu"])):
+        micro = seconds * 1e6 if len(seconds) else np.zeros(1)
+        p50, p99 = np.percentile(micro, [50, 99])
+        print(f"latency per scan ({name}): p50 {p50:.0f} us, p99 {p99:.0f} us, max {micro.max():.0f} us")
+    busy, cpu = float(summary["latency"].sum()), float(summary["cpu"].sum())
     factor = summary["recording"] / busy if busy > 0 else float("inf")
     print(
-        f"real-time factor {factor:.1f} ({summary['recording']:.1f} s of recording labelled in {busy:.2f} s; "
-        "above 1 is faster than real time)"
+        f"real-time factor {factor:.1f} ({summary['recording']:.1f} s of recording labelled in {busy:.2f} s, "
+        f"{cpu:.2f} s of CPU; above 1 is faster than real time)"
     )
     written = ", ".join(_shown(path) for path in (summary["out"], summary["objects"]) if path is not None)
     print(f"wrote {written}")

@@ -52,17 +52,19 @@ def replay(online, data, objects=False):
     -------
     replayed : dict
         ``labels`` (stage 1), ``object_ids`` (final: every alias resolved to its surviving id), ``keep``,
-        ``latency`` (s per scan), ``aliases`` and ``objects`` (a DataFrame, or None).
+        ``latency`` and ``cpu`` (wall and thread CPU time per scan, s), ``aliases`` and ``objects`` (a
+        DataFrame, or None).
     """
     columns = {name: data[name].to_numpy() for name in data.columns if name not in ("uuid", "track_id")}
     n = len(data)
     labels, reported, keep = np.full(n, -1), np.full(n, -1), np.zeros(n, dtype=bool)
-    latency, aliases, frames = [], [], []
+    latency, cpu, aliases, frames = [], [], [], []
     for rows in scan_order(data):
         scan = {name: values[rows] for name, values in columns.items()}
-        start = time.perf_counter()
+        start, start_cpu = time.perf_counter(), time.thread_time()
         result = online.update(scan, objects=objects)
         latency.append(time.perf_counter() - start)
+        cpu.append(time.thread_time() - start_cpu)
         labels[rows], reported[rows], keep[rows] = result.labels, result.object_ids, result.keep
         aliases += result.aliases
         if objects and len(result.objects):
@@ -78,6 +80,7 @@ def replay(online, data, objects=False):
         "object_ids": final,
         "keep": keep,
         "latency": np.array(latency),
+        "cpu": np.array(cpu),
         "aliases": aliases,
         "objects": table,
     }
@@ -128,7 +131,8 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None):
     -------
     summary : dict
         ``experiment``, ``params``, ``n_detections``, ``n_scans``, ``n_objects``, ``n_aliases``,
-        ``latency`` (s per scan), ``recording`` (s), ``out`` and ``objects``.
+        ``latency`` and ``cpu`` (wall and thread CPU time per scan, s), ``recording`` (s), ``out`` and
+        ``objects``.
     """
     from ..reproduce._apply import _pipeline, check_predictions_file, load_params, write_predictions
     from ..reproduce._io import atomic_write
@@ -161,6 +165,7 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None):
         "n_objects": len(np.unique(final[final >= 0])),
         "n_aliases": len(replayed["aliases"]),
         "latency": replayed["latency"],
+        "cpu": replayed["cpu"],
         "recording": recording_seconds(scenes.data),
         "out": str(out),
         "objects": None if objects is None else str(objects),
