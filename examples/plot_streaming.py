@@ -26,6 +26,8 @@ import time
 
 import matplotlib.pyplot as plt
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
 from sklearn.metrics import adjusted_rand_score
 
 from sklearn_radar.datasets import make_scenes
@@ -86,18 +88,12 @@ print(result.objects.to_frame().round(2).to_string(index=False))
 causal = online.causal_pipeline()
 offline = causal.fit_predict(data)
 offline_stage1 = causal[-1].stage1_labels_
-parent = {}
-
-
-def find(label):
-    while parent.get(label, label) != label:
-        label = parent[label]
-    return label
-
-
-for a, b in merges:
-    parent[find(b)] = find(a)
-merged = np.array([find(label) if label >= 0 else -1 for label in labels])
+# The merged clusters are the connected components of the graph whose edges are the merges.
+n_labels = labels.max() + 1
+edges = np.array(merges, dtype=np.int64).reshape(-1, 2)
+graph = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(n_labels, n_labels))
+component = connected_components(graph, directed=False)[1]
+merged = np.where(labels >= 0, component[np.maximum(labels, 0)], -1)
 for name, ours, theirs in [("stage 1", labels, offline_stage1), ("stage 2", merged, offline)]:
     clustered = ours >= 0
     same = np.array_equal(ours < 0, theirs < 0) and adjusted_rand_score(ours[clustered], theirs[clustered]) == 1.0

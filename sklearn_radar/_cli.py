@@ -192,19 +192,14 @@ def _parser():
         "JSON and print the per-scan latency and the real-time factor.",
     )
     stream.set_defaults(run=_stream, parser=stream)
-    stream.add_argument("--data", required=True, help="RadarScenes data folder (or its parent)")
-    stream.add_argument("--params", required=True, help="params.json written by 'sklearn-radar reproduce'")
-    stream.add_argument(
-        "--out",
-        required=True,
-        help="predictions file to write (JSON, final object id per detection); an existing file is replaced only "
-        "if it is such a predictions file",
-    )
-    stream.add_argument(
-        "--objects",
-        help="object list to write (CSV, one row per live object per scan); an existing file is replaced only if "
-        "it is such an object list",
-    )
+    replaced_only = "an existing file is replaced only if it is such"
+    for flag, required, text in (
+        ("--data", True, "RadarScenes data folder (or its parent)"),
+        ("--params", True, "params.json written by 'sklearn-radar reproduce'"),
+        ("--out", True, f"predictions file to write (JSON, final object id per detection); {replaced_only} a file"),
+        ("--objects", False, f"object list to write (CSV, one row per live object per scan); {replaced_only} a list"),
+    ):
+        stream.add_argument(flag, required=required, help=text)
     _add_checked(stream, "--experiment", _at_least(1), help="which saved experiment (default: the best)")
     return parser
 

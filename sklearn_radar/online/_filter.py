@@ -2,37 +2,24 @@
 
 from __future__ import annotations
 
-import numba
 import numpy as np
 
 from ..preprocessing._doppler_density_filter import _doppler_density_keep
 
 
-@numba.njit(cache=True, nogil=True)
-def _count_past(x, y, t, first_new, radius2, before, cap):
-    """Neighbours of the points ``[first_new, n)`` among all points within ``before`` s at or before them.
+def _count_past(x, y, t, first_new, radius2, before):
+    """Neighbours of the points ``[first_new, n)`` (one scan, one time) among the points before them.
 
     ``t`` is sorted; a point j counts for i when ``t_i - before <= t_j <= t_i``,
-    ``(x_j - x_i)^2 + (y_j - y_i)^2 <= radius2`` (m^2) and ``j != i``, as the
-    offline causal count does; counting stops at ``cap``.
+    ``(x_j - x_i)^2 + (y_j - y_i)^2 <= radius2`` (m^2) and ``j != i``: the
+    offline causal count (its cap changes no decision of Eq. 1).
     """
-    n = len(t)
-    counts = np.zeros(n - first_new, dtype=np.int64)
-    for i in range(first_new, n):
-        low = t[i] - before
-        j = np.searchsorted(t[:n], low)
-        count = 0
-        while j < n and t[j] <= t[i]:
-            if j != i:
-                dx = x[j] - x[i]
-                dy = y[j] - y[i]
-                if dx * dx + dy * dy <= radius2:
-                    count += 1
-                    if count >= cap:
-                        break
-            j += 1
-        counts[i - first_new] = count
-    return counts
+    low = int(np.searchsorted(t, t[first_new] - before, side="left"))
+    new = slice(first_new, len(t))
+    dx = x[low:, None] - x[None, new]
+    dy = y[low:, None] - y[None, new]
+    within = dx * dx + dy * dy <= radius2
+    return within.sum(axis=0) - 1  # each new point is within 0 m of itself
 
 
 class FilterWindow:
@@ -48,7 +35,6 @@ class FilterWindow:
         self.dt = float(filter_.dt)
         self.vr_threshold = filter_.vr_threshold
         self.ratios, self.min_neighbors = filter_._rule()
-        self.cap = int(self.min_neighbors.max())
         self.origin = None
         self.block = np.zeros((3, 0))  # x, y (m), t relative to the origin (s)
 
@@ -62,5 +48,5 @@ class FilterWindow:
         first_kept = int(np.searchsorted(self.block[2], relative[0] - self.dt, side="left"))
         self.block = np.concatenate([self.block[:, first_kept:], np.vstack([x, y, relative])], axis=1)
         first_new = self.block.shape[1] - len(t)
-        counts = _count_past(self.block[0], self.block[1], self.block[2], first_new, self.d_xy**2, self.dt, self.cap)
+        counts = _count_past(self.block[0], self.block[1], self.block[2], first_new, self.d_xy**2, self.dt)
         return _doppler_density_keep(v_r, counts, self.vr_threshold, self.ratios, self.min_neighbors)

@@ -24,17 +24,21 @@ def check_objects_file(out):
     FileExistsError
         Naming ``out``.
     """
-    out = Path(out)
+    problem = _why_not_replaceable(Path(out))
+    if problem is not None:
+        raise FileExistsError(f"{out} {problem}; it is not replaced: choose another output file")
+
+
+def _why_not_replaceable(out):
+    """None when ``out`` may be replaced (absent, empty, or starting with our header), else why not."""
     if out.is_symlink():
-        problem = "is a symbolic link"
-    elif not out.is_file() or out.stat().st_size == 0:
-        return
-    else:
-        with open(out, "rb") as stream:
-            if stream.read(len(OBJECTS_HEADER) + 1) == (OBJECTS_HEADER + "\n").encode("ascii"):
-                return
-        problem = "exists and is not an object list written by sklearn-radar"
-    raise FileExistsError(f"{out} {problem}; it is not replaced: choose another output file")
+        return "is a symbolic link"
+    if not out.is_file() or out.stat().st_size == 0:
+        return None
+    head = (OBJECTS_HEADER + "\n").encode("ascii")
+    with open(out, "rb") as stream:
+        ours = stream.read(len(head)) == head
+    return None if ours else "exists and is not an object list written by sklearn-radar"
 
 
 def scan_order(data):
@@ -117,9 +121,9 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None):
     Parameters
     ----------
     data : str or path-like
-        RadarScenes data folder (or its parent).
+        The RadarScenes folder to replay (or its parent).
     params : str or path-like
-        ``params.json`` written by ``sklearn-radar reproduce``.
+        The setting: a ``params.json`` of ``sklearn-radar reproduce``.
     out : str or path-like
         Predictions file to write.
     objects : str or path-like, default=None
