@@ -119,6 +119,7 @@ def run(number, minutes, objects):
             rows, ids = retained_rows(online)
             after[k + 1] = {
                 "rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+                "rss_now_mb": current_rss_mb(),
                 "rows": rows,
                 "ids": ids,
             }
