@@ -50,6 +50,7 @@ _SUBPACKAGES = {
     "experiments",
     "metrics",
     "model_selection",
+    "online",
     "preprocessing",
     "reproduce",
 }

@@ -50,6 +50,7 @@ PUBLIC_MODULES = (
     "sklearn_radar.model_selection",
     "sklearn_radar.experiments",
     "sklearn_radar.reproduce",
+    "sklearn_radar.online",
 )
 
 

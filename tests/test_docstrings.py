@@ -34,6 +34,7 @@ PACKAGES = [
     "sklearn_radar.experiments",
     "sklearn_radar.metrics",
     "sklearn_radar.model_selection",
+    "sklearn_radar.online",
     "sklearn_radar.preprocessing",
     "sklearn_radar.reproduce",
     "sklearn_radar",

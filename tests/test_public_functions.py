@@ -34,6 +34,7 @@ PACKAGES = [
     "sklearn_radar.experiments",
     "sklearn_radar.metrics",
     "sklearn_radar.model_selection",
+    "sklearn_radar.online",
     "sklearn_radar.preprocessing",
     "sklearn_radar.reproduce",
 ]
@@ -74,6 +75,7 @@ PARAM_VALIDATION_FUNCTION_LIST = [
     "sklearn_radar.metrics.radar_homogeneity_completeness_v_measure",
     "sklearn_radar.metrics.radar_v_measure",
     "sklearn_radar.metrics.radar_v_measure_scorer",
+    "sklearn_radar.metrics.tracking_scores",
     "sklearn_radar.model_selection.make_bayes_search",
     "sklearn_radar.model_selection.sequence_train_test_split",
     "sklearn_radar.preprocessing.doppler_density_keep",

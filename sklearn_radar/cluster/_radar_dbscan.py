@@ -488,6 +488,7 @@ class ScanStream:
         self._windows = {}
         self._next_id = 0
         self._criterion = clusterer._kernel_criterion()  # the headings of future scans are unknown: the rotated box
+        self._meetings = []  # (absorbed ids, surviving ids) of the clusters that met in the last call
 
     def update(self, x, y, v_r, t, *, sequence=0, keep=None, range_sc=None, heading=None):
         """Labels of one or more new scans (-1: noise), in the order given.
@@ -530,6 +531,7 @@ class ScanStream:
         return self._label(c)
 
     def _label(self, c):
+        self._meetings = []
         active, min_points, can_be_core = self.clusterer._point_rules(c)
         n = len(c["x"])
         labels = np.full(n, -1, dtype=np.int64)
@@ -554,6 +556,7 @@ class ScanStream:
                     f"{window.last_time} s in sequence {sequence[scan[0]]:g}); pass scans in time order"
                 )
             window.append(c, scan, heading, min_points, can_be_core, self._criterion.eps_t)
+            before = window.cluster[: window.first_new].copy()
             self._next_id = update_window(
                 points=window.points,
                 min_points=window.min_points,
@@ -565,6 +568,9 @@ class ScanStream:
                 criterion=self._criterion,
             )
             labels[scan] = window.cluster[window.first_new :]
+            relabelled = np.flatnonzero(before != window.cluster[: window.first_new])
+            if len(relabelled):  # clusters met: the window's rows of the newer ones now carry the older id
+                self._meetings.append((before[relabelled], window.cluster[relabelled]))
         return labels
 
 

@@ -1,7 +1,8 @@
 """Scores and targets for radar clustering.
 
 The radar V-measure and the pre-clustered target of Scheiner et al. 2019 (Sec. "Parameter Optimization"), and
-object-level scores per time frame: panoptic quality, coverage and the share of background-only clusters.
+object-level scores per time frame: panoptic quality, coverage and the share of background-only clusters; and
+the tracking quality of object ids over frames: ID switches, MOTA and IDF1.
 """
 
 from ._instance import (
@@ -13,6 +14,7 @@ from ._instance import (
     panoptic_quality_scorer,
 )
 from ._target import precluster_target
+from ._tracking import tracking_scores
 from ._v_measure import radar_homogeneity_completeness_v_measure, radar_v_measure, radar_v_measure_scorer
 
 __all__ = [
@@ -26,4 +28,5 @@ __all__ = [
     "radar_homogeneity_completeness_v_measure",
     "radar_v_measure",
     "radar_v_measure_scorer",
+    "tracking_scores",
 ]

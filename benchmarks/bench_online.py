@@ -1,0 +1,177 @@
+"""Benchmark of the whole framework online: per-scan latency of OnlinePipeline, real-time factor, flat memory.
+
+Run: ``python benchmarks/bench_online.py [--minutes 10] [--experiments 1 13 12]``.
+
+The recording is simulated a minute at a time (realistic preset, the
+RadarScenes rates: four unsynchronised sensors with a 60 ms cycle, a scan
+every 15 ms on average) and replayed through one OnlinePipeline as a single
+long sequence (each minute's timestamps shifted past the previous one), so
+that the stream runs for ``--minutes`` of recorded time while only one
+minute of detections is in memory at once.
+
+Printed per setting:
+
+* latency per scan (all four stages: frame transform, filter, stage 1,
+  stage 2), p50 / p99 / max, as wall time and as the CPU time of the
+  thread (``time.thread_time``: what the load of a shared machine does not
+  inflate), without and with the object list;
+* the real-time factor: recorded time / processing time (above 1 is faster
+  than real time);
+* peak RSS (``ru_maxrss``) and the rows the windows retain after the first
+  and after the last minute: flat memory means equal figures.
+
+Each setting runs in a child process of its own, so its peak RSS is its own.
+"""
+
+import argparse
+import json
+import resource
+import subprocess
+import sys
+import time
+
+import numpy as np
+
+#: What each child process times.
+KINDS = {0: "all stages", 1: "with objects", 2: "stage 1 only"}
+
+
+def minute_of_data(k, difficulty="realistic"):
+    """The k-th minute of the recording: a simulated 60 s sequence, its timestamps shifted by k minutes."""
+    from sklearn_radar.datasets import make_scenes
+
+    data = make_scenes(n_sequences=1, duration=60.0, random_state=k, difficulty=difficulty).data
+    data = data.drop(columns=["uuid", "track_id"])
+    data["timestamp"] = data["timestamp"] - data["timestamp"].min() + k * 60_000_000
+    data["sequence"] = 0
+    return data
+
+
+def retained_rows(online):
+    """Rows held by the windows of the stream (filter, stage 1, stage 2) and the ids remembered."""
+    rows = sum(window.points.t.shape[0] for window in online._stage1._windows.values())
+    for state in online._sequences.values():
+        rows += state.merge.rows["t"].shape[0] + (0 if state.filter is None else state.filter.block.shape[1])
+    return rows, len(online._ids.root)
+
+
+def stage1_alone(online, data, wall, cpu):
+    """The reference: ScanStream alone on the working columns of the same scans (computed offline)."""
+    from sklearn_radar.cluster import ScanStream
+    from sklearn_radar.online._replay import scan_order
+
+    work = online.causal_pipeline()[:-1].fit_transform(data)
+    stage1 = online._stage1.clusterer
+    stream = ScanStream(stage1)
+    names = ("x", "y", "v_r", "t", "keep", "range_sc", "heading")
+    columns = {name: work[name].to_numpy() for name in names if name in work.columns}
+    for rows in scan_order(data):
+        scan = {name: values[rows] for name, values in columns.items()}
+        start_cpu, start = time.thread_time(), time.perf_counter()
+        stream.update(
+            scan["x"],
+            scan["y"],
+            scan["v_r"],
+            scan["t"][0],
+            keep=scan.get("keep"),
+            range_sc=scan["range_sc"],
+            heading=scan["heading"],
+        )
+        wall.append(time.perf_counter() - start)
+        cpu.append(time.thread_time() - start_cpu)
+
+
+def current_rss_mb():
+    """Resident set size now, MB (Linux: /proc/self/statm)."""
+    import os
+
+    with open("/proc/self/statm") as statm:
+        return int(statm.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
+
+
+def run(number, minutes, objects):
+    """Child process: stream ``minutes`` minutes with experiment ``number``; print the figures as JSON.
+
+    ``objects`` 2 times stage 1 alone (ScanStream) on the same scans instead.
+    """
+    from sklearn_radar.experiments import experiment_pipeline
+    from sklearn_radar.online import OnlinePipeline
+    from sklearn_radar.online._replay import scan_order
+
+    online = OnlinePipeline(experiment_pipeline(number))
+    wall, cpu, after = [], [], {}
+    recorded = 0.0
+    for k in range(minutes):
+        data = minute_of_data(k)
+        if objects == 2:
+            stage1_alone(online, data, wall, cpu)
+            recorded += (data["timestamp"].max() - data["timestamp"].min()) * 1e-6
+            continue
+        columns = {name: data[name].to_numpy() for name in data.columns}
+        for rows in scan_order(data):
+            scan = {name: values[rows] for name, values in columns.items()}
+            start_cpu, start = time.thread_time(), time.perf_counter()
+            online.update(scan, objects=bool(objects))
+            wall.append(time.perf_counter() - start)
+            cpu.append(time.thread_time() - start_cpu)
+        recorded += (data["timestamp"].max() - data["timestamp"].min()) * 1e-6
+        if k in (0, minutes - 1):
+            rows, ids = retained_rows(online)
+            after[k + 1] = {
+                "rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+                "rss_now_mb": current_rss_mb(),
+                "rows": rows,
+                "ids": ids,
+            }
+        del data, columns
+    wall, cpu = np.array(wall[50:]) * 1e6, np.array(cpu[50:]) * 1e6  # the first scans load the compiled kernels
+    figures = {
+        "n_scans": len(wall),
+        "wall_us": [float(np.percentile(wall, q)) for q in (50, 99)] + [float(wall.max())],
+        "cpu_us": [float(np.percentile(cpu, q)) for q in (50, 99)] + [float(cpu.max())],
+        "real_time_factor_wall": recorded / (wall.sum() * 1e-6),
+        "real_time_factor_cpu": recorded / (cpu.sum() * 1e-6),
+        "after_minutes": after,
+    }
+    print(json.dumps(figures))
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--minutes", type=int, default=10)
+    parser.add_argument("--experiments", type=int, nargs="+", default=[1, 13, 12])
+    parser.add_argument("--kinds", type=int, nargs="+", default=[2, 0, 1], help="2: stage 1 alone, 0: all, 1: +objects")
+    parser.add_argument("--child", nargs=3, type=int, help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.child:
+        number, minutes, objects = args.child
+        run(number, minutes, objects)
+        return
+    print(f"OnlinePipeline, realistic preset, 4 sensors, {args.minutes} min of recording per setting")
+    for number in args.experiments:
+        for objects in args.kinds:  # stage 1 alone, the four stages, the four stages with the object list
+            child = [sys.executable, __file__, "--child", str(number), str(args.minutes), str(objects)]
+            out = subprocess.run(child, capture_output=True, text=True, check=True).stdout
+            f = json.loads(out.strip().splitlines()[-1])
+            unknown = {
+                "rss_mb": float("nan"),
+                "rss_now_mb": float("nan"),
+                "rows": 0,
+                "ids": 0,
+            }  # stage 1 alone: not measured
+            first = f["after_minutes"].get("1", unknown)
+            last = f["after_minutes"].get(str(args.minutes), unknown)
+            print(
+                f"#{number:<2} {KINDS[objects]:12}  "
+                f"scans {f['n_scans']}  "
+                f"wall p50/p99/max {f['wall_us'][0]:.0f}/{f['wall_us'][1]:.0f}/{f['wall_us'][2]:.0f} us  "
+                f"cpu p50/p99/max {f['cpu_us'][0]:.0f}/{f['cpu_us'][1]:.0f}/{f['cpu_us'][2]:.0f} us  "
+                f"real-time factor {f['real_time_factor_wall']:.0f} (cpu {f['real_time_factor_cpu']:.0f})  "
+                f"peak RSS {first['rss_mb']:.0f} -> {last['rss_mb']:.0f} MB, "
+                f"RSS now {first['rss_now_mb']:.0f} -> {last['rss_now_mb']:.0f} MB, "
+                f"rows kept {first['rows']} -> {last['rows']}, ids {first['ids']} -> {last['ids']}"
+            )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,378 @@
+"""OnlinePipeline: the whole framework (frame transform, filter, stage 1, stage 2) one radar scan at a time."""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+from dataclasses import dataclass
+
+import numpy as np
+from sklearn.base import clone
+from sklearn.pipeline import Pipeline
+
+from .._schema import RAW_LAYOUT
+from ..cluster import ClusterMerger, RadarDBSCAN, ScanStream
+from ..preprocessing import DopplerDensityFilter, FrameTransform
+from ._filter import FilterWindow
+from ._merger import MergeWindow
+from ._objects import ObjectIds, ObjectList, ObjectTable, empty_object_list, object_figures
+
+#: The raw columns a scan must hold (the detection table's, see :mod:`sklearn_radar._schema`).
+SCAN_COLUMNS = tuple(name for name in RAW_LAYOUT.columns if name != "sequence")
+
+
+@dataclass
+class ScanResult:
+    """What :meth:`OnlinePipeline.update` returns for one scan.
+
+    Parameters
+    ----------
+    labels : ndarray of int64, shape (n_detections,)
+        Stage-1 cluster of each detection (-1: noise), as the offline causal stage 1 gives it.
+    object_ids : ndarray of int64, shape (n_detections,)
+        Persistent object id of each detection (-1: noise), after the merges decided at this scan.
+    keep : ndarray of bool, shape (n_detections,)
+        False where the filter (Eq. 1) removed the detection; True for every row without a filter.
+    objects : ObjectList
+        The live objects of the scan's sequence.
+    aliases : list of (int, int, int, str)
+        The merges decided at this scan: (timestamp us, surviving id, merged id, ``"stage1"`` or ``"stage2"``);
+        from now on the merged id is an alias of the surviving one.  A merge of clusters that are one
+        object already (through other merges) makes no alias.
+    merges : list of (int, int)
+        The stage-2 pairs (A, B) accepted at this scan, as stage-1 labels: the offline ``ClusterMerger``'s
+        ``merges_``, decided here.
+    """
+
+    labels: np.ndarray
+    object_ids: np.ndarray
+    keep: np.ndarray
+    objects: ObjectList
+    aliases: list
+    merges: list
+
+
+class _Sequence:
+    """The windows of one sequence (recording): filter, stage 2 and the last times seen."""
+
+    def __init__(self, filter_, merger, eps_t):
+        self.filter = None if filter_ is None else FilterWindow(filter_)
+        self.merge = MergeWindow(merger, eps_t)
+        self.objects = ObjectTable()
+        self.last_us = None
+        self.sensor_us = {}
+
+
+class OnlinePipeline:
+    """The framework's pipeline on a live stream: each radar scan labelled when it arrives, using only the past.
+
+    Built from an offline pipeline of :class:`~sklearn_radar.FrameTransform`,
+    an optional :class:`~sklearn_radar.DopplerDensityFilter` (or
+    ``"passthrough"``) and :class:`~sklearn_radar.RadarDBSCAN` or
+    :class:`~sklearn_radar.ClusterMerger` (either mode), configured or
+    fitted, or from a ``params.json`` (:meth:`from_params`).  Each stage is
+    causal exactly as the offline pipeline with ``causal=True`` on the
+    filter and on stage 1 (:meth:`causal_pipeline`):
+
+    * the frame transform uses each scan's own odometry and mounting;
+    * the filter (Eq. 1) counts neighbours within the past ``dt`` only;
+    * stage 1 is :class:`~sklearn_radar.cluster.ScanStream` (the last ``eps_t``);
+    * stage 2 decides a pair (A, B) at ``tau = min(end of B, s_B + eps_t2)``
+      from the detections at or before tau, as soon as they have all arrived
+      (at the latest ``eps_t`` after B's last detection).
+
+    The stage-1 labels equal the causal pipeline's detection for detection,
+    and the object ids resolved through the stage-2 aliases give its merged
+    clusters.  Memory is bounded: every window keeps a fixed span of time.
+
+    **Object ids.**  A new stage-1 cluster is a new object whose id is its
+    stage-1 id; ids are never reused.  When clusters merge (stage-1 clusters
+    meet, or stage 2 merges them) the older (smaller) id survives and the
+    merge is reported as an alias (:attr:`ScanResult.aliases`); detections
+    reported before the merge keep the id they were given.  **Occlusion**:
+    an object unseen for more than ``eps_t`` ends as a stage-1 cluster; when
+    it comes back it is a new stage-1 cluster with a new id, which the
+    stage-2 merge makes an alias of the old one if the gap is shorter than
+    ``eps_t2`` and the merge criterion accepts the pair; otherwise (or
+    without stage 2) the old id is retired and never given again.
+
+    Not a scikit-learn estimator: like :class:`~sklearn_radar.cluster.ScanStream`
+    it is the state of one stream (windows, ids), fed scan by scan with raw
+    columns and odometry, and nothing is fitted; the estimator is the
+    offline pipeline it is built from, which keeps the parameters and
+    passes the scikit-learn checks.
+
+    Parameters
+    ----------
+    pipeline : sklearn.pipeline.Pipeline
+        The offline pipeline; read once, at construction.  Stage 1's
+        ``eps_t`` must be set (the window), ``cluster_vr_min`` of both stages
+        None (the gate judges whole clusters) and ClusterMerger's
+        ``min_samples`` 1 (the paper's; a larger one makes a merge depend on
+        later pairs): a ValueError otherwise.
+
+    Examples
+    --------
+    >>> from sklearn_radar.datasets import make_scenes
+    >>> from sklearn_radar.experiments import experiment_pipeline
+    >>> from sklearn_radar.online import OnlinePipeline
+    >>> scenes = make_scenes(n_sequences=1, duration=2.0, random_state=0)
+    >>> online = OnlinePipeline(experiment_pipeline(13))
+    >>> data = scenes.data.sort_values("timestamp", kind="stable")
+    >>> for _, scan in data.groupby(["timestamp", "sensor_id"], sort=True):
+    ...     result = online.update(scan)
+    >>> result.labels.shape == (len(scan),)
+    True
+    """
+
+    def __init__(self, pipeline):
+        self.pipeline = pipeline
+        frame, filter_, stage1, merger = _stages(pipeline)
+        self._frame = frame
+        self._filter_params = filter_
+        self._merger = merger
+        self._stage1 = ScanStream(stage1)
+        self._eps_t = float(stage1.eps_t)
+        self._sequences = {}
+        self._ids = ObjectIds()
+
+    @classmethod
+    def from_params(cls, path, experiment=None):
+        """The online form of the pipeline saved in a reproduce run's ``params.json``.
+
+        Parameters
+        ----------
+        path : str or path-like
+            ``params.json`` written by ``sklearn-radar reproduce``.
+        experiment : int, default=None
+            Which saved experiment; None: the run's best.
+
+        Returns
+        -------
+        online : OnlinePipeline
+        """
+        from ..reproduce._apply import _pipeline, load_params
+
+        return cls(_pipeline(load_params(path, experiment), path))
+
+    def causal_pipeline(self):
+        """The offline pipeline whose labels this stream gives: ``causal=True`` on the filter and on stage 1.
+
+        Returns
+        -------
+        pipeline : sklearn.pipeline.Pipeline
+            An unfitted clone.
+        """
+        causal = clone(self.pipeline)
+        for name, step in causal.steps:
+            if isinstance(step, DopplerDensityFilter | RadarDBSCAN):
+                causal.set_params(**{f"{name}__causal": True})
+            elif isinstance(step, ClusterMerger):
+                stage1 = clone(step.stage1) if step.stage1 is not None else RadarDBSCAN()
+                causal.set_params(**{f"{name}__stage1": stage1.set_params(causal=True)})
+        return causal
+
+    def update(self, scan, objects=True):
+        """Label one radar scan.
+
+        Parameters
+        ----------
+        scan : DataFrame or mapping of str to array-like
+            The detections of one scan (one ``timestamp`` of one
+            ``sequence``; sensors that measured at the same time go
+            together, since the causal stages count detections of the same
+            time as the past of each other) with the raw columns of the
+            detection table: ``range_sc`` (m), ``azimuth_sc`` (rad), ``vr``
+            (m/s), ``timestamp`` (us), the mounting ``sensor_x``,
+            ``sensor_y`` (m), ``sensor_yaw`` (rad) and the odometry
+            ``ego_x_seq``, ``ego_y_seq`` (m), ``ego_yaw_seq`` (rad),
+            ``ego_vx`` (m/s), ``ego_yaw_rate`` (rad/s); optionally
+            ``sequence`` and ``sensor_id`` (default 0).  Scans must come in
+            time order within a sequence (the sensors interleaved); there is
+            no buffering.
+        objects : bool, default=True
+            Whether to compute the object list (the velocity estimate is
+            most of its cost).
+
+        Returns
+        -------
+        result : ScanResult
+
+        Raises
+        ------
+        ValueError
+            If a column is missing or not finite, the rows are not one
+            scan, or the scan is not newer than the last one of its
+            sequence (which includes its own sensors' last scans).
+        """
+        c = _read_scan(scan)
+        n = len(c["timestamp"])
+        if n == 0:
+            return _empty_result([], [])
+        sequence, us = int(c["sequence"][0]), int(c["timestamp"][0])
+        state = self._sequences.get(sequence)
+        if state is None:
+            state = self._sequences[sequence] = _Sequence(self._filter_params, self._merger, self._eps_t)
+        _check_order(state, sequence, np.unique(c["sensor_id"]).tolist(), us)
+        work = self._frame._working_columns(c)
+        x, y, v_r, t, heading = work["x"], work["y"], work["v_r"], work["t"], work["heading"]
+        keep = np.ones(n, dtype=bool) if state.filter is None else state.filter.keep(x, y, t, v_r)
+        stage1_columns = {"x": x, "y": y, "v_r": v_r, "t": t, "sequence": np.full(n, float(sequence))}
+        stage1_columns.update(keep=keep, range_sc=c["range_sc"], heading=heading)
+        labels = self._stage1._label(stage1_columns)
+        los = c["azimuth_sc"] + c["sensor_yaw"] + heading
+        state.merge.add(labels, t, x, y, v_r, los, us)
+        self._ids.add(np.unique(labels[labels >= 0]).tolist(), us)
+        aliases = []
+        for absorbed, survivor in self._stage1._meetings:
+            for a, s in sorted(set(zip(absorbed.tolist(), survivor.tolist(), strict=True))):
+                aliases.append(self._ids.merge(s, a, us, "stage1"))
+        window = self._stage1._windows.get(float(sequence))
+        growing = set() if window is None else set(np.unique(window.cluster).tolist())
+        merges = state.merge.decide(float(t[0]), growing)
+        for a, b in merges:
+            aliases.append(self._ids.merge(a, b, us, "stage2"))
+        result = ScanResult(
+            labels=labels,
+            object_ids=self._ids.of(labels),
+            keep=keep,
+            objects=self._objects(state, sequence, us, float(t[0]), labels, aliases)
+            if objects
+            else empty_object_list(),
+            aliases=[alias for alias in aliases if alias is not None],
+            merges=merges,
+        )
+        self._ids.forget(state.merge.gone)
+        return result
+
+    def finish(self):
+        """End the stream: decide every pending stage-2 pair (as offline at the end of each sequence).
+
+        Returns
+        -------
+        result : ScanResult
+            Without detections; its ``aliases`` and ``merges`` are those decided now, the aliases stamped
+            with the last time of their sequence.
+        """
+        aliases, merges = [], []
+        for state in self._sequences.values():
+            decided = state.merge.decide(np.inf, None)
+            merges += decided
+            aliases += [self._ids.merge(a, b, state.last_us, "stage2") for a, b in decided]
+        return _empty_result([alias for alias in aliases if alias is not None], merges)
+
+    def _objects(self, state, sequence, now_us, now, labels, aliases):
+        """The scan's object list: the objects it updated (detected or merged) get new figures."""
+        updated = set(self._ids.of(labels[labels >= 0]).tolist())
+        updated |= {alias[1] for alias in aliases if alias is not None}
+        gone = [alias[2] for alias in aliases if alias is not None]
+        if updated:
+            rows = state.merge.recent(now - self._eps_t)
+            ids = self._ids.of(rows["label"])
+            mine = np.isin(ids, np.fromiter(updated, dtype=np.int64))
+            found, figures = object_figures(
+                ids[mine], rows["x"][mine], rows["y"][mine], rows["v_r"][mine], rows["los"][mine], rows["us"][mine]
+            )
+            state.objects.update(found, figures, gone)
+        else:
+            state.objects.update(np.zeros(0, dtype=np.int64), {}, gone)
+        oldest_us = now_us - round(self._eps_t * 1e6)
+        return state.objects.listed(sequence, now_us, oldest_us, self._ids.first_us)
+
+
+def _empty_result(aliases, merges):
+    """A ScanResult without detections."""
+    none = np.zeros(0, dtype=np.int64)
+    return ScanResult(none, none, np.zeros(0, dtype=bool), empty_object_list(), aliases, merges)
+
+
+def _stages(pipeline):
+    """(FrameTransform, DopplerDensityFilter or None, stage-1 RadarDBSCAN, ClusterMerger or None), checked."""
+    if not isinstance(pipeline, Pipeline):
+        raise ValueError(f"OnlinePipeline: pipeline must be a scikit-learn Pipeline, got {type(pipeline).__name__}")
+    steps = [step for _, step in pipeline.steps if step not in (None, "passthrough")]
+    kinds = [FrameTransform, DopplerDensityFilter, RadarDBSCAN | ClusterMerger]
+    if not (
+        len(steps) in (2, 3)
+        and isinstance(steps[0], kinds[0])
+        and isinstance(steps[-1], kinds[2])
+        and (len(steps) == 2 or isinstance(steps[1], kinds[1]))
+    ):
+        names = [type(step).__name__ for step in steps]
+        raise ValueError(
+            "OnlinePipeline: pipeline must be FrameTransform, an optional DopplerDensityFilter, then RadarDBSCAN "
+            f"or ClusterMerger; got {names}"
+        )
+    for step in steps:
+        step._validate_params()
+    frame, final = steps[0], steps[-1]
+    filter_ = steps[1] if len(steps) == 3 else None
+    merger = final if isinstance(final, ClusterMerger) else None
+    stage1 = final if merger is None else (merger.stage1 if merger.stage1 is not None else RadarDBSCAN())
+    if not isinstance(stage1, RadarDBSCAN):
+        raise ValueError(f"OnlinePipeline: ClusterMerger's stage1 must be a RadarDBSCAN, got {type(stage1).__name__}")
+    stage1._validate_params()
+    if stage1.eps_t is None:
+        raise ValueError("OnlinePipeline: RadarDBSCAN's eps_t must be set (None keeps every past detection)")
+    if merger is not None:
+        if merger.cluster_vr_min is not None:
+            raise ValueError("OnlinePipeline: ClusterMerger's cluster_vr_min judges whole clusters; set it to None")
+        if merger.min_samples != 1:
+            raise ValueError(
+                f"OnlinePipeline: ClusterMerger's min_samples must be 1 (a merge would depend on later pairs), "
+                f"got {merger.min_samples}"
+            )
+    return frame, filter_, stage1, merger
+
+
+def _read_scan(scan):
+    """The scan's columns as float64 arrays (``sequence`` and ``sensor_id`` as given), checked."""
+    if not isinstance(scan, Mapping) and not hasattr(scan, "columns"):
+        raise ValueError(f"OnlinePipeline.update: scan must be a DataFrame or a mapping, got {type(scan).__name__}")
+    names = scan.columns if hasattr(scan, "columns") else scan.keys()
+    missing = [name for name in SCAN_COLUMNS if name not in names]
+    if missing:
+        raise ValueError(f"OnlinePipeline.update: the scan lacks the column(s) {missing}")
+    columns = [np.ravel(scan[name]) for name in SCAN_COLUMNS]
+    n = len(columns[0])
+    lengths = [len(values) for values in columns]
+    if min(lengths) != n or max(lengths) != n:
+        name = SCAN_COLUMNS[next(i for i, length in enumerate(lengths) if length != n)]
+        raise ValueError(f"OnlinePipeline.update: column {name!r} has another length than 'range_sc' ({n})")
+    block = np.array(columns, dtype=np.float64)  # one conversion and one finiteness test for all columns
+    finite = np.isfinite(block)
+    if not finite.all():
+        bad = SCAN_COLUMNS[int(np.flatnonzero(~finite.all(axis=1))[0])]
+        raise ValueError(f"OnlinePipeline.update: column {bad!r} holds values that are not finite")
+    c = dict(zip(SCAN_COLUMNS, block, strict=True))
+    for name in ("sequence", "sensor_id"):
+        values = np.ravel(scan[name]) if name in names else np.zeros(n, dtype=np.int64)
+        if len(values) != n:
+            raise ValueError(f"OnlinePipeline.update: column {name!r} has another length than 'range_sc' ({n})")
+        c[name] = values
+    for name in ("timestamp", "sequence"):
+        if n and (c[name].min() != c[name].max()):
+            raise ValueError(f"OnlinePipeline.update: the rows are not one scan (column {name!r} differs)")
+    return c
+
+
+def _check_order(state, sequence, sensors, us):
+    """ValueError for a scan not newer than its sequence's last one (its sensors' last ones included)."""
+    if state.last_us is not None and us <= state.last_us:
+        late = [sensor for sensor in sensors if state.sensor_us.get(sensor, -np.inf) >= us]
+        which = (
+            f"its sensor {late[0]}'s last scan at {state.sensor_us[late[0]]} us"
+            if late
+            else f"the last scan of sequence {sequence} at {state.last_us} us"
+        )
+        if us == state.last_us:
+            raise ValueError(
+                f"OnlinePipeline.update: the scan at {us} us has the time of {which}; pass the detections of one "
+                "time of a sequence (all its sensors) in one update, as the causal stages count them together"
+            )
+        raise ValueError(
+            f"OnlinePipeline.update: the scan at {us} us is older than {which}; pass the scans of a sequence in "
+            "time order (the stages are causal: a late scan cannot be labelled after later ones)"
+        )
+    state.last_us = us
+    for sensor in sensors:
+        state.sensor_us[sensor] = us

@@ -1,0 +1,240 @@
+"""OnlinePipeline: scan by scan, the offline causal pipeline's labels exactly; persistent ids; the object list."""
+
+import numpy as np
+import pandas as pd
+import pytest
+from sklearn.pipeline import make_pipeline
+
+from sklearn_radar import ClusterMerger, DopplerDensityFilter, FrameTransform, RadarDBSCAN
+from sklearn_radar.datasets import make_scenes
+from sklearn_radar.experiments import experiment_pipeline
+from sklearn_radar.online import OnlinePipeline
+
+
+def scans_in_time_order(data):
+    """Row positions of each scan (a time of a sequence, any sensors), all sequences interleaved by timestamp."""
+    order = np.lexsort((data["sequence"].to_numpy(), data["timestamp"].to_numpy()))
+    keys = data[["timestamp", "sequence"]].to_numpy()[order]
+    cut = np.flatnonzero(np.any(np.diff(keys, axis=0) != 0, axis=1)) + 1
+    return np.split(order, cut)
+
+
+def replay(online, data):
+    """Stage-1 labels, keep flags, object ids as reported, every alias and every stage-2 merge of a replay."""
+    columns = {name: data[name].to_numpy() for name in data.columns if name not in ("uuid", "track_id")}
+    labels = np.full(len(data), -2)
+    object_ids = np.full(len(data), -2)
+    keep = np.zeros(len(data), dtype=bool)
+    aliases, merges = [], []
+    for rows in scans_in_time_order(data):
+        result = online.update({name: values[rows] for name, values in columns.items()}, objects=False)
+        labels[rows], object_ids[rows], keep[rows] = result.labels, result.object_ids, result.keep
+        aliases += result.aliases
+        merges += result.merges
+    end = online.finish()
+    return labels, object_ids, keep, aliases + end.aliases, merges + end.merges
+
+
+def stage2_resolution(labels, merges):
+    """Each stage-1 label's cluster after the stage-2 merges (a union-find written for the test)."""
+    parent = {}
+
+    def find(label):
+        while parent.get(label, label) != label:
+            label = parent[label]
+        return label
+
+    for a, b in merges:
+        parent[find(b)] = find(a)
+    return np.array([find(label) if label >= 0 else -1 for label in labels.tolist()])
+
+
+def assert_same_partition(a, b):
+    """Equal noise and a one-to-one map between the cluster ids of a and b."""
+    a, b = np.asarray(a), np.asarray(b)
+    np.testing.assert_array_equal(a < 0, b < 0)
+    clustered = a >= 0
+    pairs = set(zip(a[clustered].tolist(), b[clustered].tolist(), strict=True))
+    assert len(pairs) == len(set(a[clustered].tolist())) == len(set(b[clustered].tolist()))
+
+
+def offline_causal(online, data):
+    """(keep, stage-1 labels, final labels) of the offline causal pipeline."""
+    pipeline = online.causal_pipeline()
+    final_labels = pipeline.fit_predict(data)
+    final = pipeline.steps[-1][1]
+    steps = [step for _, step in pipeline.steps[:-1] if step != "passthrough"]
+    keep = np.ones(len(data), dtype=bool)
+    if len(steps) == 2:
+        keep = make_pipeline(*steps).fit_transform(data)["keep"].to_numpy()
+    return keep, getattr(final, "stage1_labels_", final.labels_), final_labels
+
+
+TUNED = {  # settings that merge often, so that the comparison sees many decisions
+    12: {"merge__eps_d": 2.0, "merge__eps_phi": 0.8, "merge__eps_v": 2.5, "merge__unknown_velocity": "accept"},
+    13: {"merge__eps_d": 2.5, "merge__eps_v": 4.0, "merge__unknown_velocity": "accept"},
+}
+
+
+@pytest.mark.parametrize("difficulty", ["realistic", "easy"])
+@pytest.mark.parametrize(
+    "number, params",
+    [(1, None), (8, None), (12, None), (13, None), (12, TUNED[12]), (13, TUNED[13])],
+    ids=["1", "8", "12-velocity", "13-continuation", "12-tuned", "13-tuned"],
+)
+def test_online_equals_offline_causal(difficulty, number, params):
+    data = make_scenes(n_sequences=3, duration=5.0, random_state=number, difficulty=difficulty).data
+    online = OnlinePipeline(experiment_pipeline(number, params=params))
+    labels, _, keep, _, merges = replay(online, data)
+    offline_keep, offline_stage1, offline_final = offline_causal(online, data)
+    np.testing.assert_array_equal(keep, offline_keep)
+    assert_same_partition(labels, offline_stage1)
+    assert_same_partition(stage2_resolution(labels, merges), offline_final)
+    if number in (12, 13) and params is not None:
+        assert len(merges) > 0  # the comparison covered merges
+
+
+def test_sensors_in_phase_and_scans_sharing_a_time():
+    """Several sensors' scans at the same timestamp (in phase) give the offline labels too."""
+    data = make_scenes(n_sequences=2, duration=5.0, random_state=5, difficulty="realistic").data.copy()
+    data["timestamp"] = data["timestamp"] // 40_000 * 40_000  # 40 ms grid: sensors share scan times
+    assert data.groupby(["sequence", "timestamp"])["sensor_id"].nunique().max() > 1
+    online = OnlinePipeline(experiment_pipeline(13, params=TUNED[13]))
+    labels, _, keep, _, merges = replay(online, data)
+    offline_keep, offline_stage1, offline_final = offline_causal(online, data)
+    np.testing.assert_array_equal(keep, offline_keep)
+    assert_same_partition(labels, offline_stage1)
+    assert_same_partition(stage2_resolution(labels, merges), offline_final)
+
+
+def test_ids_never_reused_and_the_older_survives():
+    data = make_scenes(n_sequences=2, duration=6.0, random_state=2, difficulty="realistic").data
+    online = OnlinePipeline(experiment_pipeline(13, params=TUNED[13]))
+    labels, object_ids, _, aliases, _ = replay(online, data)
+    assert aliases and all(kept < merged for _, kept, merged, _ in aliases)
+    assert {reason for *_, reason in aliases} == {"stage1", "stage2"}
+    retired_at = {merged: us for us, _, merged, _ in aliases}
+    timestamps = data["timestamp"].to_numpy()
+    for merged, us in retired_at.items():  # a merged id is never reported after its merge
+        assert not np.any((object_ids == merged) & (timestamps > us))
+    # A new object's id is a stage-1 id never seen before: each scan's new ids exceed every earlier id.
+    seen = {-1}
+    for rows in scans_in_time_order(data):
+        new = set(labels[rows].tolist()) - seen
+        assert not new or min(new) > max(seen)
+        seen |= new
+
+
+def test_a_scan_older_than_its_sensor_raises():
+    data = make_scenes(n_sequences=1, duration=1.0, random_state=0).data
+    scans = [data.iloc[rows] for rows in scans_in_time_order(data)]
+    online = OnlinePipeline(experiment_pipeline(8))
+    online.update(scans[0])
+    online.update(scans[5])
+    with pytest.raises(ValueError, match="older than"):
+        online.update(scans[1])
+    with pytest.raises(ValueError, match="has the time of"):
+        online.update(scans[5])
+    with pytest.raises(ValueError, match="not one scan"):
+        online.update(pd.concat([scans[6], scans[7]]))
+    with pytest.raises(ValueError, match="lacks the column"):
+        online.update(scans[6].drop(columns="vr"))
+
+
+@pytest.mark.parametrize(
+    "pipeline, match",
+    [
+        (make_pipeline(FrameTransform(), RadarDBSCAN(eps_t=None)), "eps_t"),
+        (make_pipeline(FrameTransform(), RadarDBSCAN(cluster_vr_min=0.2)), "cluster_vr_min"),
+        (make_pipeline(FrameTransform(), ClusterMerger(min_samples=2)), "min_samples"),
+        (make_pipeline(FrameTransform(), ClusterMerger(cluster_vr_min=0.2)), "cluster_vr_min"),
+        (make_pipeline(DopplerDensityFilter(), RadarDBSCAN()), "FrameTransform"),
+    ],
+)
+def test_pipelines_that_cannot_stream_are_refused(pipeline, match):
+    with pytest.raises(ValueError, match=match):
+        OnlinePipeline(pipeline)
+
+
+def target_scan(t_s, x_centre, speed=5.0, y=10.0):
+    """Three detections of a target at (x_centre, y) moving along x at ``speed`` m/s; sensor and car at rest."""
+    x = x_centre + np.array([-0.4, 0.0, 0.4])
+    yy = np.full(3, y)
+    los = np.arctan2(yy, x)
+    zeros = np.zeros(3)
+    return {
+        "range_sc": np.hypot(x, yy),
+        "azimuth_sc": los,
+        "vr": speed * np.cos(los),
+        "timestamp": np.full(3, round(t_s * 1e6)),
+        **{name: zeros for name in ("sensor_x", "sensor_y", "sensor_yaw", "ego_x_seq", "ego_y_seq")},
+        **{name: zeros for name in ("ego_yaw_seq", "ego_vx", "ego_yaw_rate")},
+    }
+
+
+def occluded_track(gap_s):
+    """Object ids of a target seen for 1 s, unseen for ``gap_s`` s between two scans, then seen for 1 s (50 ms)."""
+    stage1 = RadarDBSCAN(metric="xy", eps_xy=1.0, min_samples=2, vr_min=0.1)
+    online = OnlinePipeline(make_pipeline(FrameTransform(), ClusterMerger(stage1=stage1, eps_d=1.5)))
+    times = np.r_[np.arange(0.0, 0.96, 0.05), np.arange(0.95 + gap_s, 1.95 + gap_s, 0.05)]
+    ids = [online.update(target_scan(t, 5.0 * t)).object_ids for t in times]
+    return times, np.array(ids)
+
+
+def test_occlusion_shorter_than_eps_t2_keeps_the_id():
+    """A gap of 0.3 s (> eps_t, < eps_t2 = 0.35 s): a new stage-1 cluster, aliased to the old id by stage 2."""
+    times, ids = occluded_track(0.3)
+    before, after = ids[times < 1.0], ids[times > 1.0]
+    assert len(np.unique(before)) == 1
+    assert after[0, 0] != before[0, 0]  # the new cluster starts as a new object ...
+    assert np.all(after[-1] == before[0, 0])  # ... and becomes the old one when stage 2 decides the pair
+
+
+def test_occlusion_longer_than_eps_t2_gives_a_new_id():
+    times, ids = occluded_track(0.6)
+    before, after = ids[times < 1.0], ids[times > 1.0]
+    assert len(np.unique(before)) == 1 and len(np.unique(after)) == 1
+    assert after[0, 0] > before[0, 0]  # a new id, never an old one reused
+
+
+def test_object_list_of_a_hand_made_target():
+    stage1 = RadarDBSCAN(metric="xy", eps_xy=1.0, min_samples=2, vr_min=0.1)
+    online = OnlinePipeline(make_pipeline(FrameTransform(), stage1))
+    for t in np.arange(0.0, 0.5, 0.05):
+        result = online.update(target_scan(t, 2.0 + 5.0 * t, y=5.0))  # near: the lines of sight spread
+    objects = result.objects
+    assert len(objects) == 1
+    # The window holds the scans of the last eps_t = 0.25 s: 0.20 .. 0.45 s, six scans of three detections.
+    window_times = np.arange(0.20, 0.46, 0.05)
+    assert objects.n_detections[0] == 3 * len(window_times)
+    np.testing.assert_allclose(objects.x[0], np.mean(2.0 + 5.0 * window_times), rtol=1e-9)
+    np.testing.assert_allclose(objects.y[0], 5.0)
+    np.testing.assert_allclose(objects.extent_x[0], 5.0 * (0.45 - 0.20) + 0.8, rtol=1e-9)
+    assert objects.velocity_known[0]
+    np.testing.assert_allclose([objects.vx[0], objects.vy[0]], [5.0, 0.0], atol=1e-6)
+    np.testing.assert_allclose(objects.age[0], 0.45)
+    assert objects.last_update[0] == 450_000
+    frame = objects.to_frame()
+    assert list(frame.columns)[:3] == ["object_id", "sequence", "x"] and len(frame) == 1
+
+
+def test_the_windows_keep_a_bounded_span_of_time():
+    """Memory stays flat: no window keeps detections older than its span, however long the stream runs."""
+    data = make_scenes(n_sequences=1, duration=12.0, random_state=7, difficulty="realistic").data
+    online = OnlinePipeline(experiment_pipeline(13))
+    merger = online._merger
+    eps_t, eps_t2 = 0.25, float(merger.eps_t2)
+    # Stage 2 keeps max(eps_t2, 4 eps_t) + 0.05 s before the oldest undecided cluster, which is at most
+    # eps_t2 + eps_t (+ one scan gap) old: a bound that does not grow with the recording.
+    bound = max(eps_t2, 4 * eps_t) + 0.05 + eps_t2 + eps_t + 0.1
+    columns = {name: data[name].to_numpy() for name in data.columns if name not in ("uuid", "track_id")}
+    spans = []
+    for rows in scans_in_time_order(data):
+        online.update({name: values[rows] for name, values in columns.items()}, objects=False)
+        now = columns["timestamp"][rows[0]] * 1e-6
+        state = online._sequences[int(columns["sequence"][rows[0]])]
+        kept = [state.merge.rows["t"], online._stage1._windows[float(columns["sequence"][rows[0]])].points.t]
+        spans.append(max(now - times.min() for times in kept if len(times)))
+        assert len(online._ids.root) <= len(state.merge.clusters) + len(online._stage1._windows)
+    assert max(spans) <= bound
+    assert max(spans) > 0.5 * bound  # the check sees windows that do fill
