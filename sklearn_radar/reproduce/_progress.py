@@ -6,9 +6,10 @@ counts its work in units of a few kinds (an iteration of a stage-1, stage-2
 or baseline search, one pass of a step without a search over its data) and
 measures the seconds each kind took so far.  The time left is the work left
 at those rates; a kind not measured yet is priced like a test-half scoring
-pass (a candidate's evaluation clusters about as much data), else like the
-making of the data.  When work ran concurrently, its seconds add up to more
-than the time elapsed, and the rates are scaled by that overlap.
+pass (a candidate's evaluation clusters about as much data), else like any
+step measured; before the first step ends, the time left is not known.  When
+work ran concurrently, its seconds add up to more than the time elapsed, and
+the rates are scaled by that overlap.
 """
 
 from __future__ import annotations
@@ -131,24 +132,37 @@ class RunProgress:
         self._units[kind] = self._units.get(kind, 0.0) + units
 
     def rate(self, kind):
-        """Measured seconds per unit of ``kind``; unmeasured: a scoring pass's, else the data step's, else 1 s."""
-        for known in (kind, SCORING, DATA):
+        """Measured seconds per unit of ``kind``; unmeasured: a scoring pass's, else any step's; else None."""
+        measured = [known for known in self._units if known not in (DATA, REPORT) and self._units[known]]
+        for known in (kind, SCORING, *measured):
             if self._units.get(known):
                 return self._spent[known] / self._units[known]
-        return 1.0
+        return None
 
     def left(self):
-        """Seconds left: the work left at the measured rates, scaled by how much of the work ran at once."""
+        """Seconds left (None before a step is measured): the work left at the measured rates.
+
+        The rates are scaled by how much of the work ran at once (its
+        measured seconds add up to more than the time elapsed then).
+        """
+        remaining = {kind: 0.0 for kind, _ in self.work.values()}
+        for key, (kind, units) in self.work.items():
+            remaining[kind] += units - self._done[key]
+        rates = {kind: self.rate(kind) for kind, units in remaining.items() if units > 0}
+        if None in rates.values():
+            return None
         spent = sum(self._spent.values())
         elapsed = time.perf_counter() - self.started
         overlap = min(1.0, elapsed / spent) if spent > 0 else 1.0
-        return overlap * sum((units - self._done[key]) * self.rate(kind) for key, (kind, units) in self.work.items())
+        return overlap * sum(remaining[kind] * rate for kind, rate in rates.items())
 
     def status(self):
         """``"run 42 %, 0:53 elapsed, about 1:13 left"`` (the share never goes back)."""
         with self._lock:
             elapsed = time.perf_counter() - self.started
             left = self.left()
+            if left is None:
+                return f"run {100 * self._shown:.0f} %, {duration(elapsed)} elapsed, time left not measured yet"
             self._shown = max(self._shown, min(elapsed / max(elapsed + left, 1e-9), 0.99))
             return f"run {100 * self._shown:.0f} %, {duration(elapsed)} elapsed, about {duration(left)} left"
 

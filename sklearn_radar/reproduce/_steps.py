@@ -300,7 +300,7 @@ def run_experiment(env, key, needed):
     found = env.executor.map(
         _ExperimentRepeat(env, number, repeats, stage1s),
         range(repeats),
-        on_done=_said_ended(env, f"#{number}", repeats),
+        on_done=_said_ended(env, f"#{number}", repeats) if experiment.tuned else None,
     )
     first = found[0]
     derived = None
