@@ -30,8 +30,8 @@ Run (the issue's scale: 5 seeds, both presets, 6 x 20 s; about an hour on 2 idle
 each variant's mean test PQ and V1 over the seeds with the standard error, and its mean paired PQ
 difference to F0 and to the best per-sequence baseline with the standard error of that difference.
 
-The search loop is the main job's (``sklearn_radar.reproduce._search``: skopt's ask and tell, one task per
-training sequence); its public form is planned in issue #28.
+The search loop is the main job's (``sklearn_radar.model_selection._sequence_search``: skopt's ask and tell, one
+task per training sequence); its public form is :class:`~sklearn_radar.model_selection.SequenceSearchCV`.
 """
 
 from __future__ import annotations
@@ -53,7 +53,7 @@ from sklearn_radar.datasets import make_scenes
 from sklearn_radar.metrics import precluster_target
 from sklearn_radar.metrics._parts import combine_parts, sequence_parts
 from sklearn_radar.model_selection import sequence_train_test_split
-from sklearn_radar.reproduce._search import SearchData, bayes_search, sized_sequence_folds
+from sklearn_radar.model_selection._sequence_search import SearchData, bayes_search, sized_sequence_folds
 
 
 class PointDopplerGate(TransformerMixin, BaseEstimator):

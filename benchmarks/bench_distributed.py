@@ -5,12 +5,13 @@ Run: ``python benchmarks/bench_distributed.py`` (about 25 min on 2 idle cores; `
 ``--scale`` change the sizes).  Needs the ``[distributed]`` extra.
 
 1. **Speed-up of one search.**  The search of #8 (or ``--search-experiment``; ``--n-iter`` 100 candidates, 30
-   random, 3 grouped folds, ``n_points`` 1) as ``reproduce`` runs it (:mod:`sklearn_radar.reproduce._search`), on
-   the default run's training half (2 simulated sequences x 20 s) times each of ``--search-scales``: in one process
-   and on 2 local worker processes (``--workers 2``), interleaved ``--repeats`` times.  The clock runs from the
-   first candidate to the last (stage 0 done before; no cluster start-up, no data placement).  Both must find the
-   same scores (checked).  The step times give E (a candidate's evaluation: the random steps) and g (the Gaussian
-   process: guided steps minus E), hence Amdahl's bound.
+   random, 3 grouped folds, ``n_points`` 1) as ``reproduce`` runs it
+   (:mod:`sklearn_radar.model_selection._sequence_search`), on the default run's training half (2 simulated
+   sequences x 20 s) times each of ``--search-scales``: in one process and on 2 local worker processes
+   (``--workers 2``), interleaved ``--repeats`` times.  The clock runs from the first candidate to the last (stage
+   0 done before; no cluster start-up, no data placement).  Both must find the same scores (checked).  The step
+   times give E (a candidate's evaluation: the random steps) and g (the Gaussian process: guided steps minus E),
+   hence Amdahl's bound.
 1b. **Concurrent searches.**  ``reproduce --experiments 2-9`` on the default data, 1 process against
    ``--workers 2``, where the 8 independent searches run at once: whole-run wall time, same figures.
 2. **Memory.**  ``cluster`` of a simulated data set ``--scale`` (10) times the default size of
@@ -90,7 +91,7 @@ class _StepClock:
 
 
 def _timed_search(data, searched, space, folds, n_iter):
-    from sklearn_radar.reproduce._search import bayes_search
+    from sklearn_radar.model_selection._sequence_search import bayes_search
 
     clock = _StepClock()
     start = time.perf_counter()
@@ -115,8 +116,8 @@ def speedup(scales, n_iter, repeats, number=8):
 
     from sklearn_radar._executor import connect_executor
     from sklearn_radar.experiments import experiment_pipeline, search_space
+    from sklearn_radar.model_selection._sequence_search import SearchData, sequence_folds
     from sklearn_radar.reproduce._steps import _fixed_stage0
-    from sklearn_radar.reproduce._search import SearchData, sequence_folds
 
     print(
         f"## 1. Speed-up: a {n_iter}-iteration search of #{number} (30 random candidates, then guided), "

@@ -21,6 +21,9 @@ an executor and asks it, never whether a cluster exists:
     ``function(executor, handles, *args)`` as one task on a worker, which
     submits its own tasks (a search's loop: its Gaussian process then never
     queues for this process's GIL), with one BLAS thread;
+``queued(function, batches)``
+    every batch's tasks queued at once (a search's candidates), each batch's
+    results yielded in order;
 ``blocks(sizes)``
     how sequences of these sizes are grouped into tasks.
 
@@ -57,6 +60,7 @@ __all__ = [
     "EXTRA",
     "DaskExecutor",
     "LocalExecutor",
+    "balanced_blocks",
     "connect_executor",
     "peak_rss",
     "require_distributed",
@@ -84,9 +88,6 @@ class LocalExecutor:
         self.alone = alone
         self.note = note
 
-    #: What a search's SearchData takes as its cluster (reproduce._search): none here.
-    search_cluster = None
-
     def describe(self):
         """The run's first line about where it runs (None: nothing to say)."""
         return self.note
@@ -110,6 +111,16 @@ class LocalExecutor:
     def stream(self, function, items):
         for item in items:
             yield function(item)
+
+    def queued(self, function, batches):
+        """Per batch, ``[function(*call) for call in batch]``, computed when the caller asks for it (``n_jobs``)."""
+        for batch in batches:
+            if _effective_n_jobs(self.n_jobs) < 2 or len(batch) < 2:
+                yield [function(*call) for call in batch]
+            else:
+                from joblib import Parallel, delayed
+
+                yield Parallel(n_jobs=self.n_jobs)(delayed(function)(*call) for call in batch)
 
     def ahead(self, function, items, on_done=None):
         """``function(self, item)`` for each item when the caller asks for it, in order (here, one at a time)."""
@@ -217,11 +228,6 @@ class DaskExecutor:
         self._turn = -1
         self._lock = threading.Lock()
 
-    @property
-    def search_cluster(self):
-        """What a search's SearchData takes as its cluster (reproduce._search): this executor."""
-        return self
-
     def describe(self):
         """One line: where the cluster is, how many tasks run at a time, and workers that run slowly."""
         text = f"dask cluster at {self.address}: {self.n_workers} worker(s), {self.n_threads} thread(s)"
@@ -253,13 +259,25 @@ class DaskExecutor:
     def blocks(self, sizes):
         """One block per worker thread, balanced in detections: a task's round trip (about 10 ms) would cost
         as much as a small sequence's clustering."""
-        n_blocks = max(1, min(self.n_threads, len(sizes)))
-        blocks, totals = [[] for _ in range(n_blocks)], np.zeros(n_blocks)
-        for position in np.argsort(-np.asarray(sizes), kind="stable"):
-            lightest = int(np.argmin(totals))
-            blocks[lightest].append(int(position))
-            totals[lightest] += sizes[position]
-        return [sorted(block) for block in blocks]
+        return balanced_blocks(sizes, self.n_threads)
+
+    def queued(self, function, batches, priority=0):
+        """Per batch, ``[function(*call) for call in batch]``: every batch's tasks queued at once, yielded in order.
+
+        The workers never wait for this process between batches (a search's
+        candidates); a caller that stops early drops the batches it no
+        longer needs.  Priority 0: behind the steps' tasks.
+        """
+        queued = [
+            [self.client.submit(function, *call, pure=False, priority=priority) for call in batch] for batch in batches
+        ]
+        try:
+            for futures in queued:
+                yield self.client.gather(futures)
+        finally:
+            for futures in queued:
+                for future in futures:
+                    future.release()
 
     def stream(self, function, items, in_flight=None):
         """``function(item)`` in order, at most ``in_flight`` (default: twice the threads) submitted at a time.
@@ -340,6 +358,21 @@ class DaskExecutor:
     def pipeline_cache(self, folder, prefix):
         """No pipeline cache: its folder is not where a worker on another machine can reach it."""
         yield None
+
+
+def balanced_blocks(sizes, n_blocks):
+    """Positions of ``sizes`` in ``n_blocks`` blocks of near-equal total size (largest first, to the lightest).
+
+    Each block lists its positions in increasing order; no block is empty
+    when ``n_blocks <= len(sizes)``.
+    """
+    n_blocks = max(1, min(n_blocks, len(sizes)))
+    blocks, totals = [[] for _ in range(n_blocks)], np.zeros(n_blocks)
+    for position in np.argsort(-np.asarray(sizes), kind="stable"):
+        lightest = int(np.argmin(totals))
+        blocks[lightest].append(int(position))
+        totals[lightest] += sizes[position]
+    return [sorted(block) for block in blocks]
 
 
 def _on_this_worker(function, keys, args):

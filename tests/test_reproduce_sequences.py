@@ -9,7 +9,7 @@ from sklearn_radar.datasets import load_radarscenes, make_scenes
 from sklearn_radar.experiments import experiment_pipeline
 from sklearn_radar.metrics import precluster_target
 from sklearn_radar.model_selection import sequence_train_test_split
-from sklearn_radar.reproduce._search import SearchData, candidate_scores, sequence_folds
+from sklearn_radar.model_selection._sequence_search import SearchData, candidate_scores, sequence_folds
 from sklearn_radar.reproduce._sequences import LABEL_COLUMNS, RunSequences
 
 #: The fixtures' simulation: make_scenes(n_sequences=4, duration=3.0, random_state=5), whole and per sequence.

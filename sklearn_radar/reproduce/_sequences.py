@@ -27,8 +27,8 @@ from ..datasets import load_radarscenes
 from ..datasets._radarscenes import _read_sensors_json, _read_sequences_json, _resolve_data_dir
 from ..datasets._simulator import _check_knobs, sequence_seeds, simulate_sequences
 from ..metrics import precluster_target
+from ..model_selection._sequence_search import SearchData
 from ..model_selection._split import sequence_sides
-from ._search import SearchData
 
 __all__ = ["RunSequences", "Sequence"]
 
@@ -209,7 +209,7 @@ class RunSequences:
         return self.executor.fetch(self.items[int(number)])
 
     def search_data(self, ids, executor=None):
-        """The sequences ``ids`` as a search's training data (:class:`._search.SearchData`), where they live.
+        """The sequences ``ids`` as a search's training data (:class:`~sklearn_radar.model_selection._sequence_search.SearchData`), where they live.
 
         They are grouped into the executor's blocks (:meth:`~sklearn_radar._executor.DaskExecutor.blocks`),
         each block built where its sequences are.
@@ -218,6 +218,4 @@ class RunSequences:
         ids = sorted(int(i) for i in ids)
         positions = executor.blocks([self.size([i]) for i in ids])
         blocks = [self.executor.place(_search_block, *[self.items[ids[p]] for p in block]) for block in positions]
-        return SearchData(
-            blocks, [[ids[p] for p in block] for block in positions], executor.search_cluster, executor.n_jobs
-        )
+        return SearchData(blocks, [[ids[p] for p in block] for block in positions], executor)

@@ -48,6 +48,12 @@ from ..experiments import (
 )
 from ..metrics._parts import combine_instance_parts, combine_parts, instance_parts, score_parts
 from ..model_selection import ProgressPrinter
+from ..model_selection._sequence_search import (
+    SearchData,
+    candidate_scores,
+    search_and_score_start,
+    sized_sequence_folds,
+)
 from ..preprocessing import DopplerDensityFilter, FrameTransform
 from ._constants import (
     ALL_EXPERIMENTS,
@@ -80,7 +86,6 @@ from ._results import (
     RepeatResult,
     SearchRecord,
 )
-from ._search import SearchData, candidate_scores, search_and_score_start, sized_sequence_folds
 
 #: Length of the frames of the object-level scores, s (Scheiner et al. 2021 evaluate 500 ms).
 FRAME_S = 0.5
@@ -634,7 +639,7 @@ def tune(env, key, estimator, space, label, start_from=None, seed=None):
 
 def _search(executor, blocks, ids, estimator, space, folds, start_from, options, callback):
     """:func:`search_and_score_start` on the blocks, where ``executor`` runs (a worker, or here)."""
-    data = SearchData(blocks, ids, executor.search_cluster, executor.n_jobs)
+    data = SearchData(blocks, ids, executor)
     return search_and_score_start(estimator, space, data, folds, start_from, callback=callback, **options)
 
 
@@ -676,7 +681,7 @@ class TrainingData:
 
     @staticmethod
     def _with(data, executor):
-        return SearchData(data.blocks, data.ids, executor.search_cluster, executor.n_jobs)
+        return data.on(executor)
 
 
 def _native(params):

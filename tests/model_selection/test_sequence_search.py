@@ -1,4 +1,4 @@
-"""The run's searches (``reproduce._search``): one task per candidate and sequence, scores combined per fold."""
+"""The per-sequence search (``model_selection._sequence_search``): a task per candidate and sequence."""
 
 import pickle
 
@@ -13,7 +13,7 @@ from sklearn_radar.datasets import make_scenes
 from sklearn_radar.experiments import experiment_pipeline
 from sklearn_radar.metrics import panoptic_quality_scorer, precluster_target, radar_v_measure_scorer
 from sklearn_radar.metrics._parts import FailedPart, combine_parts
-from sklearn_radar.reproduce._search import (
+from sklearn_radar.model_selection._sequence_search import (
     SearchData,
     balanced_blocks,
     candidate_parts,
