@@ -76,12 +76,15 @@ class RunProgress:
         ``time.perf_counter()`` at the start of the run.
     stream : file-like or None
         Where :meth:`say` prints (None: nowhere).
+    searches : int, default=0
+        The run's searches, for the lines of :meth:`search_ended`.
 
     A copy in another process (joblib) prints nothing and counts for itself.
     """
 
-    def __init__(self, work, started, stream=None):
+    def __init__(self, work, started, stream=None, searches=0):
         self.work = dict(work)
+        self.searches, self._ended = searches, 0
         self.started = started
         self.stream = stream
         self._lock = threading.Lock()
@@ -103,6 +106,14 @@ class RunProgress:
         if self.stream is not None:
             with self._lock:
                 print(text, file=self.stream, flush=True)
+
+    def search_ended(self, label):
+        """Say that the search ``label``, which ran beside others, ended, and how many have."""
+        status = self.status()
+        with self._lock:
+            self._ended += 1
+            text = f"    search {label} ended ({self._ended}/{self.searches} of the concurrent searches) | {status}"
+        self.say(text)
 
     def start(self, key):
         """Step ``key`` begins: its next units are timed from now."""

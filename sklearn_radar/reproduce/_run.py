@@ -40,7 +40,7 @@ from sklearn.utils._param_validation import HasMethods, Interval, StrOptions, va
 
 from .. import __version__
 from .._executor import connect_executor
-from ..experiments import get_experiment
+from ..experiments import SKLEARN_BASELINES, get_experiment
 from ..metrics._parts import OBJECTIVES  # what the searches can maximise: "v1", "pq"
 from ._constants import ALL_EXPERIMENTS, BASELINES, FILTER, FILTER_EFFECT, NUMBERS
 from ._context import RunContext
@@ -289,13 +289,14 @@ def _in_process_reason(data, budget, keys, repeats):
 
 def _searches_at_once(keys, repeats):
     """The most searches the run has at once: those of the steps that need no other (together), or one step's."""
+    ahead = sum(_searches(key, repeats) for key in keys if _runs_ahead(key, keys))
+    return max([ahead, *(_searches(key, repeats) for key in keys)])
 
-    def searches(key):
-        experiment = get_experiment(int(key)) if key.isdigit() else None
-        return repeats * (4 if key == BASELINES else int(experiment is not None and experiment.tuned))
 
-    ahead = sum(searches(key) for key in keys if _runs_ahead(key, keys))
-    return max([ahead, *(searches(key) for key in keys)])
+def _searches(key, repeats):
+    """How many searches step ``key`` runs."""
+    experiment = get_experiment(int(key)) if key.isdigit() else None
+    return repeats * (len(SKLEARN_BASELINES) if key == BASELINES else int(experiment is not None and experiment.tuned))
 
 
 def _runs_ahead(key, keys):
@@ -337,7 +338,8 @@ def _reproduce(data, out, keys, budget, seed, repeats, stream, objective, diffic
         **{key: (STEPS[key].kind, units(key, budget, repeats)) for key in keys},
         REPORT: (REPORT, 1),
     }
-    run = Run(out=out, results=results, progress=RunProgress(work, started, stream), started=started)
+    progress = RunProgress(work, started, stream, searches=sum(_searches(key, repeats) for key in keys))
+    run = Run(out=out, results=results, progress=progress, started=started)
     run.progress.finish(DATA, time.perf_counter() - started)
     _start_folder(run)
     run.say(
@@ -389,7 +391,14 @@ def run_steps(run, env, keys, context):
     and are collected in order.
     """
     found = {}
-    ahead = env.executor.ahead(_started(run, env, found), [key for key in keys if _runs_ahead(key, keys)])
+    first = [key for key in keys if _runs_ahead(key, keys)]
+    ahead = env.executor.ahead(_started(run, env, found), first)
+    at_once = sum(_searches(key, env.repeats) for key in first)
+    if not env.executor.alone and at_once > 1:
+        run.say(
+            f"{at_once} independent searches run on the cluster at once, each a task on a worker "
+            "(their iterations are not printed; a line as each ends)"
+        )
     with contextlib.closing(ahead):
         for position, key in enumerate(keys, start=1):
             _run_step(run, env, keys, context, found, position, key, ahead)

@@ -209,10 +209,11 @@ class RunSequences:
         return self.executor.fetch(self.items[int(number)])
 
     def search_data(self, ids, executor=None):
-        """The sequences ``ids`` as a search's training data (:class:`~sklearn_radar.model_selection._sequence_search.SearchData`), where they live.
+        """The sequences ``ids`` as a search's training data (a ``SearchData``), where they live.
 
-        They are grouped into the executor's blocks (:meth:`~sklearn_radar._executor.DaskExecutor.blocks`),
-        each block built where its sequences are.
+        See :class:`~sklearn_radar.model_selection._sequence_search.SearchData`.  They are grouped into the
+        executor's blocks (:meth:`~sklearn_radar._executor.DaskExecutor.blocks`), each block built where its
+        sequences are.
         """
         executor = executor or self.executor
         ids = sorted(int(i) for i in ids)

@@ -428,7 +428,7 @@ def _said_ended(env, label, repeats):
     """``on_done`` of a step's repeats when they run beside other work: a line as each ends (none when alone)."""
     if env.executor.alone:
         return None
-    return lambda k, _: env.progress.say(f"    search {_repeat_label(label, k, repeats)} ended")
+    return lambda k, _: env.progress.search_ended(_repeat_label(label, k, repeats))
 
 
 # ----------------------------------------------------------------------------- the filter's effect
@@ -528,7 +528,7 @@ class _BaselineRepeat:
 def _said_baseline_ended(env):
     if env.executor.alone:
         return None
-    return lambda job, _: env.progress.say(f"    search {_repeat_label(job[0], job[1], env.repeats)} ended")
+    return lambda job, _: env.progress.search_ended(_repeat_label(job[0], job[1], env.repeats))
 
 
 # ----------------------------------------------------------------------------- scoring and searching
