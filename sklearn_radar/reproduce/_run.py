@@ -227,8 +227,12 @@ def reproduce(
         ``[distributed]`` extra; an unreachable address fails within a few
         seconds (OSError naming it).
     workers : int, default=None
-        Start a local dask cluster of this many worker processes instead.
-        Without ``scheduler`` or ``workers`` dask is not imported.
+        Start a local dask cluster of this many worker processes instead;
+        a run that it would slow down (one search at a time on simulated
+        data no larger than the default run's,
+        :data:`IN_PROCESS_MAX_SEQUENCE_S`) stays in this process, and its
+        first line says so.  Without ``scheduler`` or ``workers`` dask is
+        not imported.
     n_points : int, default=None
         Candidates each search step proposes and evaluates at a time
         (``BayesSearchCV(n_points=...)``); None: 1.  The results depend on
