@@ -472,3 +472,30 @@ def test_a_steps_tasks_go_ahead_of_queued_search_tasks(local_cluster, tmp_path):
         assert search.result() == 30
     assert lengths == sequences.sizes
     assert waiting > 10  # most of the queue (3 s of naps on 2 workers) was still ahead when the step finished
+
+
+def test_local_workers_that_would_slow_a_small_run_down_are_not_started(tmp_path):
+    # One search at a time on the default run's data: a local cluster was 2x slower than one process, so the run
+    # stays here and its first line says so; with searches at once, a folder or --scheduler, the cluster is used.
+    from sklearn_radar._executor import LocalExecutor
+    from sklearn_radar.reproduce._results import Budget
+    from sklearn_radar.reproduce._run import _in_process_reason, parse_experiments
+
+    small = _in_process_reason(None, Budget.default(), parse_experiments("3"), 1)
+    assert "one search at a time" in small
+    assert _in_process_reason(None, Budget.default(), parse_experiments("8,12"), 1)  # #12 waits for #8: one at a time
+    assert _in_process_reason(None, Budget.default(), parse_experiments("3"), 2) is None  # 2 repeats at once
+    assert _in_process_reason(None, Budget.default(), parse_experiments(None), 1) is None  # 12 searches at once
+    assert _in_process_reason(None, Budget.full(), parse_experiments("3"), 1) is None  # larger data
+    assert _in_process_reason(tmp_path, Budget.default(), parse_experiments("3"), 1) is None  # a folder
+    with connect_executor(workers=2, in_process_reason=small) as executor:
+        assert isinstance(executor, LocalExecutor)
+        assert executor.describe() == f"--workers 2: {small}; running in this process"
+    code = (
+        "import sys\n"
+        "from sklearn_radar._executor import connect_executor\n"
+        "with connect_executor(workers=2, in_process_reason='small') as executor:\n"
+        "    pass\n"
+        "assert 'distributed' not in sys.modules, 'dask was imported'\n"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True, env=_env(), cwd=ROOT)
