@@ -7,6 +7,8 @@ budget and split as the experiments.
 
 from __future__ import annotations
 
+from sklearn.utils._param_validation import HasMethods, StrOptions, validate_params
+
 from .._skopt import Integer, Real
 from ..cluster import SequenceDBSCAN, SequenceHDBSCAN, WindowedDBSCAN, WindowedHDBSCAN
 from ._paper import experiment_pipeline
@@ -58,6 +60,10 @@ SKLEARN_BASELINES = {
 }
 
 
+@validate_params(
+    {"name": [StrOptions(set(SKLEARN_BASELINES))], "memory": [None, str, HasMethods(["cache"])]},
+    prefer_skip_nested_validation=True,
+)
 def baseline_pipeline(name, memory=None):
     """The pipeline of baseline ``name``: #3's stage 0, then the baseline's clusterer (default parameters).
 
@@ -65,8 +71,8 @@ def baseline_pipeline(name, memory=None):
     ----------
     name : str
         A key of :data:`SKLEARN_BASELINES`.
-    memory : str or None, default=None
-        The pipeline's cache folder.
+    memory : str, joblib.Memory or None, default=None
+        The pipeline's cache.
 
     Returns
     -------
