@@ -462,7 +462,7 @@ def _say_the_work(run, keys, budget, repeats):
     )
     uncompiled = uncompiled_kernels()
     if uncompiled:
-        text += f" ({len(uncompiled)} numba kernels are compiled in this first run: its first steps run slower)"
+        text += f" ({len(uncompiled)} of its numba kernels compile in this first run: its first steps run slower)"
     run.say(text)
 
 
