@@ -114,7 +114,7 @@ def speedup(scales, n_iter, repeats, number=8):
     from distributed import wait
     from threadpoolctl import threadpool_limits
 
-    from sklearn_radar._distributed import connect_cluster
+    from sklearn_radar._executor import connect_executor
     from sklearn_radar.experiments import experiment_pipeline, search_space
     from sklearn_radar.model_selection._sequence_search import SearchData, fixed_prefix, sequence_folds
 
@@ -126,7 +126,7 @@ def speedup(scales, n_iter, repeats, number=8):
     print("  | scale | training detections | candidate E | proposing g | 1 process | 2 workers | speed-up |")
     print("  |---|---|---|---|---|---|---|")
     rows = []
-    with connect_cluster(workers=2) as cluster, threadpool_limits(limits=1, user_api="blas"):
+    with connect_executor(workers=2) as cluster, threadpool_limits(limits=1, user_api="blas"):
         for scale in scales:
             X, target, groups = _training_half(scale)
             stage0, searched, prefix = fixed_prefix(experiment_pipeline(number), search_space(number))
@@ -218,7 +218,7 @@ if mode == "whole":
     n = len(labels)
 else:
     n = cluster_radarscenes(data, params, out)["n_detections"]
-from sklearn_radar._distributed import peak_rss
+from sklearn_radar._executor import peak_rss
 print(json.dumps({"peak": peak_rss(), "seconds":
     time.perf_counter() - start, "n": n}))
 """
@@ -226,13 +226,13 @@ print(json.dumps({"peak": peak_rss(), "seconds":
 
 REPRODUCE_PEAK = """
 import io, json, sys, time
-from sklearn_radar._distributed import connect_cluster, peak_rss
+from sklearn_radar._executor import connect_executor, peak_rss
 from sklearn_radar.reproduce import reproduce
 workers, data, out, steps = int(sys.argv[1]), sys.argv[2], sys.argv[3], sys.argv[4]
 start = time.perf_counter()
 peaks = {}
 if workers:  # as --workers starts them, the scheduler in this process
-    with connect_cluster(workers=workers) as cluster:
+    with connect_executor(workers=workers) as cluster:
         reproduce(data, out, n_iter=2, experiments=steps, stream=io.StringIO(), scheduler=cluster.address)
         peaks = cluster.client.run(peak_rss)
 else:
@@ -269,7 +269,7 @@ def reproduce_memory(work, data, detections, steps="filter,1,3,filter-effect"):
 def memory(work, scale):
     import dask.distributed as distributed
 
-    from sklearn_radar._distributed import connect_cluster, peak_rss
+    from sklearn_radar._executor import connect_executor, peak_rss
     from sklearn_radar.datasets import make_scenes, write_radarscenes
     from sklearn_radar.reproduce import cluster_radarscenes, reproduce
 
@@ -303,7 +303,7 @@ def memory(work, scale):
         )
         rows[mode] = json.loads(done.stdout.strip().splitlines()[-1])
     # As --workers starts them (without dask's MALLOC_TRIM_THRESHOLD_, which slowed the kernels 2x).
-    with connect_cluster(workers=2) as local:
+    with connect_executor(workers=2) as local:
         client = local.client
         idle = client.run(peak_rss)
         with distributed.get_task_stream(client=client) as stream:

@@ -349,7 +349,7 @@ def _reproduce(args) -> int:
 
 
 def _cluster(args) -> int:
-    from .reproduce import cluster_radarscenes
+    from ._cluster_command import cluster_radarscenes
 
     summary = cluster_radarscenes(
         args.data, args.params, args.out, experiment=args.experiment, scheduler=args.scheduler, workers=args.workers

@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 from sklearn_radar._cli import main
-from sklearn_radar._distributed import connect_cluster
+from sklearn_radar._executor import connect_executor
 from sklearn_radar.datasets import load_radarscenes
 from sklearn_radar.experiments import experiment_pipeline
 from sklearn_radar.reproduce import cluster_radarscenes, load_params, reproduce, write_predictions
@@ -242,10 +242,10 @@ def test_independent_searches_run_concurrently_and_equal_one_after_the_other(loc
 def test_local_workers_keep_glibc_default_memory_trimming(local_cluster, monkeypatch):
     # dask's MALLOC_TRIM_THRESHOLD_ made the clustering kernels 2.1x slower per detection in its workers.  dask
     # also writes it into the spawning process's environment (the module's default local_cluster did).
-    from sklearn_radar._distributed import MALLOC_TRIM, connect_cluster
+    from sklearn_radar._executor import MALLOC_TRIM
 
     monkeypatch.setenv(MALLOC_TRIM, "65536")
-    with connect_cluster(workers=1) as cluster:
+    with connect_executor(workers=1) as cluster:
         environment = cluster.client.run(lambda: dict(os.environ))
         assert "MALLOC_TRIM" not in cluster.describe()
     (worker,) = environment.values()
@@ -256,7 +256,7 @@ def test_local_workers_keep_glibc_default_memory_trimming(local_cluster, monkeyp
 
 def test_workers_started_as_documented_run_without_malloc_trim_and_others_are_named(local_cluster, tmp_path):
     # The docs' way for workers on other machines: dask worker with DASK_CONFIG holding WORKER_CONFIG.
-    from sklearn_radar._distributed import MALLOC_TRIM, WORKER_CONFIG, connect_cluster, malloc_trim_setting
+    from sklearn_radar._executor import MALLOC_TRIM, WORKER_CONFIG, malloc_trim_setting
 
     (tmp_path / "dask.yaml").write_text(WORKER_CONFIG)
     env = {**_env(), "DASK_CONFIG": str(tmp_path)}
@@ -268,11 +268,11 @@ def test_workers_started_as_documented_run_without_malloc_trim_and_others_are_na
         stderr=subprocess.DEVNULL,
     )
     try:
-        with connect_cluster(scheduler=local_cluster.scheduler_address) as cluster:
+        with connect_executor(scheduler=local_cluster.scheduler_address) as cluster:
             cluster.client.wait_for_workers(3, timeout=60)
             values = cluster.client.run(malloc_trim_setting)
         assert sorted(v is None for v in values.values()) == [False, False, True]  # the fixture's two have it
-        with connect_cluster(scheduler=local_cluster.scheduler_address) as cluster:
+        with connect_executor(scheduler=local_cluster.scheduler_address) as cluster:
             assert cluster.n_malloc_trim == 2
             assert f"2 worker(s) run with dask's {MALLOC_TRIM}" in cluster.describe()
             assert f"pre-spawn-environ.{MALLOC_TRIM}: null" in cluster.describe()
@@ -299,7 +299,7 @@ def _whole_table_predictions(tiny_folder, saved_params, path):
 
 
 def test_cluster_streams_per_sequence_and_equals_the_whole_table_fit(tiny_folder, saved_params, tmp_path, monkeypatch):
-    from sklearn_radar.reproduce import _apply
+    from sklearn_radar import _cluster_command
 
     loaded = []
 
@@ -308,7 +308,7 @@ def test_cluster_streams_per_sequence_and_equals_the_whole_table_fit(tiny_folder
         loaded.append(np.unique(bunch.groups).tolist())
         return bunch
 
-    monkeypatch.setattr(_apply, "load_radarscenes", load_one)
+    monkeypatch.setattr(_cluster_command, "load_radarscenes", load_one)
     summary = cluster_radarscenes(tiny_folder, saved_params, tmp_path / "p.json")
     assert loaded == [[1], [2], [3], [4]]  # one sequence at a time, never the whole table
     reference = _whole_table_predictions(tiny_folder, saved_params, tmp_path / "ref.json")
@@ -459,8 +459,8 @@ def test_a_steps_tasks_go_ahead_of_queued_search_tasks(local_cluster, tmp_path):
     # the workers' queue full: a step's tasks must not wait for that whole queue.
     from sklearn_radar.reproduce._sequences import RunSequences
 
-    with connect_cluster(scheduler=local_cluster.scheduler_address) as cluster:
-        sequences = RunSequences.simulated(2, 1.0, 0, cluster=cluster)
+    with connect_executor(scheduler=local_cluster.scheduler_address) as cluster:
+        sequences = RunSequences.simulated(2, 1.0, 0, executor=cluster)
         sequences.map(_sequence_length)  # placed before the queue fills
         # Queued from a task, as the concurrent searches queue their candidates: dask ranks such sub-tasks ahead of
         # anything the command submits later, unless the command's tasks have a higher priority.
@@ -472,3 +472,30 @@ def test_a_steps_tasks_go_ahead_of_queued_search_tasks(local_cluster, tmp_path):
         assert search.result() == 30
     assert lengths == sequences.sizes
     assert waiting > 10  # most of the queue (3 s of naps on 2 workers) was still ahead when the step finished
+
+
+def test_local_workers_that_would_slow_a_small_run_down_are_not_started(tmp_path):
+    # One search at a time on the default run's data: a local cluster was 2x slower than one process, so the run
+    # stays here and its first line says so; with searches at once, a folder or --scheduler, the cluster is used.
+    from sklearn_radar._executor import LocalExecutor
+    from sklearn_radar.reproduce._results import Budget
+    from sklearn_radar.reproduce._run import _in_process_reason, parse_experiments
+
+    small = _in_process_reason(None, Budget.default(), parse_experiments("3"), 1)
+    assert "one search at a time" in small
+    assert _in_process_reason(None, Budget.default(), parse_experiments("8,12"), 1)  # #12 waits for #8: one at a time
+    assert _in_process_reason(None, Budget.default(), parse_experiments("3"), 2) is None  # 2 repeats at once
+    assert _in_process_reason(None, Budget.default(), parse_experiments(None), 1) is None  # 12 searches at once
+    assert _in_process_reason(None, Budget.full(), parse_experiments("3"), 1) is None  # larger data
+    assert _in_process_reason(tmp_path, Budget.default(), parse_experiments("3"), 1) is None  # a folder
+    with connect_executor(workers=2, in_process_reason=small) as executor:
+        assert isinstance(executor, LocalExecutor)
+        assert executor.describe() == f"--workers 2: {small}; running in this process"
+    code = (
+        "import sys\n"
+        "from sklearn_radar._executor import connect_executor\n"
+        "with connect_executor(workers=2, in_process_reason='small') as executor:\n"
+        "    pass\n"
+        "assert 'distributed' not in sys.modules, 'dask was imported'\n"
+    )
+    subprocess.run([sys.executable, "-c", code], check=True, env=_env(), cwd=ROOT)

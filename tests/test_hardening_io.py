@@ -357,12 +357,14 @@ def test_sigint_during_the_start_up_imports_prints_no_traceback(small_folder):
 
 @pytest.mark.parametrize("error, status, code", [(KeyboardInterrupt, "interrupted", 130), (ValueError, "failed", 1)])
 def test_an_interrupted_or_failed_run_is_marked_so(two_folder, tmp_path, monkeypatch, capsys, error, status, code):
-    import sklearn_radar.reproduce._run as run_module
+    import dataclasses
+
+    from sklearn_radar.reproduce._steps import STEPS
 
     def fail(*args, **kwargs):
         raise error("stopped here")
 
-    monkeypatch.setitem(run_module._RUNNERS, "filter-effect", fail)
+    monkeypatch.setitem(STEPS, "filter-effect", dataclasses.replace(STEPS["filter-effect"], run=fail))
     out = tmp_path / "out"
     argv = ["reproduce", "--data", str(two_folder), "--out", str(out), "--experiments", "1,filter-effect"]
     assert main(argv) == code

@@ -60,6 +60,7 @@ PARAM_VALIDATION_FUNCTION_LIST = [
     "sklearn_radar.evaluation.filter_settings_table",
     "sklearn_radar.evaluation.plot_filter_errors",
     "sklearn_radar.experiments.derived_params",
+    "sklearn_radar.experiments.baseline_pipeline",
     "sklearn_radar.experiments.experiment_pipeline",
     "sklearn_radar.experiments.get_experiment",
     "sklearn_radar.experiments.paper_experiments",

@@ -170,12 +170,14 @@ def test_malformed_params_file_is_a_one_line_error(tiny_folder, tmp_path, capsys
 
 
 def test_interrupted_run_keeps_finished_results(tiny_folder, tmp_path, monkeypatch):
-    import sklearn_radar.reproduce._run as run_module
+    import dataclasses
+
+    from sklearn_radar.reproduce._steps import STEPS
 
     def interrupt(*args, **kwargs):
         raise KeyboardInterrupt
 
-    monkeypatch.setitem(run_module._RUNNERS, "filter-effect", interrupt)
+    monkeypatch.setitem(STEPS, "filter-effect", dataclasses.replace(STEPS["filter-effect"], run=interrupt))
     out = tmp_path / "out"
     assert main(["reproduce", "--data", str(tiny_folder), "--out", str(out), "--experiments", "1,filter-effect"]) == 130
     results = json.loads((out / "results.json").read_text())
@@ -396,7 +398,7 @@ def _typed_data():
 
 def test_the_cluster_gate_is_searched_only_for_pq():
     from sklearn_radar.experiments import search_space
-    from sklearn_radar.reproduce._run import _with_cluster_gate
+    from sklearn_radar.reproduce._steps import with_cluster_gate as _with_cluster_gate
 
     assert _with_cluster_gate(search_space(8), 1, "v1") == search_space(8)
     assert set(_with_cluster_gate(search_space(8), 1, "pq")) - set(search_space(8)) == {"cluster__cluster_vr_min"}
@@ -519,7 +521,7 @@ def test_progress_estimates_the_run_and_shows_overall_progress_in_plain_lines(ti
     text = (tiny_report.parent / "stdout.txt").read_text()
     assert "\r" not in text and "\x1b" not in text  # readable in a file: no carriage returns, no escapes
     lines = text.splitlines()
-    assert re.match(r"estimated run time: about \d+ (s|min|h)\b.*--full .* takes about \d", lines[1])
+    assert re.match(r"the run's work: 9 steps, \d+ search iterations in all; the progress lines estimate", lines[1])
     status = re.compile(r"\| run (\d+) %, (\d+:)?\d+:\d\d elapsed, about (\d+:)?\d+:\d\d left$")
     done = [line for line in lines if re.match(r"\[\d+/9\] .* done in ", line)]
     iterations = [line for line in lines if " iteration " in line]
@@ -527,33 +529,65 @@ def test_progress_estimates_the_run_and_shows_overall_progress_in_plain_lines(ti
     shares = [int(status.search(line).group(1)) for line in done]
     assert all(status.search(line) for line in iterations)
     assert shares == sorted(shares) and shares[0] < shares[-1] < 100  # the report itself is the rest
-    assert re.match(r"report written after \d+:\d\d in all \(estimated at the start: about ", lines[-2])
+    assert re.match(r"report written after \d+:\d\d in all$", lines[-2])
 
 
-def test_progress_durations_and_the_estimate_grow_with_the_budget():
-    from sklearn_radar.reproduce._progress import RunProgress, duration, step_cost
-    from sklearn_radar.reproduce._results import Budget
+def test_progress_counts_units_and_prices_the_work_left_at_each_kinds_measured_rate(monkeypatch):
+    from sklearn_radar.reproduce import _progress
+    from sklearn_radar.reproduce._progress import RunProgress, duration
 
     assert (duration(0), duration(75), duration(4000)) == ("0:00", "1:15", "1:06:40")
-    sizes = {"n_train": 90_000, "n_test": 85_000, "n_detections": 175_000}
-    for key in ("8", "13", "baselines"):
-        small = step_cost(key, Budget.default(), tuned=True, **sizes)
-        assert step_cost(key, Budget.full(), tuned=True, **sizes) > 5 * small > 0
-        bigger = {name: 6 * value for name, value in sizes.items()}
-        assert step_cost(key, Budget.default(), tuned=True, **bigger) > small
-    progress = RunProgress({"a": 1.0, "b": 3.0}, started=0.0)
-    progress.start("a")
-    progress.finish("a")
-    progress.start("b")
-    assert progress.status(0.5).startswith("run 62 %")  # (1 + 1.5) / 4
-    # Searches that ran concurrently are credited as they end, and not counted again when their step ends.
-    ahead = RunProgress({"a": 1.0, "b": 3.0}, started=0.0)
-    ahead.credit("b", 0.5)
-    assert ahead.status().startswith("run 38 %")  # 1.5 / 4
-    ahead.start("b")
-    assert ahead.status(0.5).startswith("run 56 %")  # (1.5 + 0.75) / 4
-    ahead.finish("b")
-    assert ahead.status().startswith("run 75 %")  # 3 / 4, not 4.5 / 4
+    clock = [0.0]
+    monkeypatch.setattr(_progress.time, "perf_counter", lambda: clock[0])
+    work = {
+        "data": ("data", 1),
+        "filter": ("filter", 1),
+        "1": ("scoring", 1),
+        "2": ("stage 1", 10),
+        "3": ("stage 1", 10),
+    }
+    progress = RunProgress(work, started=0.0)
+    clock[0] = 4.0
+    progress.finish("data", 4.0)
+    assert "time left not measured yet" in progress.status()  # the data step prices nothing
+    progress.start("filter")
+    clock[0] = 6.0
+    progress.finish("filter")  # 2 s; until a scoring pass is measured, every kind is priced like it
+    assert progress.left() == pytest.approx(21 * 2.0)
+    progress.start("1")
+    clock[0] = 7.0
+    progress.finish("1")  # 1 s a scoring pass: the price of an iteration until one is measured
+    assert progress.left() == pytest.approx(20 * 1.0)
+    progress.start("2")
+    for _ in range(4):  # 4 iterations of 0.5 s: the stage-1 rate
+        clock[0] += 0.5
+        progress.advance("2")
+    assert progress.left() == pytest.approx(16 * 0.5)
+    assert progress.status() == "run 53 %, 0:09 elapsed, about 0:08 left"  # 9 / (9 + 8)
+    # Work that ran at once: its 6 units took 11 s while the clock moved on by less, so that the measured
+    # seconds (20) exceed the time elapsed (19): the rate, (2 + 11) / 10 s, is scaled by 19 / 20.
+    progress.finish("2", 11.0)
+    clock[0] = 19.0
+    assert progress.left() == pytest.approx(10 * (13.0 / 10) * 19.0 / 20.0)
+
+
+def test_progress_share_never_goes_back(monkeypatch):
+    from sklearn_radar.reproduce import _progress
+    from sklearn_radar.reproduce._progress import RunProgress
+
+    clock = [0.0]
+    monkeypatch.setattr(_progress.time, "perf_counter", lambda: clock[0])
+    progress = RunProgress({"1": ("scoring", 1), "2": ("stage 1", 1), "3": ("stage 1", 100)}, started=0.0)
+    progress.start("1")
+    clock[0] = 1.0
+    progress.finish("1")
+    clock[0] = 1.01
+    progress.finish("2", 0.01)  # a fast first iteration: 100 more at 0.01 s, 1 s left
+    assert progress.status().startswith("run 50 %")
+    progress.start("3")
+    clock[0] = 11.01
+    progress.advance("3")  # a slow one: 99 more at 5 s each, the share would drop to 2 %
+    assert progress.status().startswith("run 50 %")
 
 
 @pytest.mark.parametrize("number", [3, 13, "baseline"])
@@ -562,17 +596,19 @@ def test_tune_searches_exactly_as_the_plain_pipeline_search(number):
     # fold's score from its sequences' parts: the candidates must be those of the plain BayesSearchCV of the
     # whole pipeline (stage 0 per fold, one fit per fold) with the same seed, the scores equal to rounding.
     import io
-    from types import SimpleNamespace
 
     from sklearn.model_selection import GroupKFold
 
+    from sklearn_radar._executor import LocalExecutor
     from sklearn_radar.cluster import WindowedDBSCAN
+    from sklearn_radar.experiments import SKLEARN_BASELINES as _BASELINES
     from sklearn_radar.experiments import experiment_pipeline, search_space
     from sklearn_radar.metrics import precluster_target, radar_v_measure_scorer
     from sklearn_radar.model_selection import make_bayes_search
+    from sklearn_radar.reproduce._progress import RunProgress
     from sklearn_radar.reproduce._results import Budget
-    from sklearn_radar.reproduce._run import _BASELINES, _tune
     from sklearn_radar.reproduce._sequences import RunSequences
+    from sklearn_radar.reproduce._steps import RunEnv, TrainingData, tune
 
     scenes = make_scenes(n_sequences=4, duration=3.0, random_state=5)
     X = scenes.data[[c for c in scenes.data.columns if c not in ("uuid", "track_id", "label_id")]]
@@ -585,17 +621,24 @@ def test_tune_searches_exactly_as_the_plain_pipeline_search(number):
     else:
         pipeline, space = experiment_pipeline(number), search_space(number)
     budget = Budget(label="test", n_iter=5, n_initial_points=2, cv_folds=2)
-    run = SimpleNamespace(
-        budget=budget,
-        seed=1,
-        n_jobs=None,
-        progress=None,
-        stream=io.StringIO(),
-        results=SimpleNamespace(meta=SimpleNamespace(objective="v1")),
-    )
     sequences = RunSequences.simulated(4, 3.0, 5)  # the sequences of scenes, simulated one by one
-    context = SimpleNamespace(sequences=sequences, train=sequences.ids[:3])
-    best, record = _tune(run, context, pipeline, space, "test")
+    train_ids = sequences.ids[:3]
+    progress = RunProgress({"test": ("stage 1", 7)}, started=0.0, stream=io.StringIO())
+    env = RunEnv(
+        LocalExecutor(),
+        sequences,
+        train_ids,
+        sequences.ids[3:],
+        budget,
+        1,
+        "v1",
+        1,
+        1,
+        None,
+        progress,
+        TrainingData(sequences, train_ids),
+    )
+    best, record = tune(env, "test", pipeline, space, "test")
 
     groups = scenes.groups[train]
     cv = [(rows, rows) for _, rows in GroupKFold(n_splits=2).split(train, groups=groups)]

@@ -138,8 +138,12 @@ def test_the_convergence_band_spans_the_repeats():
     assert low.tolist() == [0.0, 0.2, 0.3] and high.tolist() == [0.2, 0.4, 0.5]
 
 
-def test_the_estimate_counts_each_repeated_step_once_per_repeat():
-    from sklearn_radar.reproduce._run import _repeated
+def test_the_progress_counts_each_repeated_step_once_per_repeat():
+    from sklearn_radar.reproduce._results import Budget
+    from sklearn_radar.reproduce._steps import units
+
+    def _repeated(key, repeats):
+        return units(key, Budget.default(), repeats) / units(key, Budget.default(), 1)
 
     assert [_repeated(key, 3) for key in ("filter", "1", "2", "8", "10", "11", "13", "filter-effect", "baselines")] == [
         1,

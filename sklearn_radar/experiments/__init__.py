@@ -3,9 +3,12 @@
 :data:`PAPER_EXPERIMENTS` holds experiments #1-#13 (method, coordinate
 system, filtering, stage, the paper's V1 score and setting);
 :func:`experiment_pipeline` builds the scikit-learn Pipeline of an
-experiment and :func:`search_space` its Bayesian-optimisation ranges.
+experiment and :func:`search_space` its Bayesian-optimisation ranges;
+:data:`SKLEARN_BASELINES` and :func:`baseline_pipeline` are the scikit-learn
+clusterers the run compares with, on #3's input.
 """
 
+from ._baselines import BASELINE_INPUT, SKLEARN_BASELINES, baseline_pipeline
 from ._paper import (
     PAPER_EXPERIMENTS,
     PIPELINE_COLUMNS,
@@ -19,9 +22,12 @@ from ._paper import (
 )
 
 __all__ = [
+    "BASELINE_INPUT",
     "PAPER_EXPERIMENTS",
     "PIPELINE_COLUMNS",
+    "SKLEARN_BASELINES",
     "PaperExperiment",
+    "baseline_pipeline",
     "derived_params",
     "experiment_pipeline",
     "get_experiment",

@@ -7,12 +7,14 @@ task per training sequence, and a fold's score is combined from the small
 summaries of its sequences (:mod:`sklearn_radar.metrics._parts`: contingency
 counts for the V-measure, matches for the panoptic quality).
 
-* On a dask cluster (``reproduce --workers``) each sequence's data is placed
+Where the tasks run is the executor's (:mod:`sklearn_radar._executor`):
+
+* on a dask cluster (``reproduce --workers``) each sequence's data is placed
   on a worker once per run and stays there; stage 0 runs there once per
   search; a candidate's task ships only the parameters there and a summary
   back.  The data enters the cluster as tasks, not as scattered data, so
-  that the scheduler can compute it again when a worker is lost.
-* In one process the same tasks run here, or with joblib's ``n_jobs``.
+  that the scheduler can compute it again when a worker is lost;
+* in one process the same tasks run here, or with joblib's ``n_jobs``.
 
 The optimiser loop is ``BayesSearchCV``'s (skopt's ask and tell, the same
 optimiser and random state, candidates in the same order), so a search's
@@ -23,19 +25,18 @@ only on the seed and on ``n_points``.
 from __future__ import annotations
 
 import time
-import warnings
 from dataclasses import dataclass, field
 from numbers import Integral
 from typing import ClassVar
 
 import numpy as np
-from joblib import Parallel, delayed
 from scipy.stats import rankdata
 from sklearn.base import BaseEstimator, MetaEstimatorMixin, _fit_context, clone
 from sklearn.utils import check_consistent_length, check_random_state, column_or_1d
 from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
 from threadpoolctl import threadpool_limits
 
+from .._executor import LocalExecutor, balanced_blocks
 from .._skopt import Optimizer, dimensions_aslist
 from ..metrics._parts import FailedPart, combine_parts, sequence_parts
 from ._search import ProgressPrinter
@@ -44,6 +45,7 @@ __all__ = [
     "SearchData",
     "SearchResult",
     "SequenceSearchCV",
+    "balanced_blocks",
     "bayes_search",
     "search_and_score_start",
     "sequence_folds",
@@ -103,80 +105,59 @@ def _rows(X, rows):
     return X.iloc[rows] if hasattr(X, "iloc") else X[rows]
 
 
-def balanced_blocks(sizes, n_blocks):
-    """Positions of ``sizes`` in ``n_blocks`` blocks of near-equal total size (largest first, to the lightest).
-
-    Each block lists its positions in increasing order; no block is empty
-    when ``n_blocks <= len(sizes)``.
-    """
-    n_blocks = max(1, min(n_blocks, len(sizes)))
-    blocks, totals = [[] for _ in range(n_blocks)], np.zeros(n_blocks)
-    for position in np.argsort(-np.asarray(sizes), kind="stable"):
-        lightest = int(np.argmin(totals))
-        blocks[lightest].append(int(position))
-        totals[lightest] += sizes[position]
-    return [sorted(block) for block in blocks]
-
-
 class SearchData:
-    """A search's training sequences, each ``(detections, target)``, in blocks: here, or on the cluster's workers.
+    """A search's training sequences, each ``(detections, target)``, in blocks where its executor runs the tasks.
 
-    A block is what one task works on.  In one process every sequence is a
-    block of its own; on a cluster the sequences are grouped into one block
-    per worker thread, balanced in detections: dask's round trip per task
-    (about 10 ms on 2 cores, measured) would otherwise cost as much as a
-    small sequence's clustering.
+    A block is what one task works on, as the executor groups them
+    (:meth:`sklearn_radar._executor.DaskExecutor.blocks`): in one process
+    every sequence is a block of its own; on a cluster the sequences are
+    grouped into one block per worker thread, balanced in detections.
 
     Parameters
     ----------
     blocks : list
-        Per block the list of its sequences, or (on a cluster) a dask future
-        of that list.
+        The executor's handle of each block (here: the list of its sequences).
     ids : list of list
         The sequence ids of each block.
-    cluster : Cluster or None
-        Where the blocks live (:mod:`sklearn_radar._distributed`).
+    executor : LocalExecutor, DaskExecutor or None, default=None
+        Where the blocks live and the tasks run (:mod:`sklearn_radar._executor`);
+        None: here, with ``n_jobs``.
     n_jobs : int or None, default=None
-        Tasks at a time in one process (joblib); ignored on a cluster.
+        Tasks at a time here (joblib) when ``executor`` is None.
     """
 
-    def __init__(self, blocks, ids, cluster, n_jobs=None):
+    def __init__(self, blocks, ids, executor=None, n_jobs=None):
         self.blocks = blocks
         self.ids = ids
-        self.cluster = cluster
-        self.n_jobs = n_jobs
+        self.executor = executor if executor is not None else LocalExecutor(n_jobs)
 
     @classmethod
-    def place(cls, X, target, groups, cluster=None, n_jobs=None):
+    def place(cls, X, target, groups, executor=None, n_jobs=None):
         """Split the rows into sequences (in increasing sequence id) and put them where their tasks run.
 
-        On a cluster each block becomes a task's result, kept by a worker
-        until this object is dropped: computed again if that worker is lost.
+        Each block is placed by the executor (on a cluster: a task's result,
+        kept by a worker until this object is dropped, computed again if
+        that worker is lost).
         """
+        executor = executor if executor is not None else LocalExecutor(n_jobs)
         groups, target = np.asarray(groups), np.asarray(target)
         sequence_ids = np.unique(groups)
         rows = [np.flatnonzero(groups == sequence_id) for sequence_id in sequence_ids]
         sequences = [(_rows(X, r), target[r]) for r in rows]
-        if cluster is None:
-            return cls([[s] for s in sequences], [[i] for i in sequence_ids], None, n_jobs)
-        positions = balanced_blocks([len(r) for r in rows], cluster.n_threads)
-        client = cluster.client
-        with warnings.catch_warnings():
-            # The data must travel once; as a task's input (not scattered) so that a lost worker loses nothing.
-            warnings.filterwarnings("ignore", message="Sending large graph", category=UserWarning)
-            blocks = [client.submit(_identity, [sequences[p] for p in block], pure=False) for block in positions]
-        return cls(blocks, [[sequence_ids[p] for p in block] for block in positions], cluster, n_jobs)
+        positions = executor.blocks([len(r) for r in rows])
+        blocks = [executor.place(_identity, [sequences[p] for p in block]) for block in positions]
+        return cls(blocks, [[sequence_ids[p] for p in block] for block in positions], executor)
+
+    def on(self, executor):
+        """The same blocks, their tasks submitted by ``executor`` (e.g. a worker's, or one with other ``n_jobs``)."""
+        return SearchData(self.blocks, self.ids, executor)
 
     def prepare(self, stage0):
         """The sequences with ``stage0`` applied to each (where they are); ``self`` when it is None."""
         if stage0 is None:
             return self
-        if self.cluster is not None:
-            client = self.cluster.client
-            prepared = [client.submit(prepared_block, stage0, block, pure=False) for block in self.blocks]
-        else:
-            prepared = self._map(prepared_block, [(stage0, block) for block in self.blocks])
-        return SearchData(prepared, self.ids, self.cluster, self.n_jobs)
+        prepared = [self.executor.place(prepared_block, stage0, block) for block in self.blocks]
+        return SearchData(prepared, self.ids, self.executor)
 
     @property
     def sequence_ids(self):
@@ -185,41 +166,19 @@ class SearchData:
 
     def parts(self, estimator, candidates, objective):
         """``candidate_parts`` of every candidate on every sequence: per candidate, in :attr:`sequence_ids` order."""
-        if self.cluster is not None:
-            return list(self.iter_parts(estimator, candidates, objective))
-        calls = [(estimator, params, block, objective) for params in candidates for block in self.blocks]
-        per_block = self._map(block_parts, calls)
-        n = len(self.blocks)
-        return [[part for block in per_block[i * n : (i + 1) * n] for part in block] for i in range(len(candidates))]
+        return list(self.iter_parts(estimator, candidates, objective))
 
     def iter_parts(self, estimator, candidates, objective):
         """:meth:`parts` of each candidate in turn, yielded as soon as it and those before it are done.
 
         On a cluster every candidate's tasks are queued at once (the workers
         never wait for this process between candidates); here each candidate
-        is evaluated when the caller asks for it.
+        is evaluated when the caller asks for it
+        (:meth:`~sklearn_radar._executor.DaskExecutor.queued`).
         """
-        if self.cluster is None:
-            for params in candidates:
-                yield self.parts(estimator, [params], objective)[0]
-            return
-        client = self.cluster.client
-        queued = [
-            [client.submit(block_parts, estimator, params, block, objective, pure=False) for block in self.blocks]
-            for params in candidates
-        ]
-        try:
-            for futures in queued:
-                yield [part for block in client.gather(futures) for part in block]
-        finally:  # a search that stops early drops the candidates it no longer needs
-            for futures in queued:
-                for future in futures:
-                    future.release()
-
-    def _map(self, function, calls):
-        if self.n_jobs in (None, 1) or len(calls) < 2:
-            return [function(*call) for call in calls]
-        return Parallel(n_jobs=self.n_jobs)(delayed(function)(*call) for call in calls)
+        batches = [[(estimator, params, block, objective) for block in self.blocks] for params in candidates]
+        for per_block in self.executor.queued(block_parts, batches):
+            yield [part for block in per_block for part in block]
 
 
 def sequence_folds(groups, n_folds):

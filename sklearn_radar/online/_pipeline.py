@@ -150,7 +150,7 @@ class OnlinePipeline:
         -------
         online : OnlinePipeline
         """
-        from ..reproduce._apply import _pipeline, load_params
+        from .._cluster_command import _pipeline, load_params
 
         return cls(_pipeline(load_params(path, experiment), path))
 

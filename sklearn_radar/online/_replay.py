@@ -138,7 +138,7 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None):
         ``latency`` and ``cpu`` (wall and thread CPU time per scan, s), ``recording`` (s), ``out`` and
         ``objects``.
     """
-    from ..reproduce._apply import _pipeline, check_predictions_file, load_params, write_predictions
+    from .._cluster_command import _pipeline, check_predictions_file, load_params, write_predictions
     from ..reproduce._io import atomic_write
 
     setting = load_params(params, experiment)

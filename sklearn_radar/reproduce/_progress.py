@@ -1,104 +1,60 @@
-"""The overall progress of a reproduce run: an estimate of its length at the start, elapsed time and ETA.
+"""The overall progress of a reproduce run: the work done so far, the time elapsed and the time left.
 
 Plain lines only (no carriage returns, no terminal control), so the output
-reads the same in a terminal and piped to a file.  The estimate is a cost
-model per step, calibrated on the default run and ``--full`` on an idle
-2-core machine; as steps finish, the remaining time is rescaled by how fast
-this machine actually went.
+reads the same in a terminal and piped to a file.  No cost model: the run
+counts its work in units of a few kinds (an iteration of a stage-1, stage-2
+or baseline search, one pass of a step without a search over its data) and
+measures the seconds each kind took so far.  The time left is the work left
+at those rates; a kind not measured yet is priced like a test-half scoring
+pass (a candidate's evaluation clusters about as much data), else like any
+step measured; before the first step ends, the time left is not known.  When
+work ran concurrently, its seconds add up to more than the time elapsed, and
+the rates are scaled by that overlap.
 """
 
 from __future__ import annotations
 
 import importlib
+import threading
 import time
 
-from ._constants import BASELINES, FILTER, FILTER_EFFECT, STAGE2
-from ._results import Budget
-
-#: Seconds per iteration of one search on about 90,000 training detections (:data:`REFERENCE_TRAIN`), by kind of
-#: step, measured on the default run on an idle 2-core machine (the four baselines together; commit 0d7f519).
-PER_ITERATION = {"stage 1": 0.2, "stage 2": 0.3, BASELINES: 3.1}
-#: The training detections of that measurement.
-REFERENCE_TRAIN = 90_000
-#: How an iteration's time grows with the training detections, by kind of step: fitted to the default run and
-#: ``--full --repeats 1 --n-jobs 2`` (100 iterations on 6.3 times the training data: about 0.49 s per stage-1
-#: iteration, 0.53 s per stage-2 iteration, 6.3 s per iteration of the four baselines; 21 min 40 s in all) on
-#: the same 2-core machine at commit cd345b9.  The progress lines correct the estimate as the run goes.
-SIZE_EXPONENT = {"stage 1": 0.49, "stage 2": 0.31, BASELINES: 0.38}
-#: Shortest time of one iteration (the optimiser's and the scoring's fixed costs), s, by kind of step.
-MIN_PER_ITERATION = {"stage 1": 0.15, "stage 2": 0.15, BASELINES: 1.0}
-#: Each search also scores the paper's setting and the kept one on the test half: about two iterations more.
-EXTRA_ITERATIONS = 2
-#: Seconds per detection of the steps without a search.
-PER_DETECTION = {FILTER: 1.2e-5, FILTER_EFFECT: 5e-6, "fixed": 2e-6}
-#: Seconds to draw the figures and write the report.
-REPORT_S = 6.0
-#: Seconds of the first run in a new environment spent compiling the numba kernels the run uses, by kernel (later
-#: runs load them from numba's cache): the default run's cold minus warm time in a new virtual environment on the
-#: 2-core machine, 12-13 s, shared out by each kernel's compile time (docs/performance.rst, "Compile time").
-COMPILE_S = {
-    "sklearn_radar.cluster._radar_dbscan_kernels._dbscan_sorted": 3.6,
-    "sklearn_radar.cluster._merge_kernels._candidate_pairs": 3.0,
-    "sklearn_radar._neighbors._count_capped": 1.4,
-    "sklearn_radar.cluster._merge_kernels._continuation_edges": 1.1,
-    "sklearn_radar.cluster._merge_kernels._max_speeds": 1.1,
-    "sklearn_radar.cluster._merge_kernels._velocity_frames": 0.5,
-    "sklearn_radar._labels._number_by_first_row": 0.6,
-    "sklearn_radar.cluster._merge_kernels._merge_components": 0.3,
-    "sklearn_radar._neighbors._counting_order": 0.3,
-}
+#: The kind of the data step and of the report, whose measured time prices a kind that has none yet.
+DATA, REPORT = "data", "report"
+#: The kind of a pass over the test half that scores a fixed setting: the price of a search iteration until one is
+#: measured (each candidate clusters the training half).
+SCORING = "scoring"
+#: The numba kernels a run compiles on an empty cache (a new environment): the first steps then run slower.
+KERNELS = (
+    "sklearn_radar.cluster._radar_dbscan_kernels._dbscan_sorted",
+    "sklearn_radar.cluster._merge_kernels._candidate_pairs",
+    "sklearn_radar._neighbors._count_capped",
+    "sklearn_radar.cluster._merge_kernels._continuation_edges",
+    "sklearn_radar.cluster._merge_kernels._max_speeds",
+    "sklearn_radar.cluster._merge_kernels._velocity_frames",
+    "sklearn_radar._labels._number_by_first_row",
+    "sklearn_radar.cluster._merge_kernels._merge_components",
+    "sklearn_radar._neighbors._counting_order",
+)
 
 
-def step_cost(key, budget: Budget, n_train, n_test, n_detections, tuned):
-    """Estimated seconds of one step on an idle 2-core machine.
-
-    Parameters
-    ----------
-    key : str
-        Step key (``"filter"``, ``"8"``, ``"baselines"``, ...).
-    budget : Budget
-    n_train, n_test, n_detections : float
-        Detections of the training half, the test half and all of the data.
-    tuned : bool
-        Whether the step is an experiment with a search.
+def uncompiled_kernels():
+    """The :data:`KERNELS` not in numba's cache yet (their cache index is missing or stale).
 
     Returns
     -------
-    seconds : float
+    names : list of str
+        Empty when every kernel is cached (or numba's cache cannot be read).
     """
-    if key == FILTER:
-        return PER_DETECTION[FILTER] * n_detections
-    if key == FILTER_EFFECT:
-        return PER_DETECTION[FILTER_EFFECT] * n_test
-    if key != BASELINES and not tuned:
-        return PER_DETECTION["fixed"] * n_test
-    kind = BASELINES if key == BASELINES else ("stage 2" if int(key) in STAGE2 else "stage 1")
-    scale = (max(n_train, 1) / REFERENCE_TRAIN) ** SIZE_EXPONENT[kind]
-    per_iteration = max(MIN_PER_ITERATION[kind], PER_ITERATION[kind] * scale)
-    return (budget.n_iter + EXTRA_ITERATIONS) * per_iteration
-
-
-def compile_cost():
-    """Estimated seconds the run will spend compiling: :data:`COMPILE_S` of the kernels not in numba's cache.
-
-    A kernel is cached when its cache index (one small file per kernel,
-    written at its first compilation) exists and matches the source file;
-    after an install or an edit of the source, it does not.
-
-    Returns
-    -------
-    seconds : float
-        0 when every kernel is cached (or numba's cache cannot be read).
-    """
-    seconds = 0.0
-    for name, cost in COMPILE_S.items():
+    names = []
+    for name in KERNELS:
         module, kernel = name.rsplit(".", 1)
         try:
             cached = bool(getattr(importlib.import_module(module), kernel)._cache._cache_file._load_index())
         except Exception:  # another numba's cache internals: no claim either way
             cached = True
-        seconds += 0.0 if cached else cost
-    return seconds
+        if not cached:
+            names.append(name)
+    return names
 
 
 def duration(seconds):
@@ -109,83 +65,132 @@ def duration(seconds):
     return f"{hours}:{minutes:02d}:{seconds:02d}" if hours else f"{minutes}:{seconds:02d}"
 
 
-def rough(seconds):
-    """A duration in words for the estimate: ``"about 2 min"``, ``"about 1.5 h"``."""
-    if seconds < 90:
-        return f"about {max(1, round(seconds / 10) * 10)} s"
-    if seconds < 3600:
-        return f"about {round(seconds / 60)} min"
-    return f"about {seconds / 3600:.1f} h"
-
-
 class RunProgress:
-    """Where a run stands: the share of its estimated work done, the time elapsed and the time left.
+    """Where a run stands: its work done, measured per kind, and the time left at the measured rates.
 
     Parameters
     ----------
-    costs : dict of str to float
-        Estimated seconds of each step, in run order (:func:`step_cost`).
+    work : dict of str to (str, float)
+        Per step key, its kind and its units of work, in run order.
     started : float
         ``time.perf_counter()`` at the start of the run.
+    stream : file-like or None
+        Where :meth:`say` prints (None: nowhere).
+    searches : int, default=0
+        The run's searches, for the lines of :meth:`search_ended`.
 
-    Attributes
-    ----------
-    done : float
-        Estimated seconds of the work finished so far.
+    A copy in another process (joblib) prints nothing and counts for itself.
     """
 
-    def __init__(self, costs, started):
-        self.costs = dict(costs)
-        self.total = sum(self.costs.values()) or 1.0
+    def __init__(self, work, started, stream=None, searches=0):
+        self.work = dict(work)
+        self.searches, self._ended = searches, 0
         self.started = started
-        self.done = 0.0
-        self._current = None
-        self._credited = {}
+        self.stream = stream
+        self._lock = threading.Lock()
+        self._done = dict.fromkeys(self.work, 0.0)
+        self._spent, self._units = {}, {}
+        self._last = {}
+        self._shown = 0.0
 
-    def credit(self, key, fraction):
-        """``fraction`` of step ``key`` ended ahead of the step (a search that ran concurrently)."""
-        share = self.costs.get(key, 0.0) * min(max(fraction, 0.0), 1.0)
-        self._credited[key] = self._credited.get(key, 0.0) + share
-        self.done += share
+    def __getstate__(self):
+        state = dict(self.__dict__)
+        del state["_lock"]
+        return {**state, "stream": None}
+
+    def __setstate__(self, state):
+        self.__dict__.update(state, _lock=threading.Lock())
+
+    def say(self, text):
+        """Print a line (whole, also from several threads)."""
+        if self.stream is not None:
+            with self._lock:
+                print(text, file=self.stream, flush=True)
+
+    def search_ended(self, label):
+        """Say that the search ``label``, which ran beside others, ended, and how many have."""
+        status = self.status()
+        with self._lock:
+            self._ended += 1
+            text = f"    search {label} ended ({self._ended}/{self.searches} of the concurrent searches) | {status}"
+        self.say(text)
 
     def start(self, key):
-        """A step begins."""
-        self._current = key
+        """Step ``key`` begins: its next units are timed from now."""
+        with self._lock:
+            self._last[key] = time.perf_counter()
 
-    def advance(self, fraction):
-        """The current step is ``fraction`` (0-1) done."""
-        return self._done_with(min(max(fraction, 0.0), 1.0))
+    def advance(self, key, units=1.0):
+        """``units`` more of step ``key`` are done, in the time since its start or its last advance."""
+        with self._lock:
+            now = time.perf_counter()
+            self._add(key, units, now - self._last.get(key, now))
+            self._last[key] = now
 
-    def finish(self, key):
-        """A step ended (what :meth:`credit` counted already is not counted twice)."""
-        self.done += max(self.costs.get(key, 0.0) - self._credited.pop(key, 0.0), 0.0)
-        self._current = None
+    def finish(self, key, seconds=None):
+        """Step ``key`` ended: the rest of its units, done in ``seconds`` (None: since its last advance)."""
+        with self._lock:
+            now = time.perf_counter()
+            seconds = now - self._last.get(key, now) if seconds is None else seconds
+            self._add(key, self.work[key][1] - self._done[key], seconds)
+            self._last.pop(key, None)
 
-    def _done_with(self, fraction):
-        if not self._current:
-            return self.done
-        remaining = max(self.costs.get(self._current, 0.0) - self._credited.get(self._current, 0.0), 0.0)
-        return self.done + remaining * fraction
+    def _add(self, key, units, seconds):
+        kind, total = self.work[key]
+        units = min(max(units, 0.0), total - self._done[key])
+        self._done[key] += units
+        self._spent[kind] = self._spent.get(kind, 0.0) + max(seconds, 0.0)
+        self._units[kind] = self._units.get(kind, 0.0) + units
 
-    def status(self, fraction=0.0):
-        """``"run 42 %, 0:53 elapsed, about 1:13 left"``, with ``fraction`` of the current step done."""
-        done = self._done_with(min(max(fraction, 0.0), 1.0))
+    def rate(self, kind):
+        """Measured seconds per unit of ``kind``; unmeasured: a scoring pass's, else any step's; else None."""
+        measured = [known for known in self._units if known not in (DATA, REPORT) and self._units[known]]
+        for known in (kind, SCORING, *measured):
+            if self._units.get(known):
+                return self._spent[known] / self._units[known]
+        return None
+
+    def left(self):
+        """Seconds left (None before a step is measured): the work left at the measured rates.
+
+        The rates are scaled by how much of the work ran at once (its
+        measured seconds add up to more than the time elapsed then).
+        """
+        remaining = {kind: 0.0 for kind, _ in self.work.values()}
+        for key, (kind, units) in self.work.items():
+            remaining[kind] += units - self._done[key]
+        rates = {kind: self.rate(kind) for kind, units in remaining.items() if units > 0}
+        if None in rates.values():
+            return None
+        spent = sum(self._spent.values())
         elapsed = time.perf_counter() - self.started
-        share = done / self.total
-        # The machine's speed relative to the estimate, once a few percent of the work tells it.
-        speed = elapsed / done if share >= 0.03 and done > 0 else 1.0
-        left = (self.total - done) * speed
-        return f"run {100 * share:.0f} %, {duration(elapsed)} elapsed, about {duration(left)} left"
+        overlap = min(1.0, elapsed / spent) if spent > 0 else 1.0
+        return overlap * sum(remaining[kind] * rate for kind, rate in rates.items())
 
-    def search_status(self, part=0, parts=1):
-        """A ``status`` for :class:`~sklearn_radar.model_selection.ProgressPrinter` of search ``part`` of ``parts``.
+    def status(self):
+        """``"run 42 %, 0:53 elapsed, about 1:13 left"`` (the share never goes back)."""
+        with self._lock:
+            elapsed = time.perf_counter() - self.started
+            left = self.left()
+            if left is None:
+                return f"run {100 * self._shown:.0f} %, {duration(elapsed)} elapsed, time left not measured yet"
+            self._shown = max(self._shown, min(elapsed / max(elapsed + left, 1e-9), 0.99))
+            return f"run {100 * self._shown:.0f} %, {duration(elapsed)} elapsed, about {duration(left)} left"
+
+    def search_status(self, key):
+        """A ``status`` for :class:`~sklearn_radar.model_selection.ProgressPrinter` of a search of step ``key``.
 
         Returns
         -------
         status : callable
-            ``status(i, n) -> str`` after iteration ``i`` of ``n``.
+            ``status(i, n) -> str`` after each iteration: one unit of ``key`` done.
         """
-        return lambda i, n: self.status((part + i / max(n, 1)) / parts)
+
+        def status(i, n):
+            self.advance(key)
+            return self.status()
+
+        return status
 
 
-__all__ = ["COMPILE_S", "REPORT_S", "RunProgress", "compile_cost", "duration", "rough", "step_cost"]
+__all__ = ["DATA", "KERNELS", "REPORT", "SCORING", "RunProgress", "duration", "uncompiled_kernels"]

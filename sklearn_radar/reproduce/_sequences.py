@@ -1,19 +1,17 @@
-"""The data of a reproduce run, one table per sequence: in this process, or on the workers of a dask cluster.
+"""The data of a reproduce run, one table per sequence, where the run's executor runs its tasks.
 
 Stages 0-2 never cross sequences, and every figure of a run is combined
 from per-sequence summaries (:mod:`sklearn_radar.metrics._parts`, the
 statistics' and the filter evaluation's parts).  So the run never needs
 the whole data set in one place:
 
-* in one process each sequence is a table of its own, and a step maps a
-  function over the sequences it needs;
-* on a cluster each sequence is loaded (a RadarScenes folder: by a worker,
-  from the folder, which the workers must see at the same path) or placed
-  (simulated data) on a worker once, as the result of a task, so that the
-  scheduler computes it again when a worker is lost.  A step's function then
-  runs where the sequence is and returns its small summary; the command's
-  process holds the summaries, the results and at most the one sequence a
-  figure draws.
+each sequence is made (loaded from a RadarScenes folder, which a
+cluster's workers must see at the same path, or simulated) once, where the
+executor keeps data (:meth:`sklearn_radar._executor.LocalExecutor.place`:
+here, or as a task's result on a worker, computed again when that worker is
+lost).  A step's function then runs where the sequence is and returns its
+small summary; the command's process holds the summaries, the results and
+at most the one sequence a figure draws.
 """
 
 from __future__ import annotations
@@ -24,11 +22,12 @@ from pathlib import Path
 import numpy as np
 from sklearn.utils import Bunch
 
+from .._executor import LocalExecutor
 from ..datasets import load_radarscenes
 from ..datasets._radarscenes import _read_sensors_json, _read_sequences_json, _resolve_data_dir
 from ..datasets._simulator import _check_knobs, sequence_seeds, simulate_sequences
 from ..metrics import precluster_target
-from ..model_selection._sequence_search import SearchData, balanced_blocks
+from ..model_selection._sequence_search import SearchData
 from ..model_selection._split import sequence_sides
 
 __all__ = ["RunSequences", "Sequence"]
@@ -74,9 +73,6 @@ def as_sequence(number, scenes):
     return Sequence(id=int(number), scenes=scenes, target=precluster_target(scenes.data, scenes.target))
 
 
-#: dask priority of a step's per-sequence tasks (:meth:`RunSequences.map`); a search's candidates have 0.
-STEP_PRIORITY = 10
-
 #: make_scenes' default number of road users per sequence (low, high), which the run simulates with.
 SIMULATED_OBJECTS = (3, 12)
 
@@ -117,13 +113,13 @@ def _apply(function, sequence, args):
     return function(sequence, *args)
 
 
-def _search_block(sequences):
+def _search_block(*sequences):
     """The training data of a search block: ``(X, pre-clustered target)`` of each sequence."""
     return [(s.X, s.target) for s in sequences]
 
 
 class RunSequences:
-    """Every sequence of a run, where its tasks run.
+    """Every sequence of a run, where its executor keeps them.
 
     Parameters
     ----------
@@ -132,23 +128,20 @@ class RunSequences:
     sizes : list of int
         Detections per sequence.
     items : list
-        :class:`Sequence` per id; on a cluster a dask future of it.
-    cluster : Cluster or None, default=None
-    n_jobs : int or None, default=None
-        A search's tasks at a time in one process (joblib,
-        :meth:`search_data`); ignored on a cluster.
+        The executor's handle of each :class:`Sequence`.
+    executor : LocalExecutor or DaskExecutor
+        Where they live and their tasks run (:mod:`sklearn_radar._executor`).
     """
 
-    def __init__(self, ids, sizes, items, cluster=None, n_jobs=None):
+    def __init__(self, ids, sizes, items, executor):
         self.ids = [int(i) for i in ids]
         self.sizes = [int(n) for n in sizes]
         self.items = dict(zip(self.ids, items, strict=True))
-        self.cluster = cluster
-        self.n_jobs = n_jobs
+        self.executor = executor
 
     @classmethod
-    def simulated(cls, n_sequences, duration, random_state, difficulty="realistic", cluster=None, n_jobs=None):
-        """:func:`~sklearn_radar.datasets.make_scenes`'s sequences, each simulated where it lives (on a worker).
+    def simulated(cls, n_sequences, duration, random_state, difficulty="realistic", executor=None):
+        """:func:`~sklearn_radar.datasets.make_scenes`'s sequences, each simulated where it lives.
 
         The same detections as ``make_scenes(n_sequences, duration,
         random_state, difficulty=difficulty)``: each sequence has a seed of
@@ -159,26 +152,22 @@ class RunSequences:
             (number, int(seed), duration, difficulty)
             for number, seed in zip(numbers, sequence_seeds(random_state, n_sequences), strict=True)
         ]
-        return cls._made(numbers, simulate_sequence, calls, cluster, n_jobs)
+        return cls._made(numbers, simulate_sequence, calls, executor)
 
     @classmethod
-    def from_folder(cls, path, cluster=None, n_jobs=None):
-        """A RadarScenes folder, loaded sequence by sequence: on a cluster by the workers (same path there)."""
+    def from_folder(cls, path, executor=None):
+        """A RadarScenes folder, loaded sequence by sequence where they live (on a cluster: same path there)."""
         data_dir = _resolve_data_dir(Path(path)).resolve()  # absolute: the workers' working folder may differ
         _read_sensors_json(data_dir / "sensors.json")  # a malformed folder fails here, before any task
         ids = sorted(_read_sequences_json(data_dir / "sequences.json"))  # a ValueError naming it when empty
-        return cls._made(ids, load_sequence, [(str(data_dir), number) for number in ids], cluster, n_jobs)
+        return cls._made(ids, load_sequence, [(str(data_dir), number) for number in ids], executor)
 
     @classmethod
-    def _made(cls, ids, make, calls, cluster, n_jobs):
-        """The sequences ``make(*call)``, here or each as a task's result on a worker (computed again if it is lost)."""
-        if cluster is None:
-            items = [make(*call) for call in calls]
-            return cls(ids, [len(s) for s in items], items, None, n_jobs)
-        client = cluster.client
-        items = [client.submit(make, *call, pure=False) for call in calls]
-        sizes = client.gather([client.submit(_size, item, pure=False) for item in items])
-        return cls(ids, sizes, items, cluster, n_jobs)
+    def _made(cls, ids, make, calls, executor):
+        executor = executor or LocalExecutor()
+        items = [executor.place(make, *call) for call in calls]
+        sizes = executor.gather([executor.submit(_size, item) for item in items])
+        return cls(ids, sizes, items, executor)
 
     @property
     def n_detections(self):
@@ -204,40 +193,30 @@ class RunSequences:
         ids = np.asarray(self.ids)
         return [int(i) for i in ids[side == 0]], [int(i) for i in ids[side == 1]]
 
-    def map(self, function, ids=None, *args):
+    def map(self, function, ids=None, *args, executor=None):
         """``function(sequence, *args)`` for each sequence of ``ids`` (None: all), in order, where it lives.
 
         ``function`` must be a module-level function (the workers import
-        it) and should return a small summary.
+        it) and should return a small summary.  ``executor`` (default: the
+        sequences') submits the tasks.
         """
+        executor = executor or self.executor
         ids = self.ids if ids is None else [int(i) for i in ids]
-        if self.cluster is None:
-            # One after the other: a step's work per sequence is numpy-heavy, and shipping sequences to
-            # joblib's processes would cost as much as it saves on 2 cores.
-            return [function(self.items[i], *args) for i in ids]
-        client = self.cluster.client
-        # Ahead of the searches' queued candidates: the run's steps wait for these, one after the other.
-        futures = [
-            client.submit(_apply, function, self.items[i], args, pure=False, priority=STEP_PRIORITY) for i in ids
-        ]
-        return client.gather(futures)
+        return executor.gather([executor.submit(_apply, function, self.items[i], args) for i in ids])
 
     def fetch(self, number):
         """Sequence ``number`` here (from its worker on a cluster), e.g. to draw it."""
-        item = self.items[int(number)]
-        return item.result() if self.cluster is not None else item
+        return self.executor.fetch(self.items[int(number)])
 
-    def search_data(self, ids):
-        """The sequences ``ids`` as a search's training data (:class:`._search.SearchData`), where they live.
+    def search_data(self, ids, executor=None):
+        """The sequences ``ids`` as a search's training data (a ``SearchData``), where they live.
 
-        On a cluster they are grouped into one block per worker thread,
-        balanced in detections, each block built on a worker from its
-        sequences.
+        See :class:`~sklearn_radar.model_selection._sequence_search.SearchData`.  They are grouped into the
+        executor's blocks (:meth:`~sklearn_radar._executor.DaskExecutor.blocks`), each block built where its
+        sequences are.
         """
+        executor = executor or self.executor
         ids = sorted(int(i) for i in ids)
-        if self.cluster is None:
-            return SearchData([_search_block([self.items[i]]) for i in ids], [[i] for i in ids], None, self.n_jobs)
-        positions = balanced_blocks([self.size([i]) for i in ids], self.cluster.n_threads)
-        client = self.cluster.client
-        blocks = [client.submit(_search_block, [self.items[ids[p]] for p in block], pure=False) for block in positions]
-        return SearchData(blocks, [[ids[p] for p in block] for block in positions], self.cluster, self.n_jobs)
+        positions = executor.blocks([self.size([i]) for i in ids])
+        blocks = [self.executor.place(_search_block, *[self.items[ids[p]] for p in block]) for block in positions]
+        return SearchData(blocks, [[ids[p] for p in block] for block in positions], executor)

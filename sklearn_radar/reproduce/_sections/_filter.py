@@ -151,8 +151,8 @@ def _trend(f, w):
 
 
 def figures(out: Path, results: RunResults, context: RunContext) -> dict[str, str]:
-    """Table I's error counts as heatmaps, FCS beside CCS, and what the chosen setting removes in one sequence."""
-    if context.filter_grids is None:
+    """Table I's errors (from the saved results) as heatmaps, FCS beside CCS; what the filter removes in a sequence."""
+    if results.filter is None:
         return {}
     import matplotlib.pyplot as plt
 
@@ -162,7 +162,7 @@ def figures(out: Path, results: RunResults, context: RunContext) -> dict[str, st
 
     fig, axes = plt.subplots(1, 2, figsize=(12, 5))
     for ax, frame in zip(axes, FRAMES, strict=True):
-        plot_filter_errors(context.filter_grids[frame].errors, ax=ax, chosen=CHOSEN)
+        plot_filter_errors(results.filter.table_i[frame].errors.to_frame(), ax=ax, chosen=CHOSEN)
         ax.set_title(f"Table I errors, {frame_name(frame)}")
     save_figure(fig, out / HEATMAP)
     return {"table1_heatmap": HEATMAP, "filter_scene": FILTER_SCENE}

@@ -11,12 +11,12 @@ import numpy as np
 from sklearn.base import BaseEstimator, clone
 from sklearn.utils._param_validation import Interval, validate_params
 
-from .._distributed import connect_cluster, map_sequences
-from .._schema import LABELS, STATIC_LABEL
-from ..datasets import load_radarscenes
-from ..datasets._radarscenes import _read_sensors_json, _read_sequences_json, _resolve_data_dir
-from ..experiments import experiment_pipeline, get_experiment
-from ._io import atomic_write
+from ._executor import connect_executor
+from ._schema import LABELS, STATIC_LABEL
+from .datasets import load_radarscenes
+from .datasets._radarscenes import _read_sensors_json, _read_sequences_json, _resolve_data_dir
+from .experiments import experiment_pipeline, get_experiment
+from .reproduce._io import atomic_write
 
 #: Our two "classes" in the devkit's per-point prediction file: clustered or noise.
 CLASS_NAMES = {0: "NOISE", 1: "CLUSTERED"}
@@ -198,7 +198,7 @@ def cluster_radarscenes(data, params, out, experiment=None, *, scheduler=None, w
     def write(stream):
         stream.write(_PREDICTIONS_HEAD)
         try:
-            for uuids, labels in map_sequences(cluster, cluster_sequence, tasks):
+            for uuids, labels in executor.stream(cluster_sequence, tasks):
                 shifted = np.where(labels >= 0, labels + counts["n_clusters"], -1)
                 _write_entries(stream, uuids, shifted, first=counts["n_detections"] == 0)
                 counts["n_detections"] += len(labels)
@@ -208,7 +208,7 @@ def cluster_radarscenes(data, params, out, experiment=None, *, scheduler=None, w
             raise _ReadFailed from None
         stream.write(_PREDICTIONS_TAIL if counts["n_detections"] else _PREDICTIONS_EMPTY_TAIL)
 
-    with connect_cluster(scheduler, workers) as cluster:
+    with connect_executor(scheduler, workers) as executor:
         tasks = [(str(data_dir), n, pipeline) for n in numbers]
         try:
             atomic_write(Path(out), write, replaceable=check_predictions_file)

@@ -1,0 +1,84 @@
+"""Beyond the paper: the scikit-learn clusterers a user would otherwise pick, on the input of experiment #3.
+
+Each baseline replaces the clustering step of the FCS box pipeline (#3:
+frame transform and Doppler-density filter) and is tuned on the same
+budget and split as the experiments.
+"""
+
+from __future__ import annotations
+
+from sklearn.utils._param_validation import HasMethods, StrOptions, validate_params
+
+from .._skopt import Integer, Real
+from ..cluster import SequenceDBSCAN, SequenceHDBSCAN, WindowedDBSCAN, WindowedHDBSCAN
+from ._paper import experiment_pipeline
+
+__all__ = ["BASELINE_INPUT", "SKLEARN_BASELINES", "baseline_pipeline"]
+
+#: The experiment whose stage 0 (FCS, filtered) the baselines cluster: #3, the FCS box baseline.
+BASELINE_INPUT = 3
+
+
+def _scales(*, t_scale=False, vr_min=None):
+    space = {"cluster__vr_scale": Real(0.3, 20.0, prior="log-uniform", name="cluster__vr_scale")}
+    if t_scale:
+        # t_scale, m/s: how many metres one second counts (4 m/s puts 0.25 s, the paper's eps_t, at 1 m).
+        space["cluster__t_scale"] = Real(0.5, 50.0, prior="log-uniform", name="cluster__t_scale")
+    if vr_min is not None:
+        space["cluster__vr_min"] = Real(vr_min, 1.5, name="cluster__vr_min")
+    return space
+
+
+def _dbscan_space():
+    return {
+        "cluster__eps": Real(0.2, 3.0, name="cluster__eps"),
+        "cluster__min_samples": Integer(2, 8, name="cluster__min_samples"),
+    }
+
+
+def _hdbscan_space(largest_cluster):
+    # cluster_selection_epsilon stays 0: scikit-learn 1.9.1's epsilon search crashed on this data.
+    return {
+        "cluster__min_cluster_size": Integer(2, largest_cluster, name="cluster__min_cluster_size"),
+        "cluster__min_samples": Integer(1, 8, name="cluster__min_samples"),
+    }
+
+
+#: Name -> (clusterer class, search space), in run order.
+SKLEARN_BASELINES = {
+    "sklearn DBSCAN per 0.25 s window": (WindowedDBSCAN, {**_dbscan_space(), **_scales()}),
+    "sklearn HDBSCAN per 0.25 s window": (WindowedHDBSCAN, {**_hdbscan_space(10), **_scales()}),
+    "sklearn DBSCAN per sequence (x, y, v_r, t) with Doppler gate": (
+        SequenceDBSCAN,
+        {**_dbscan_space(), **_scales(t_scale=True, vr_min=0.0)},
+    ),
+    # vr_min from 0.1 m/s: below it static clutter makes one fit take 6 s.
+    "sklearn HDBSCAN per sequence (x, y, v_r, t) with Doppler gate": (
+        SequenceHDBSCAN,
+        {**_hdbscan_space(20), **_scales(t_scale=True, vr_min=0.1)},
+    ),
+}
+
+
+@validate_params(
+    {"name": [StrOptions(set(SKLEARN_BASELINES))], "memory": [None, str, HasMethods(["cache"])]},
+    prefer_skip_nested_validation=True,
+)
+def baseline_pipeline(name, memory=None):
+    """The pipeline of baseline ``name``: #3's stage 0, then the baseline's clusterer (default parameters).
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`SKLEARN_BASELINES`.
+    memory : str, joblib.Memory or None, default=None
+        The pipeline's cache.
+
+    Returns
+    -------
+    pipeline : Pipeline
+    """
+    clusterer, _ = SKLEARN_BASELINES[name]
+    pipeline = experiment_pipeline(BASELINE_INPUT, memory=memory)
+    pipeline.steps[-1] = ("cluster", clusterer())
+    return pipeline

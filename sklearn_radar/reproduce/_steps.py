@@ -1,0 +1,737 @@
+"""The steps of a reproduce run: each a function from its inputs to its typed result, their dependencies in one table.
+
+A step is ``run(env, key, needed) -> Outcome``: ``env`` says what every step
+reads (the data, the split, the budget, where the work runs), ``needed`` holds
+the results of the steps it depends on (:data:`STEPS`) that the run ran.  A
+step never writes anything; the run (:mod:`._run`) stores its result and
+saves after each step.
+
+Stages 0-2 never cross sequences, so every figure is combined from
+per-sequence summaries computed where each sequence lives (:mod:`._sequences`),
+and a search's candidate is one task per block of training sequences
+(:mod:`._search`).  The repeats of a search are one :meth:`map` over the
+executor (:mod:`sklearn_radar._executor`), each with the seed ``seed + k``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import threading
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+import joblib
+import numpy as np
+from sklearn.base import clone
+
+from .._skopt import Real
+from ..datasets import format_statistics
+from ..datasets._statistics import combine_statistics, statistics_parts
+from ..evaluation import FilterEvaluationOptions
+from ..evaluation._filter_parts import (
+    combine_error_windows,
+    combine_filter_grid,
+    combine_filter_settings_table,
+    filter_error_windows_parts,
+    filter_grid_parts,
+    filter_settings_table_parts,
+)
+from ..experiments import (
+    SKLEARN_BASELINES,
+    baseline_pipeline,
+    derived_params,
+    experiment_pipeline,
+    get_experiment,
+    paper_params,
+    search_space,
+)
+from ..metrics._parts import combine_instance_parts, combine_parts, instance_parts, score_parts
+from ..model_selection import ProgressPrinter
+from ..model_selection._sequence_search import (
+    SearchData,
+    candidate_scores,
+    fixed_prefix,
+    search_and_score_start,
+    sized_sequence_folds,
+)
+from ..preprocessing import DopplerDensityFilter, FrameTransform
+from ._constants import (
+    ALL_EXPERIMENTS,
+    BASELINES,
+    BEST_STAGE1,
+    BEST_STAGE1_UNFILTERED,
+    FILTER,
+    FILTER_EFFECT,
+    FRAMES,
+    PAPER_FILTER_SETTING,
+    SOURCE_PAPER,
+    SOURCE_SEARCH,
+    STAGE2,
+)
+from ._progress import SCORING
+from ._results import (
+    BaselineResult,
+    BestRemoval,
+    ClusteringCost,
+    DataStatistics,
+    ExperimentResult,
+    FilterEffectFigures,
+    FilterEffectResult,
+    FilterGridResult,
+    FilterResult,
+    FilterSettingRow,
+    FilterWindows,
+    GridTable,
+    InstanceScores,
+    RepeatResult,
+    SearchRecord,
+)
+
+#: Length of the frames of the object-level scores, s (Scheiner et al. 2021 evaluate 500 ms).
+FRAME_S = 0.5
+#: The object-level scores kept per experiment (:class:`InstanceScores`).
+INSTANCE_FIELDS = tuple(name for name in InstanceScores.__dataclass_fields__ if name != "frame_s")
+#: The error windows' setting: the paper's chosen filter (FCS, eta_1 = 0.10 m/s, d_xy = 1.4 m).
+WINDOWS_FRAME, WINDOW_S, WINDOW_MIN_KEPT = "frame", 0.15, 0.75
+#: Stage-0 outputs kept per run (:class:`Prepared`): the inputs of the experiments, not of every setting.
+PREPARED_KEPT = 4
+
+
+@dataclass(frozen=True)
+class RunEnv:
+    """What every step reads.
+
+    Attributes
+    ----------
+    executor : LocalExecutor or DaskExecutor
+        Where the work runs (:mod:`sklearn_radar._executor`).
+    sequences : RunSequences
+        The data, one table per sequence, where the executor keeps it.
+    train, test : list of int
+        The training and the test sequences.
+    budget : Budget
+    seed : int
+        Repeat ``k`` of a search has the seed ``seed + k``.
+    objective : {"v1", "pq"}
+    repeats : int
+    n_points : int
+        Candidates per search step.
+    cache : str or None
+        Pipeline cache folder.
+    progress : RunProgress
+    training : TrainingData
+        The training half, placed once per run, with its stage-0 outputs.
+    """
+
+    executor: Any
+    sequences: Any
+    train: list
+    test: list
+    budget: Any
+    seed: int
+    objective: str
+    repeats: int
+    n_points: int
+    cache: str | None
+    progress: Any
+    training: Any
+
+    def on(self, executor):
+        """The same inputs, the work on ``executor`` (a repeat's, from :meth:`~LocalExecutor.map`)."""
+        return dataclasses.replace(self, executor=executor)
+
+    @property
+    def drawn(self):
+        """The test sequence the figures draw (the first), whose labels the steps keep."""
+        return self.test[0]
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What a step found: its result (as ``results.json`` holds it) and what the figures draw besides.
+
+    Attributes
+    ----------
+    result : object
+        :class:`FilterResult`, :class:`ExperimentResult`,
+        :class:`FilterEffectResult` or a dict of :class:`BaselineResult` by name.
+    summary : str or None
+        The line that says it.
+    labels : ndarray or None
+        An experiment's labels of the test sequence the figures draw.
+    """
+
+    result: Any
+    summary: str | None = None
+    labels: np.ndarray | None = None
+
+
+@dataclass(frozen=True)
+class TestScores:
+    """A setting's scores on the test half (:func:`score_on_test`), summed or combined over its sequences."""
+
+    v1: float
+    instance: InstanceScores
+    n_clusters: int | None
+    n_merges: int | None
+    n_stage1: int | None
+    labels: np.ndarray
+
+
+@dataclass(frozen=True)
+class Repeat:
+    """One repeat of a step: its kept setting, its search (None: not tuned), that setting's test scores, its time."""
+
+    params: dict
+    search: SearchRecord | None
+    test: TestScores
+    wall_time_s: float
+
+
+@dataclass(frozen=True)
+class Step:
+    """A step of :data:`STEPS`: its function, the steps whose results it reads, and where its result goes.
+
+    Attributes
+    ----------
+    run : callable
+        ``run(env, key, needed) -> Outcome``.
+    needs : tuple of str
+        Step keys whose results it reads when they ran (otherwise it uses
+        the paper's setting instead).
+    kind : str
+        Its kind of work for the progress (:mod:`._progress`).
+    """
+
+    run: Callable
+    needs: tuple = ()
+    kind: str = SCORING
+
+
+# ----------------------------------------------------------------------------- the filter evaluation
+
+
+def run_filter(env, key, needed):
+    """Tables I and II and the error windows, combined from per-sequence summaries (computed where each lives)."""
+    start = time.perf_counter()
+    parts = env.sequences.map(_filter_parts, None, env.executor.n_jobs, executor=env.executor)
+    grids = {frame: combine_filter_grid([p["grids"][frame] for p in parts]) for frame in FRAMES}
+    table_ii = combine_filter_settings_table([p["table_ii"] for p in parts])
+    result = FilterResult(
+        table_i={
+            frame: FilterGridResult(
+                errors=GridTable.from_frame(g.errors), background_removed=GridTable.from_frame(g.background_removed)
+            )
+            for frame, g in grids.items()
+        },
+        table_ii=[FilterSettingRow(**row) for row in table_ii.to_dict(orient="records")],
+        best_removal_with_zero_errors={frame: _best_removal(g, 0) for frame, g in grids.items()},
+        windows=_error_windows(combine_error_windows([p["windows"] for p in parts])),
+        wall_time_s=time.perf_counter() - start,
+    )
+    return Outcome(result)
+
+
+def _filter_parts(sequence, n_jobs=None):
+    """One sequence's share of the filter evaluation: Table I per frame, Table II, the error windows."""
+    data, target = sequence.scenes.data, sequence.scenes.target
+    return {
+        "grids": {
+            frame: filter_grid_parts(data, target, FilterEvaluationOptions(frame=frame, n_jobs=n_jobs))
+            for frame in FRAMES
+        },
+        "table_ii": filter_settings_table_parts(data, target, options=FilterEvaluationOptions(n_jobs=n_jobs)),
+        "windows": _sequence_error_windows(sequence),
+    }
+
+
+def _sequence_error_windows(sequence):
+    """The (object, window) table of one sequence at the paper's chosen filter setting."""
+    vr_threshold, d_xy = PAPER_FILTER_SETTING
+    prepared = FrameTransform(frame=WINDOWS_FRAME).fit_transform(sequence.scenes.data)
+    prepared = DopplerDensityFilter(vr_threshold=vr_threshold, d_xy=d_xy).fit_transform(prepared)
+    keep = prepared["keep"].to_numpy(dtype=bool)
+    t = prepared["t"].to_numpy()
+    return filter_error_windows_parts(keep, sequence.scenes.target, t, WINDOW_S, WINDOW_MIN_KEPT)
+
+
+def _error_windows(windows):
+    """The (object, window) cases at the paper's chosen filter setting, summarised."""
+    setting = DopplerDensityFilter(vr_threshold=PAPER_FILTER_SETTING[0], d_xy=PAPER_FILTER_SETTING[1])
+    errors = windows[windows["error"]]
+    return FilterWindows(
+        frame=WINDOWS_FRAME,
+        vr_threshold=float(setting.vr_threshold),
+        d_xy=float(setting.d_xy),
+        window_s=WINDOW_S,
+        min_kept=WINDOW_MIN_KEPT,
+        n_windows=len(windows),
+        n_errors=len(errors),
+        mean_detections=float(windows["n"].mean()) if len(windows) else float("nan"),
+        mean_detections_error=float(errors["n"].mean()) if len(errors) else None,
+        n_errors_sparse=int((errors["n"] <= 3).sum()),
+    )
+
+
+def _best_removal(grid, max_errors):
+    allowed = grid.background_removed.where(grid.errors <= max_errors)
+    if not allowed.notna().any().any():
+        return None
+    vr, d_xy = allowed.stack().idxmax()
+    return BestRemoval(vr_threshold=float(vr), d_xy=float(d_xy), background_removed=float(allowed.loc[vr, d_xy]))
+
+
+def data_statistics(sequences):
+    """The data's statistics (:func:`scene_statistics`) as JSON numbers and as text, from per-sequence parts."""
+    summary, table = combine_statistics(sequences.map(_statistics_part))
+    # The plain numbers and words of the summary; anything richer stays in the text.
+    numbers = {key: value for key, value in _native(summary).items() if isinstance(value, (bool, int, float, str))}
+    return DataStatistics(summary=numbers, text=format_statistics(summary, table))
+
+
+def _statistics_part(sequence):
+    return statistics_parts(sequence.scenes)
+
+
+# ----------------------------------------------------------------------------- the experiments
+
+
+def run_experiment(env, key, needed):
+    """Experiment ``key``: each repeat searched (or derived from #8's same repeat) and scored on the test half."""
+    number = int(key)
+    experiment = get_experiment(number)
+    start = time.perf_counter()
+    best = needed.get(str(BEST_STAGE1))
+    # The fixed expert setting (#1) does not depend on a seed: it runs once whatever the repeats.
+    repeats = env.repeats if experiment.tuned or experiment.derived_from is not None else 1
+    stage1s = _stage1_settings(best, repeats)
+    found = env.executor.map(
+        _ExperimentRepeat(env, number, repeats, stage1s),
+        range(repeats),
+        on_done=_said_ended(env, f"#{number}", repeats) if experiment.tuned else None,
+    )
+    first = found[0]
+    derived = None
+    if not experiment.tuned and experiment.derived_from is not None:
+        derived = f"tuned #{BEST_STAGE1}" if best else f"paper's #{BEST_STAGE1} (experiment {BEST_STAGE1} not run)"
+    result = ExperimentResult(
+        number=number,
+        method=experiment.method,
+        frame=experiment.frame,
+        filtered=experiment.filtered,
+        stage=experiment.stage,
+        paper_v1_percent=experiment.v1_percent,
+        paper_params=paper_params(number),
+        params={**paper_params(number), **first.params},
+        v1_test=first.test.v1,
+        n_clusters_test=first.test.n_clusters,
+        wall_time_s=time.perf_counter() - start,
+        stage1_params=(stage1s[0] or paper_params(BEST_STAGE1)) if experiment.stage == 2 else None,
+        derived_from_8=derived,
+        instance_test=first.test.instance,
+        search=first.search,
+        n_merges_test=first.test.n_merges,
+        n_stage1_clusters_test=first.test.n_stage1,
+        repeats=_repeat_records(env, found, paper_params(number)) if repeats > 1 else None,
+    )
+    summary = (
+        f"    #{number}: test V1 {_spread(found, 'v1')} (paper {experiment.v1_percent:.2f} %), PQ {_spread(found)}"
+    )
+    return Outcome(result, summary, first.test.labels)
+
+
+def _stage1_settings(best, repeats):
+    """#8's setting of each repeat (its ``cluster__`` parameters), or None for each when #8 did not run.
+
+    Repeat ``k`` of #10, #11 and stage 2 builds on repeat ``k`` of #8.
+    """
+    if best is None:
+        return [None] * repeats
+    settings = [_stage1_setting(r.params) for r in best.repeats or [best]]
+    return settings if len(settings) == repeats else [_stage1_setting(best.params)] * repeats
+
+
+def _stage1_setting(params):
+    return {k: v for k, v in params.items() if k.startswith("cluster__")}
+
+
+@dataclass(frozen=True)
+class _ExperimentRepeat:
+    """``job(executor, k)``: repeat ``k`` of experiment ``number`` (a class: joblib's processes pickle it)."""
+
+    env: RunEnv
+    number: int
+    repeats: int
+    stage1s: list
+
+    def __call__(self, executor, k):
+        start = time.perf_counter()
+        env, number = self.env.on(executor), self.number
+        experiment = get_experiment(number)
+        stage1 = self.stage1s[k] if experiment.stage == 2 else None
+        pipeline = experiment_pipeline(number, memory=env.cache, stage1_params=stage1)
+        search = None
+        if experiment.tuned:
+            space = with_cluster_gate(search_space(number), experiment.stage, env.objective)
+            label = _repeat_label(f"#{number}", k, self.repeats)
+            params, search = tune(env, str(number), pipeline, space, label, paper_params(number), seed=env.seed + k)
+        elif experiment.derived_from is None:  # the expert setting (#1): the paper's, as it is
+            params = {}
+        else:  # #10, #11: #8's setting, transferred
+            params = derived_params(number, self.stage1s[k])
+        test = score_on_test(env, pipeline.set_params(**params))
+        return Repeat(params, search, test, time.perf_counter() - start)
+
+
+def with_cluster_gate(space, stage, objective):
+    """The paper's search space, plus the cluster-level Doppler gate when tuning for PQ.
+
+    The paper's V-measure does not see clusters of static background, so the
+    gate (``cluster_vr_min``, m/s: clusters whose median |v_r| is at most it
+    become noise) only enters the searches for the panoptic quality, which
+    counts them as false positives; tuned for V1 the experiments stay as
+    printed.
+    """
+    if objective != "pq":
+        return space
+    name = f"{'merge' if stage == 2 else 'cluster'}__cluster_vr_min"
+    return {**space, name: Real(0.0, 1.5, name=name)}
+
+
+def _repeat_records(env, found, defaults=None):
+    """One :class:`RepeatResult` per repeat, in order."""
+    return [
+        RepeatResult(
+            seed=env.seed + k,
+            params={**(defaults or {}), **f.params},
+            v1_test=f.test.v1,
+            n_clusters_test=f.test.n_clusters,
+            search=f.search,
+            instance_test=f.test.instance,
+        )
+        for k, f in enumerate(found)
+    ]
+
+
+def _spread(found, score="pq"):
+    """``"71.55 %"`` / ``"0.412"`` for one repeat, mean and sd over several (``"71.20 +- 0.35 %"``)."""
+    values = np.array([f.test.v1 if score == "v1" else f.test.instance.pq for f in found])
+    scale, unit, digits = (100, " %", 2) if score == "v1" else (1, "", 3)
+    text = f"{scale * values.mean():.{digits}f}"
+    if len(values) > 1:
+        text += f" +- {scale * values.std(ddof=1):.{digits}f}"
+    return text + unit
+
+
+def _repeat_label(label, k, repeats):
+    return label if repeats == 1 else f"{label} repeat {k + 1}/{repeats}"
+
+
+def _said_ended(env, label, repeats):
+    """``on_done`` of a step's repeats when they run beside other work: a line as each ends (none when alone)."""
+    if env.executor.alone:
+        return None
+    return lambda k, _: env.progress.search_ended(_repeat_label(label, k, repeats))
+
+
+# ----------------------------------------------------------------------------- the filter's effect
+
+
+def run_filter_effect(env, key, needed):
+    """Clustering time and number of clusters with and without the filter, at #8's setting."""
+    best = needed.get(str(BEST_STAGE1))
+    params = _stage1_setting(best.params) if best else paper_params(BEST_STAGE1)
+    found = env.sequences.map(_filter_effect_sequence, env.test, params, executor=env.executor)
+    per_sequence, cost = {}, {}
+    for filtered in (True, False):
+        per_sequence[filtered] = {f["id"]: f[filtered][1] for f in found}
+        # Each sequence's fastest of 3 clusterings (after a warm-up), summed over the test sequences.
+        cost[filtered] = ClusteringCost(
+            clustering_s=sum(f[filtered][0] for f in found), n_clusters=sum(f[filtered][1] for f in found)
+        )
+    with_filter, without = per_sequence[True], per_sequence[False]
+    fewer = [1 - with_filter[g] / without[g] for g in with_filter if without[g] > 0]
+    filtered, unfiltered = cost[True], cost[False]
+    result = FilterEffectResult(
+        setting=params,
+        setting_source=f"tuned #{BEST_STAGE1}" if best else f"paper's #{BEST_STAGE1}",
+        filtered=filtered,
+        unfiltered=unfiltered,
+        measured=FilterEffectFigures(
+            time_saving_percent=100 * (1 - filtered.clustering_s / unfiltered.clustering_s),
+            fewer_clusters_per_sequence_percent=100 * float(np.mean(fewer)) if fewer else float("nan"),
+            fewer_clusters_overall_percent=100 * (1 - filtered.n_clusters / max(unfiltered.n_clusters, 1)),
+        ),
+    )
+    return Outcome(result)
+
+
+def _filter_effect_sequence(sequence, params):
+    """One test sequence clustered with and without the filter: ``{filtered: (fastest of 3 s, clusters)}``."""
+    found = {"id": sequence.id}
+    for filtered in (True, False):
+        pipeline = experiment_pipeline(BEST_STAGE1 if filtered else BEST_STAGE1_UNFILTERED, params=params)
+        prepared = pipeline[:-1].fit_transform(sequence.X)
+        clusterer = pipeline[-1]
+        clusterer.fit(prepared)  # warm-up: JIT compilation is not clustering time
+        times = []
+        for _ in range(3):
+            start = time.perf_counter()
+            labels = clusterer.fit(prepared).labels_
+            times.append(time.perf_counter() - start)
+        found[filtered] = (min(times), len(np.unique(labels[labels >= 0])))
+    return found
+
+
+# ----------------------------------------------------------------------------- the baselines
+
+
+def run_baselines(env, key, needed):
+    """The clusterers a user would otherwise pick, on the same FCS + filter input, same budget and split.
+
+    Every repeat of every baseline is one :meth:`map` over the executor.
+    """
+    names = list(SKLEARN_BASELINES)
+    jobs = [(name, k) for name in names for k in range(env.repeats)]
+    found = env.executor.map(_BaselineRepeat(env), jobs, on_done=_said_baseline_ended(env))
+    baselines, lines = {}, []
+    for i, name in enumerate(names):
+        repeats = found[i * env.repeats : (i + 1) * env.repeats]
+        first = repeats[0]
+        baselines[name] = BaselineResult(
+            search=first.search,
+            params=first.params,
+            v1_test=first.test.v1,
+            n_clusters_test=first.test.n_clusters,
+            wall_time_s=sum(r.wall_time_s for r in repeats),
+            instance_test=first.test.instance,
+            repeats=_repeat_records(env, repeats) if env.repeats > 1 else None,
+        )
+        lines.append(f"    {name}: test V1 {_spread(repeats, 'v1')}, PQ {_spread(repeats)}")
+    return Outcome(baselines, "\n".join(lines))
+
+
+@dataclass(frozen=True)
+class _BaselineRepeat:
+    """``job(executor, (name, k))``: repeat ``k`` of baseline ``name`` (its search with the seed ``seed + k``)."""
+
+    env: RunEnv
+
+    def __call__(self, executor, job):
+        start = time.perf_counter()
+        name, k = job
+        env = self.env.on(executor)
+        pipeline = baseline_pipeline(name, memory=env.cache)
+        space = SKLEARN_BASELINES[name][1]
+        params, search = tune(env, BASELINES, pipeline, space, _repeat_label(name, k, env.repeats), seed=env.seed + k)
+        test = score_on_test(env, pipeline.set_params(**params))
+        return Repeat(params, search, test, time.perf_counter() - start)
+
+
+def _said_baseline_ended(env):
+    if env.executor.alone:
+        return None
+    return lambda job, _: env.progress.search_ended(_repeat_label(job[0], job[1], env.repeats))
+
+
+# ----------------------------------------------------------------------------- scoring and searching
+
+
+def score_on_test(env, pipeline):
+    """Fit-predict on each test sequence; radar V-measure and object-level scores against the pre-clustered target.
+
+    The number of clusters and, for stage 2, of merges and stage-1 clusters
+    are summed over the test sequences; the labels are those of the
+    sequence the figures draw.
+    """
+    parts = env.sequences.map(_score_sequence, env.test, pipeline, env.drawn, executor=env.executor)
+    scores = combine_instance_parts([p["instance"] for p in parts])
+    counts = {name: _sum_or_none([p[name] for p in parts]) for name in ("n_clusters", "n_merges", "n_stage1")}
+    return TestScores(
+        v1=combine_parts("v1", [p["v1"] for p in parts]),
+        instance=InstanceScores(frame_s=FRAME_S, **{name: float(scores[name]) for name in INSTANCE_FIELDS}),
+        labels=next(p["labels"] for p in parts if p["labels"] is not None),
+        **counts,
+    )
+
+
+def _sum_or_none(values):
+    return None if any(v is None for v in values) else int(sum(values))
+
+
+def _score_sequence(sequence, pipeline, drawn):
+    """One test sequence's share of :func:`score_on_test` (its labels only when it is the one drawn)."""
+    X = sequence.X
+    fitted = clone(pipeline)
+    labels = np.asarray(fitted.fit_predict(X))
+    times = X["timestamp"].to_numpy(dtype=np.float64) * 1e-6
+    found = {
+        "v1": score_parts("v1", sequence.target, labels),
+        "instance": instance_parts(sequence.target, labels, times=times, frame=FRAME_S),
+        "n_clusters": len(np.unique(labels[labels >= 0])),
+        "n_merges": None,
+        "n_stage1": None,
+        "labels": labels if sequence.id == drawn else None,
+    }
+    merger = fitted[-1] if hasattr(fitted, "steps") else None
+    if hasattr(merger, "merges_"):
+        found["n_merges"] = len(merger.merges_)
+        found["n_stage1"] = len(np.unique(merger.stage1_labels_[merger.stage1_labels_ >= 0]))
+    return found
+
+
+def tune(env, key, estimator, space, label, start_from=None, seed=None):
+    """Bayesian optimisation on the training half with grouped CV; returns (best params, SearchRecord).
+
+    A candidate is one task per block of training sequences (:mod:`._search`)
+    and the search's loop one task where the executor runs it
+    (:meth:`~sklearn_radar._executor.DaskExecutor.on_a_worker`); its
+    iterations are printed (and counted as units of step ``key``) when it
+    runs alone here.  ``seed`` is the search's random seed (None: the run's).
+
+    ``start_from`` (e.g. the paper's optimum) is scored on the same folds as
+    one more candidate and wins when the search found nothing better: a
+    short search should not report a worse setting than a known one.
+    """
+    start = time.perf_counter()
+    folds = sized_sequence_folds(env.train, [env.sequences.size([s]) for s in env.train], env.budget.cv_folds)
+    raw = env.training.raw(env.executor)
+    estimator = _without_cache(estimator)
+    searched, searched_space, data, prefix = estimator, space, raw, ""
+    fixed = fixed_prefix(estimator, space)
+    if fixed is not None:
+        # Stage 0 once for every candidate and fold, per sequence (it never crosses sequences; tested).
+        stage0, searched, prefix = fixed
+        data = env.training.prepared(env.executor, stage0)
+        searched_space = {name[len(prefix) :]: dimension for name, dimension in space.items()}
+    # The paper's setting is scored as one more candidate on the same folds (on the data as searched, when it
+    # sets only the searched step).
+    start_here = bool(start_from) and all(name.startswith(prefix) for name in start_from)
+    start_candidate = {name[len(prefix) :]: value for name, value in start_from.items()} if start_here else None
+    options = {
+        "objective": env.objective,
+        "n_iter": env.budget.n_iter,
+        "n_initial_points": env.budget.n_initial_points,
+        "n_points": env.n_points,
+        "random_state": env.seed if seed is None else seed,
+    }
+    printer = None
+    if env.executor.alone:
+        status = env.progress.search_status(key)
+        printer = ProgressPrinter(env.budget.n_iter, label=label, stream=env.progress.stream, status=status)
+    found, known = env.executor.on_a_worker(
+        _search, data.blocks, data.ids, searched, searched_space, folds, start_candidate, options, printer
+    )
+    best = {prefix + name: value for name, value in _native(found.best_params).items()}
+    cv_best, source = found.best_score, SOURCE_SEARCH
+    if start_from:
+        if not start_here:
+            known = candidate_scores(raw, estimator, [start_from], folds, env.objective)[0]
+        if known >= cv_best:
+            best = {name: start_from[name] for name in space if name in start_from}
+            cv_best, source = known, SOURCE_PAPER
+    record = SearchRecord(
+        cv_best=cv_best,
+        convergence=found.scores,
+        best_source=source,
+        cv_start_from=known,
+        search_wall_time_s=time.perf_counter() - start,
+    )
+    return best, record
+
+
+def _search(executor, blocks, ids, estimator, space, folds, start_from, options, callback):
+    """:func:`search_and_score_start` on the blocks, where ``executor`` runs (a worker, or here)."""
+    data = SearchData(blocks, ids, executor)
+    return search_and_score_start(estimator, space, data, folds, start_from, callback=callback, **options)
+
+
+class TrainingData:
+    """The training half per sequence (:class:`._search.SearchData`), placed once per run where its tasks run.
+
+    Its stage-0 outputs (:meth:`prepared`) are shared by the searches with
+    the same stage 0 (repeats, experiments on the same input); the last
+    :data:`PREPARED_KEPT` are kept.  Concurrent searches (threads) share it.
+    """
+
+    def __init__(self, sequences, train):
+        self.sequences, self.train = sequences, train
+        self._raw, self._prepared = None, {}
+        self._lock = threading.Lock()
+
+    def __getstate__(self):  # a copy in another process (joblib) places its own
+        return {"sequences": self.sequences, "train": self.train, "_raw": None, "_prepared": {}}
+
+    def __setstate__(self, state):
+        self.__dict__.update(state, _lock=threading.Lock())
+
+    def raw(self, executor):
+        with self._lock:
+            if self._raw is None:
+                self._raw = self.sequences.search_data(self.train)
+            return self._with(self._raw, executor)
+
+    def prepared(self, executor, stage0):
+        raw = self.raw(executor)
+        key = joblib.hash(stage0)
+        with self._lock:
+            found = self._prepared.get(key)
+            if found is None:
+                found = self._prepared[key] = raw.prepare(stage0)
+                while len(self._prepared) > PREPARED_KEPT:
+                    self._prepared.pop(next(iter(self._prepared)))
+        return self._with(found, executor)
+
+    @staticmethod
+    def _with(data, executor):
+        return data.on(executor)
+
+
+def _native(params):
+    """Parameters with numpy scalars as Python numbers."""
+    return {key: (value.item() if isinstance(value, np.generic) else value) for key, value in params.items()}
+
+
+def _without_cache(estimator):
+    """A pipeline without its cache folder (which a worker on another machine cannot reach)."""
+    if hasattr(estimator, "steps"):
+        return clone(estimator).set_params(memory=None)
+    return estimator
+
+
+# ----------------------------------------------------------------------------- the table
+
+
+def _experiment_step(number):
+    experiment = get_experiment(number)
+    needs = (str(BEST_STAGE1),) if experiment.derived_from == BEST_STAGE1 else ()
+    kind = "stage 2" if number in STAGE2 else "stage 1"
+    return Step(run_experiment, needs, kind if experiment.tuned else SCORING)
+
+
+#: Every step by key, in run order: its function, the steps whose results it reads, its kind of work.
+#: #10 and #11 (#8's setting transferred), stage 2 (#12, #13: merging #8's clusters) and the filter's effect (at
+#: #8's setting) need #8; every other step needs none.
+STEPS = {
+    FILTER: Step(run_filter, kind=FILTER),
+    **{key: _experiment_step(int(key)) for key in ALL_EXPERIMENTS if key.isdigit()},
+    FILTER_EFFECT: Step(run_filter_effect, (str(BEST_STAGE1),), kind=FILTER_EFFECT),
+    BASELINES: Step(run_baselines, kind=BASELINES),
+}
+
+
+def units(key, budget, repeats):
+    """A step's units of work for the progress: its search iterations (with the two more scorings), else 1."""
+    experiment = get_experiment(int(key)) if key.isdigit() else None
+    if key == BASELINES:
+        return len(SKLEARN_BASELINES) * repeats * (budget.n_iter + 2)
+    if experiment is not None and experiment.tuned:
+        return repeats * (budget.n_iter + 2)
+    if experiment is not None and experiment.derived_from is not None:
+        return repeats
+    return 1
+
+
+__all__ = ["STEPS", "Outcome", "RunEnv", "Step", "TrainingData", "data_statistics", "units"]
