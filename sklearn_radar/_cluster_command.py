@@ -187,7 +187,7 @@ def cluster_radarscenes(data, params, out, experiment=None, *, scheduler=None, w
     """
     setting = load_params(params, experiment)
     number = setting["experiment"]
-    pipeline = _pipeline(setting, params)
+    pipeline = setting_pipeline(setting, params)
     check_predictions_file(out)
     data_dir = _resolve_data_dir(Path(data))
     _read_sensors_json(data_dir / "sensors.json")  # a malformed folder fails here, before any worker starts
@@ -268,7 +268,7 @@ def cluster_sequence(task):
     return scenes.data["uuid"].to_numpy(), np.asarray(labels, dtype=np.int64)
 
 
-def _pipeline(setting, path):
+def setting_pipeline(setting, path):
     """The pipeline of a checked setting; ValueError names the file and the parameter it cannot set."""
     number = setting["experiment"]
     where = f"{path}: experiments['{number}']"

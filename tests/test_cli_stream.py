@@ -7,7 +7,7 @@ import pandas as pd
 import pytest
 
 from sklearn_radar._cli import main
-from sklearn_radar._cluster_command import _pipeline, load_params
+from sklearn_radar._cluster_command import load_params, setting_pipeline
 from sklearn_radar.datasets import load_radarscenes, make_scenes, write_radarscenes
 from sklearn_radar.experiments import paper_params
 from sklearn_radar.online import OnlinePipeline
@@ -62,7 +62,7 @@ def test_stream_writes_the_predictions_and_objects_it_prints(folder, params_file
     data = load_radarscenes(folder).data
     assert set(predictions) == set(data["uuid"])
     # The instances are the final object ids of a replay of the same folder with the same setting.
-    online = OnlinePipeline(_pipeline(load_params(params_file), params_file))
+    online = OnlinePipeline(setting_pipeline(load_params(params_file), params_file))
     expected = replay(online, data)["object_ids"]
     got = np.array([predictions[u][1] for u in data["uuid"]])
     np.testing.assert_array_equal(got, expected)
@@ -96,7 +96,7 @@ def test_objects_and_out_must_differ(folder, params_file, tmp_path, capsys):
 
 def test_from_params_builds_the_saved_pipeline(params_file):
     online = OnlinePipeline.from_params(params_file)
-    saved = _pipeline(load_params(params_file), params_file)
+    saved = setting_pipeline(load_params(params_file), params_file)
     leaves = [
         {
             key: value

@@ -150,9 +150,9 @@ class OnlinePipeline:
         -------
         online : OnlinePipeline
         """
-        from .._cluster_command import _pipeline, load_params
+        from .._cluster_command import load_params, setting_pipeline
 
-        return cls(_pipeline(load_params(path, experiment), path))
+        return cls(setting_pipeline(load_params(path, experiment), path))
 
     def causal_pipeline(self):
         """The offline pipeline whose labels this stream gives: ``causal=True`` on the filter and on stage 1.

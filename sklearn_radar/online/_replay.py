@@ -138,11 +138,11 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None):
         ``latency`` and ``cpu`` (wall and thread CPU time per scan, s), ``recording`` (s), ``out`` and
         ``objects``.
     """
-    from .._cluster_command import _pipeline, check_predictions_file, load_params, write_predictions
+    from .._cluster_command import check_predictions_file, load_params, setting_pipeline, write_predictions
     from ..reproduce._io import atomic_write
 
     setting = load_params(params, experiment)
-    online = OnlinePipeline(_pipeline(setting, params))
+    online = OnlinePipeline(setting_pipeline(setting, params))
     check_predictions_file(out)
     if objects is not None:
         if Path(objects).resolve() == Path(out).resolve():
