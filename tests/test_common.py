@@ -6,7 +6,7 @@ from sklearn.utils.estimator_checks import parametrize_with_checks
 
 from sklearn_radar import ClusterMerger, DopplerDensityFilter, FrameTransform, RadarDBSCAN, config_context
 from sklearn_radar._skopt import Real
-from sklearn_radar.cluster import SequenceDBSCAN, SequenceHDBSCAN, WindowedDBSCAN, WindowedHDBSCAN
+from sklearn_radar.cluster import SequenceDBSCAN, SequenceHDBSCAN, SlidingDBSCAN, WindowedDBSCAN, WindowedHDBSCAN
 from sklearn_radar.model_selection import SequenceSearchCV
 
 #: A small search of RadarDBSCAN's eps_xy (m), two random candidates on two folds.
@@ -21,7 +21,7 @@ _BY_DESIGN_NOISE = (
     "The same check passes with vr_min=-inf (second RadarDBSCAN instance)."
 )
 _SEQUENCE_GATE_NOISE = (
-    "The per-sequence baselines' default Doppler gate vr_min = 0.4 m/s (as the paper's expert) makes every "
+    "The per-sequence and sliding-window baselines' default Doppler gate vr_min = 0.4 m/s (as the paper's expert) makes every "
     "detection with |v_r| <= 0.4 m/s noise; the check's blobs have no Doppler column (v_r = 0), so every point "
     "is noise by design. The same check passes with vr_min=-inf (second instance of each)."
 )
@@ -48,6 +48,10 @@ EXPECTED_FAILED_CHECKS = {
         "check_clustering(readonly_memmap=True)": _SEQUENCE_GATE_NOISE,
     },
     "SequenceHDBSCAN()": {
+        "check_clustering": _SEQUENCE_GATE_NOISE,
+        "check_clustering(readonly_memmap=True)": _SEQUENCE_GATE_NOISE,
+    },
+    "SlidingDBSCAN()": {
         "check_clustering": _SEQUENCE_GATE_NOISE,
         "check_clustering(readonly_memmap=True)": _SEQUENCE_GATE_NOISE,
     },
@@ -141,6 +145,8 @@ CHECKS = _strict(
             SequenceDBSCAN(vr_min=-np.inf),
             SequenceHDBSCAN(),
             SequenceHDBSCAN(vr_min=-np.inf),
+            SlidingDBSCAN(),
+            SlidingDBSCAN(vr_min=-np.inf),
             _SEARCH,
         ],
         expected_failed_checks=_expected_failed_checks,

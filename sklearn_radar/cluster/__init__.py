@@ -3,7 +3,7 @@
 from ._cluster_merger import ClusterMerger
 from ._radar_dbscan import RadarDBSCAN, ScanStream, min_points_at_range
 from ._velocity import estimate_velocities, estimate_velocity
-from ._windowed import SequenceDBSCAN, SequenceHDBSCAN, WindowedDBSCAN, WindowedHDBSCAN
+from ._windowed import SequenceDBSCAN, SequenceHDBSCAN, SlidingDBSCAN, WindowedDBSCAN, WindowedHDBSCAN
 
 __all__ = [
     "ClusterMerger",
@@ -11,6 +11,7 @@ __all__ = [
     "ScanStream",
     "SequenceDBSCAN",
     "SequenceHDBSCAN",
+    "SlidingDBSCAN",
     "WindowedDBSCAN",
     "WindowedHDBSCAN",
     "estimate_velocities",

@@ -1,4 +1,5 @@
-"""The clusterers a user would otherwise pick: scikit-learn's DBSCAN and HDBSCAN per time window or per sequence."""
+"""The clusterers a user would otherwise pick: scikit-learn's DBSCAN and HDBSCAN per time window or per sequence,
+and DBSCAN over a sliding past window (causal)."""
 
 from __future__ import annotations
 
@@ -186,14 +187,14 @@ class _SequenceClusterer(ClusterMixin, BaseEstimator):
     """Shared input handling of the per-sequence baselines: scaled (x, y, v_r, t) and the Doppler gate."""
 
     def _features(self, X, reset):
-        """Features (x, y, v_r / vr_scale, t * t_scale), rows taking part, and the row indices of each sequence."""
+        """Features (x, y, v_r / vr_scale, t * t_scale), rows taking part, the row indices of each sequence, t (s)."""
         X, c = read_columns(self, X, WINDOWED_READS, reset=reset)
         active = np.abs(c["v_r"]) > self.vr_min
         if c["keep"] is not None:
             active &= c["keep"] != 0
         features = np.c_[c["x"], c["y"], c["v_r"] / self.vr_scale, c["t"] * self.t_scale]
         sequences = [np.arange(len(features))[rows] for rows in sequence_slices(c["sequence"])]
-        return features, active, sequences
+        return features, active, sequences, c["t"]
 
 
 class SequenceDBSCAN(_SequenceClusterer):
@@ -266,7 +267,7 @@ class SequenceDBSCAN(_SequenceClusterer):
         self : SequenceDBSCAN
             With ``labels_``.
         """
-        features, active, sequences = self._features(X, reset=True)
+        features, active, sequences, _ = self._features(X, reset=True)
         labels = np.full(len(features), -1, dtype=np.int64)
         laid_out = np.zeros_like(features)
         offset = 0.0
@@ -353,7 +354,7 @@ class SequenceHDBSCAN(_SequenceClusterer):
         self : SequenceHDBSCAN
             With ``labels_``.
         """
-        features, active, sequences = self._features(X, reset=True)
+        features, active, sequences, _ = self._features(X, reset=True)
         labels = np.full(len(features), -1, dtype=np.int64)
         offset = 0
         for rows in sequences:
@@ -370,3 +371,127 @@ class SequenceHDBSCAN(_SequenceClusterer):
             offset += max(found.max() + 1, 0)
         self.labels_ = consecutive_labels(labels)
         return self
+
+
+class SlidingDBSCAN(_SequenceClusterer):
+    """scikit-learn's DBSCAN over a sliding past window, scan by scan: the causal form of :class:`SequenceDBSCAN`.
+
+    What a user who needs labels in real time would build from scikit-learn:
+    when a scan (the detections of one time) arrives, DBSCAN clusters the
+    window of the last ``window`` seconds, ``(t - window, t]``, in the space
+    of :class:`SequenceDBSCAN` (x, y, v_r / vr_scale, t * t_scale), and only
+    the new scan's detections are labelled.  A new detection's cluster takes
+    the oldest id among the already labelled detections of its window
+    cluster, or a new id when it has none, so ids persist from scan to scan
+    and, where clusters meet, the older one survives.  Labels once given are
+    never revised, and nothing after a scan changes its labels.  Detections
+    with ``|v_r| <= vr_min`` and rows with ``keep = False`` are noise and
+    take part in nothing; sequences never share a cluster.
+
+    Parameters
+    ----------
+    eps : float, default=1.0
+        Neighbourhood radius in the scaled space (m, m, v_r / vr_scale, t * t_scale).
+    min_samples : int, default=3
+        Including the point itself.
+    vr_scale : float, default=1.0
+        Doppler difference, m/s, that counts like 1 m.
+    t_scale : float, default=4.0
+        How many metres one second counts, m/s.
+    vr_min : float, default=0.4
+        Doppler gate, m/s: detections with ``|v_r| <= vr_min`` are noise;
+        ``-inf`` keeps every detection.
+    window : float, default=0.5
+        Length of the past window, s.
+
+    Attributes
+    ----------
+    labels_ : ndarray of shape (n_detections,)
+        Cluster id per row, -1 for noise; consecutive ids, unique across sequences.
+    n_features_in_ : int
+    feature_names_in_ : ndarray of str
+        When X is a DataFrame.
+
+    See Also
+    --------
+    SequenceDBSCAN : the same space over the whole sequence, past and future.
+    RadarDBSCAN : ``causal=True`` is the framework's causal stage 1.
+
+    Notes
+    -----
+    One DBSCAN call per scan: the cost grows with the number of scans times
+    the detections in a window.
+    """
+
+    _parameter_constraints: ClassVar[dict] = {
+        **SequenceDBSCAN._parameter_constraints,
+        "window": [Interval(Real, 0, None, closed="neither")],
+    }
+
+    def __init__(self, eps=1.0, min_samples=3, vr_scale=1.0, t_scale=4.0, vr_min=0.4, window=0.5):
+        self.eps = eps
+        self.min_samples = min_samples
+        self.vr_scale = vr_scale
+        self.t_scale = t_scale
+        self.vr_min = vr_min
+        self.window = window
+
+    @_fit_context(prefer_skip_nested_validation=True)
+    def fit(self, X, y=None):
+        """Label every sequence scan by scan, each scan from its past window only.
+
+        Parameters
+        ----------
+        X : DataFrame or array-like of shape (n_detections, n_columns)
+            Working detections with the columns ``x``, ``y`` (m), ``v_r`` (m/s), ``t`` (s) and
+            optionally ``sequence`` and ``keep``.
+        y : None
+            Ignored.
+
+        Returns
+        -------
+        self : SlidingDBSCAN
+            With ``labels_``.
+        """
+        features, active, sequences, times = self._features(X, reset=True)
+        labels = np.full(len(features), -1, dtype=np.int64)
+        offset = 0
+        for rows in sequences:
+            rows = rows[active[rows]]
+            found = _sliding_window_labels(features[rows], times[rows], self.window, self.eps, self.min_samples)
+            labels[rows] = np.where(found >= 0, found + offset, -1)
+            offset += max(found.max(initial=-1) + 1, 0)
+        self.labels_ = consecutive_labels(labels)
+        return self
+
+
+def _sliding_window_labels(features, t, window, eps, min_samples):
+    """Scan-by-scan labels of one sequence's rows: DBSCAN on each scan's past window ``(t - window, t]``.
+
+    Ids are local, increasing in order of first use; -1 is noise.
+    """
+    labels = np.full(len(t), -1, dtype=np.int64)
+    if len(t) == 0:
+        return labels
+    order = np.argsort(t, kind="stable")
+    t_sorted = t[order]
+    scan_times, scan_start = np.unique(t_sorted, return_index=True)
+    scan_end = np.append(scan_start[1:], len(t_sorted))
+    window_start = np.searchsorted(t_sorted, scan_times - window, side="right")
+    next_id = 0
+    dbscan = DBSCAN(eps=eps, min_samples=min_samples)
+    for first, start, end in zip(window_start, scan_start, scan_end, strict=True):
+        rows = order[first:end]
+        if end - first < min_samples:
+            continue
+        found = dbscan.fit_predict(features[rows] - features[rows].min(axis=0))
+        past, new = found[: start - first], found[start - first :]
+        past_labels = labels[rows[: start - first]]
+        for cluster in np.unique(new[new >= 0]):
+            known = past_labels[(past == cluster) & (past_labels >= 0)]
+            if len(known):
+                cluster_id = known.min()
+            else:
+                cluster_id, next_id = next_id, next_id + 1
+            labels[rows[start - first :][new == cluster]] = cluster_id
+    return labels
