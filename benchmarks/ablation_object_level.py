@@ -48,11 +48,13 @@ from sklearn.pipeline import Pipeline
 
 from sklearn_radar import ClusterMerger, DopplerDensityFilter, FrameTransform, RadarDBSCAN
 from sklearn_radar._skopt import Integer, Real
-from sklearn_radar.cluster import SequenceDBSCAN, SequenceHDBSCAN
+from sklearn_radar.cluster import SequenceDBSCAN, SequenceHDBSCAN, SlidingDBSCAN
 from sklearn_radar.datasets import make_scenes
+from sklearn_radar.experiments import object_pipeline, object_search_space
 from sklearn_radar.metrics import precluster_target
 from sklearn_radar.metrics._parts import combine_parts, sequence_parts
 from sklearn_radar.model_selection import sequence_train_test_split
+from sklearn_radar.model_selection._bounds import bounds_reached
 from sklearn_radar.model_selection._sequence_search import SearchData, bayes_search, sized_sequence_folds
 
 
@@ -93,10 +95,6 @@ DATA_SETS = {
     "long-lived": ("realistic", {"traffic": 0.0, "occlusion": 0.0, "object_detection_probability": 0.8}),
 }
 
-#: Ends of a range that are limits of the parameter itself, not of the search (not flagged).
-NATURAL_ENDS = {"alpha_r": (0.0, 1.0), "vr_min": (0.0,), "gate": (0.0,), "cluster_vr_min": (0.0,), "min_samples": (1,)}
-
-
 @dataclass
 class Variant:
     """A pipeline to tune: its fixed stage 0 (frame, filter), the searched part and its space."""
@@ -107,12 +105,13 @@ class Variant:
     space: dict
     after: str | None = None  # stage 2 on the tuned stage 1 of this variant
     fixed: dict = field(default_factory=dict)
+    merged: object = None  # stage1 params -> the searched stage 2 (default: F0's cluster under a ClusterMerger)
 
 
-def _stage0(filtered=True):
+def _stage0(filtered=True, causal=False):
     steps = [("frame", FrameTransform(frame="frame"))]
     if filtered:
-        steps.append(("filter", DopplerDensityFilter()))
+        steps.append(("filter", DopplerDensityFilter(causal=causal)))
     return Pipeline(steps)
 
 
@@ -214,12 +213,37 @@ def variants():
             _gated(eps_t=0.25, vr_min=-np.inf),
             _with(gate_space, cluster__eps_t=_EPS_T, cluster__cluster_vr_min=vr_gate),
         ),
+        *_object_variants("objects", causal=False),
+        *_object_variants("objects causal", causal=True),
         Variant("SequenceDBSCAN", _stage0(), Pipeline([("cluster", SequenceDBSCAN())]), sequence_dbscan),
         Variant("SequenceHDBSCAN", _stage0(), Pipeline([("cluster", SequenceHDBSCAN())]), sequence_hdbscan),
+        Variant(
+            "SlidingDBSCAN",
+            _stage0(causal=True),
+            Pipeline([("cluster", SlidingDBSCAN())]),
+            {**sequence_dbscan, "cluster__window": Real(0.1, 2.0, prior="log-uniform", name="cluster__window")},
+        ),
+    ]
+
+
+def _object_variants(name, causal):
+    """The object experiment (``experiments.object_pipeline``): its stage-1 search, then stage 2 on it."""
+    stage1 = object_pipeline(1, causal=causal)
+
+    def merged(stage1_params):
+        return object_pipeline(2, stage1_params=stage1_params, causal=causal)[1:]
+
+    return [
+        Variant(f"{name} (stage 1)", stage1[:1], stage1[1:], object_search_space(1)),
+        Variant(name, stage1[:1], None, object_search_space(2), after=f"{name} (stage 1)", merged=merged),
     ]
 
 
 BASELINES = ("SequenceDBSCAN", "SequenceHDBSCAN")
+#: The causal ones: their best is what the causal variants are compared with.
+CAUSAL_BASELINES = ("SlidingDBSCAN",)
+#: Variants that decide from the past only (compared with the causal baselines).
+CAUSAL = ("objects causal (stage 1)", "objects causal", *CAUSAL_BASELINES)
 
 
 def _merger(variant, stage1_params):
@@ -234,29 +258,6 @@ def _test_scores(searched, test_sequences):
         parts = [sequence_parts(clone(searched), X, y, objective) for X, y in test_sequences]
         scores[objective] = combine_parts(objective, parts)
     return scores
-
-
-def _at_bound(params, space):
-    """Names of tuned parameters that stopped within 1 % of an end of their search range (not a natural limit)."""
-    hits = []
-    for key, dimension in space.items():
-        low, high = dimension.bounds
-        value = params[key]
-        natural = NATURAL_ENDS.get(key.split("__")[-1], ())
-        near = [end for end in (low, high) if end not in natural]
-        if isinstance(dimension, Integer):
-            if value in near:
-                hits.append(key)
-            continue
-        if not near:
-            continue
-        if getattr(dimension, "prior", "uniform") == "log-uniform":
-            low, high, value = math.log(low), math.log(high), math.log(value)
-        span = high - low
-        ends = [math.log(end) if getattr(dimension, "prior", "uniform") == "log-uniform" else end for end in near]
-        if any(abs(value - end) <= 0.01 * span for end in ends):
-            hits.append(key)
-    return hits
 
 
 def run_one(preset, seed, chosen, options):
@@ -286,8 +287,8 @@ def run_one(preset, seed, chosen, options):
         data = prepared[key]
         searched = variant.searched
         if variant.after is not None:
-            base = found.get(variant.after) or _search_record(variant, data, folds, seed, options, _cluster())
-            searched = _merger(variant, base["params"])
+            base = found[variant.after]
+            searched = variant.merged(base["params"]) if variant.merged else _merger(variant, base["params"])
         result = bayes_search(
             searched,
             variant.space,
@@ -306,31 +307,17 @@ def run_one(preset, seed, chosen, options):
             "cv_pq": result.best_score,
             "pq": scores["pq"],
             "v1": scores["v1"],
-            "bounds": _at_bound(result.best_params, variant.space),
+            "bounds": bounds_reached(result.best_params, variant.space),
             "seconds": time.perf_counter() - start,
         }
         record = found[variant.name]
         print(
-            f"  {preset} seed {seed} {variant.name:<16} test PQ {record['pq']:.3f} V1 {record['v1']:.3f} "
+            f"  {preset} seed {seed} {variant.name:<26} test PQ {record['pq']:.3f} V1 {record['v1']:.3f} "
             f"(cv PQ {record['cv_pq']:.3f}, {record['seconds']:.0f} s)"
             + (f" @bound {record['bounds']}" if record["bounds"] else ""),
             flush=True,
         )
     return found
-
-
-def _search_record(variant, data, folds, seed, options, searched):
-    result = bayes_search(
-        searched,
-        _f0_space(),
-        data,
-        folds,
-        objective="pq",
-        n_iter=options.n_iter,
-        n_initial_points=max(1, round(0.3 * options.n_iter)),
-        random_state=seed,
-    )
-    return {"params": result.best_params}
 
 
 def _rows_per_sequence(groups, rows):
@@ -345,28 +332,37 @@ def _mean_se(values):
 
 
 def _table(preset, runs, names):
-    """One preset's table: mean ± se of test PQ and V1, and paired PQ differences to F0 and the best baseline."""
-    baselines = [b for b in BASELINES if b in names]
-    best_baseline = max(baselines, key=lambda b: np.mean([r[b]["pq"] for r in runs])) if baselines else None
+    """One preset's table: mean ± se of test PQ and V1, and paired PQ differences to F0 and the best baseline.
+
+    A causal variant (:data:`CAUSAL`) is set beside the best causal baseline, every other one beside the best
+    offline baseline: a car can only use the causal figure.
+    """
+
+    def best_of(candidates):
+        present = [b for b in candidates if b in names]
+        return max(present, key=lambda b: np.mean([r[b]["pq"] for r in runs])) if present else None
+
+    best = {False: best_of(BASELINES), True: best_of(CAUSAL_BASELINES)}
     lines = [
-        f"\n{preset}: {len(runs)} seed(s); best per-sequence baseline: {best_baseline}",
-        f"{'variant':<16} {'test PQ':>15} {'test V1':>15} {'PQ - F0':>15} {'PQ - baseline':>15}  at a bound",
+        f"\n{preset}: {len(runs)} seed(s); best per-sequence baseline: {best[False]}; best causal one: {best[True]}",
+        f"{'variant':<26} {'test PQ':>15} {'test V1':>15} {'PQ - F0':>15} {'PQ - baseline':>15}  at a bound",
     ]
     for name in names:
         pq = [r[name]["pq"] for r in runs]
         v1 = [r[name]["v1"] for r in runs]
         cells = [_fmt(_mean_se(pq)), _fmt(_mean_se(v1))]
-        for reference in ("F0", best_baseline):
+        for reference in ("F0", best[name in CAUSAL]):
             if reference is None or reference not in names or reference == name:
                 cells.append(f"{'-':>15}")
             else:
                 cells.append(_fmt(_mean_se([r[name]["pq"] - r[reference]["pq"] for r in runs]), signed=True))
         bound_hits = sorted({hit for r in runs for hit in r[name]["bounds"]})
-        lines.append(f"{name:<16} " + " ".join(cells) + f"  {', '.join(bound_hits) or '-'}")
-    lines.append("settings of the first seed:")
+        lines.append(f"{name:<26} " + " ".join(cells) + f"  {', '.join(bound_hits) or '-'}")
+    lines.append("settings of each seed:")
     for name in names:
-        params = ", ".join(f"{k.split('__')[-1]}={_short(v)}" for k, v in sorted(runs[0][name]["params"].items()))
-        lines.append(f"  {name:<16} {params}")
+        for k, run in enumerate(runs):
+            params = ", ".join(f"{key.split('__')[-1]}={_short(v)}" for key, v in sorted(run[name]["params"].items()))
+            lines.append(f"  {name if k == 0 else '':<26} {params}")
     return "\n".join(lines)
 
 
@@ -397,6 +393,9 @@ def main(argv=None):
     every = variants()
     known = [v.name for v in every]
     wanted = set(options.variants or known) | {"F0", *BASELINES}
+    wanted |= {v.after for v in every if v.name in wanted and v.after}  # stage 2 needs its stage 1
+    if wanted & set(CAUSAL):
+        wanted |= set(CAUSAL_BASELINES)
     unknown = wanted - set(known)
     if unknown:
         parser.error(f"unknown variant(s) {sorted(unknown)}; known: {known}")

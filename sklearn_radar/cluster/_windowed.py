@@ -107,6 +107,11 @@ class WindowedDBSCAN(_WindowedClusterer):
         return self
 
 
+def _fewest_hdbscan_rows(min_cluster_size, min_samples):
+    """Fewest rows a part needs for HDBSCAN to find a cluster (with fewer, scikit-learn raises or finds none)."""
+    return max(min_cluster_size, min_samples or 0, 2)
+
+
 class WindowedHDBSCAN(_WindowedClusterer):
     """scikit-learn's HDBSCAN on (x, y, v_r / vr_scale), each ``window`` of each sequence on its own.
 
@@ -169,7 +174,7 @@ class WindowedHDBSCAN(_WindowedClusterer):
         order = rows[np.argsort(window_id[rows], kind="stable")]
         offset = 0
         for part in np.split(order, np.flatnonzero(np.diff(window_id[order])) + 1):
-            if len(part) < max(self.min_cluster_size, 2):
+            if len(part) < _fewest_hdbscan_rows(self.min_cluster_size, self.min_samples):
                 continue
             found = HDBSCAN(
                 min_cluster_size=self.min_cluster_size,
@@ -359,7 +364,7 @@ class SequenceHDBSCAN(_SequenceClusterer):
         offset = 0
         for rows in sequences:
             rows = rows[active[rows]]
-            if len(rows) < max(self.min_cluster_size, 2):
+            if len(rows) < _fewest_hdbscan_rows(self.min_cluster_size, self.min_samples):
                 continue
             found = HDBSCAN(
                 min_cluster_size=self.min_cluster_size,

@@ -5,10 +5,13 @@ system, filtering, stage, the paper's V1 score and setting);
 :func:`experiment_pipeline` builds the scikit-learn Pipeline of an
 experiment and :func:`search_space` its Bayesian-optimisation ranges;
 :data:`SKLEARN_BASELINES` and :func:`baseline_pipeline` are the scikit-learn
-clusterers the run compares with, on #3's input.
+clusterers the run compares with, on #3's input; :func:`object_pipeline` and
+:func:`object_search_space` are the object experiment (the framework's stages
+set up for panoptic quality, from the object-level ablation).
 """
 
 from ._baselines import BASELINE_INPUT, SKLEARN_BASELINES, baseline_pipeline
+from ._objects import GATE_RULE, OBJECT_EXPERIMENT, object_pipeline, object_search_space
 from ._paper import (
     PAPER_EXPERIMENTS,
     PIPELINE_COLUMNS,
@@ -23,6 +26,8 @@ from ._paper import (
 
 __all__ = [
     "BASELINE_INPUT",
+    "GATE_RULE",
+    "OBJECT_EXPERIMENT",
     "PAPER_EXPERIMENTS",
     "PIPELINE_COLUMNS",
     "SKLEARN_BASELINES",
@@ -31,6 +36,8 @@ __all__ = [
     "derived_params",
     "experiment_pipeline",
     "get_experiment",
+    "object_pipeline",
+    "object_search_space",
     "paper_experiments",
     "paper_params",
     "search_space",

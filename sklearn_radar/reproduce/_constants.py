@@ -9,7 +9,7 @@ stage 2 build on, and so on.
 
 from __future__ import annotations
 
-from ..experiments import PAPER_EXPERIMENTS, get_experiment
+from ..experiments import OBJECT_EXPERIMENT, PAPER_EXPERIMENTS, get_experiment
 
 #: Every experiment number (1-13), in run order.
 NUMBERS = tuple(e.number for e in PAPER_EXPERIMENTS)
@@ -42,9 +42,11 @@ PAPER_N_ITER = 100
 FILTER = "filter"
 FILTER_EFFECT = "filter-effect"
 BASELINES = "baselines"
+#: Beyond the paper: the framework's stages set up for objects (``experiments.object_pipeline``).
+OBJECTS = OBJECT_EXPERIMENT
 
 #: Every step key, in the order they run.
-ALL_EXPERIMENTS = (FILTER, *(str(n) for n in NUMBERS), FILTER_EFFECT, BASELINES)
+ALL_EXPERIMENTS = (FILTER, *(str(n) for n in NUMBERS), OBJECTS, FILTER_EFFECT, BASELINES)
 
 #: The paper's chosen filter setting (eta_1 in m/s, d_xy in m): the defaults of DopplerDensityFilter.
 PAPER_FILTER_SETTING = (0.10, 1.4)
@@ -70,6 +72,7 @@ __all__ = [
     "FRAMES",
     "FRAME_NAMES",
     "NUMBERS",
+    "OBJECTS",
     "PAPER_FILTER_SETTING",
     "PAPER_N_ITER",
     "SOURCE_PAPER",

@@ -843,6 +843,74 @@ class BaselineResult(_JsonRecord):
     repeats: list[RepeatResult] | None = None
 
 
+@dataclass(**_RECORD)
+class ObjectRepeat(_JsonRecord):
+    """One repeat of the object experiment: its two searches' kept settings, scored offline and causally.
+
+    Attributes
+    ----------
+    seed : int
+        Random seed of the repeat's searches.
+    stage1_params, params : dict
+        The kept stage-1 (``filter__``, ``cluster__``) and stage-2 (``merge__``) settings.
+    v1_test : float
+        Radar V-measure on the test half, 0-1 (offline).
+    n_clusters_test : int
+        Clusters found on the test half (offline).
+    instance_test : InstanceScores
+        Object-level scores on the test half, offline.
+    causal_v1_test : float
+        Radar V-measure of the same setting run causally.
+    causal_instance_test : InstanceScores
+        Object-level scores of the same setting run causally.
+    """
+
+    seed: int
+    stage1_params: dict[str, Any]
+    params: dict[str, Any]
+    v1_test: float
+    n_clusters_test: int
+    instance_test: InstanceScores
+    causal_v1_test: float
+    causal_instance_test: InstanceScores
+
+
+@dataclass(**_RECORD)
+class ObjectExperimentResult(_JsonRecord):
+    """Beyond the paper: the object experiment (``objects``), tuned for PQ whatever the run's objective.
+
+    Stage 1 (the Doppler gate, Eq. 5 with a fixed N_min) is searched first, then
+    stage 2 (Eq. 6 velocity merging) on it (:func:`~sklearn_radar.experiments.object_pipeline`); the kept setting
+    is scored on the test half offline and causally.
+
+    Attributes
+    ----------
+    stage1_search, search : SearchRecord
+        The stage-1 and the stage-2 search (their CV scores are PQ).
+    stage1_params, params : dict
+        The kept stage-1 and stage-2 settings (of the first repeat).
+    v1_test, n_clusters_test, instance_test, causal_v1_test, causal_instance_test
+        As :class:`ObjectRepeat`, of the first repeat.
+    wall_time_s : float
+        Searches and scoring, s.
+    repeats : list of ObjectRepeat or None, default=None
+        Every repeat of a run with more than one (the first is the one the other fields hold); None for a single
+        run.
+    """
+
+    stage1_search: SearchRecord
+    search: SearchRecord
+    stage1_params: dict[str, Any]
+    params: dict[str, Any]
+    v1_test: float
+    n_clusters_test: int
+    instance_test: InstanceScores
+    causal_v1_test: float
+    causal_instance_test: InstanceScores
+    wall_time_s: float
+    repeats: list[ObjectRepeat] | None = None
+
+
 # ----------------------------------------------------------------------------- the filter's effect
 
 
@@ -949,6 +1017,8 @@ class RunResults(_JsonRecord):
     filter_effect : FilterEffectResult or None, default=None
     baselines : dict of str to BaselineResult or None, default=None
         By clusterer name.
+    objects : ObjectExperimentResult or None, default=None
+        The object experiment, when it ran.
     figures : FigureRecord, default=FigureRecord()
         Figures drawn; written to ``results.json`` only on request.
     """
@@ -959,6 +1029,7 @@ class RunResults(_JsonRecord):
     filter: FilterResult | None = None
     filter_effect: FilterEffectResult | None = None
     baselines: dict[str, BaselineResult] | None = None
+    objects: ObjectExperimentResult | None = None
     figures: FigureRecord = field(default_factory=FigureRecord, metadata=_NOT_WRITTEN)
 
     def v1_test(self):
@@ -983,7 +1054,7 @@ class RunResults(_JsonRecord):
         -------
         document : dict
             ``meta``, ``statistics`` (when measured), ``experiments`` (keyed by the number as a string), then
-            ``filter``, ``filter_effect`` and ``baselines`` where they ran.
+            ``filter``, ``filter_effect``, ``baselines`` and ``objects`` where they ran.
         """
         document = _to_json(self)
         if figures:
@@ -1061,6 +1132,8 @@ __all__ = [
     "FilterSettingRow",
     "FilterWindows",
     "GridTable",
+    "ObjectExperimentResult",
+    "ObjectRepeat",
     "RepeatResult",
     "RunMeta",
     "RunResults",

@@ -42,7 +42,7 @@ from .. import __version__
 from .._executor import connect_executor
 from ..experiments import SKLEARN_BASELINES, get_experiment
 from ..metrics._parts import OBJECTIVES  # what the searches can maximise: "v1", "pq"
-from ._constants import ALL_EXPERIMENTS, BASELINES, FILTER, FILTER_EFFECT, NUMBERS
+from ._constants import ALL_EXPERIMENTS, BASELINES, FILTER, FILTER_EFFECT, NUMBERS, OBJECTS
 from ._context import RunContext
 from ._io import (
     RUN_TOOL,
@@ -300,6 +300,8 @@ def _searches_at_once(keys, repeats):
 def _searches(key, repeats):
     """How many searches step ``key`` runs."""
     experiment = get_experiment(int(key)) if key.isdigit() else None
+    if key == OBJECTS:
+        return 2 * repeats
     return repeats * (len(SKLEARN_BASELINES) if key == BASELINES else int(experiment is not None and experiment.tuned))
 
 
@@ -449,6 +451,8 @@ def _store(results, key, result):
         results.filter_effect = result
     elif key == BASELINES:
         results.baselines = result
+    elif key == OBJECTS:
+        results.objects = result
     else:
         results.experiments[int(key)] = result
 
@@ -563,7 +567,9 @@ def _title(key):
     return {
         FILTER: "filter evaluation (Tables I and II)",
         FILTER_EFFECT: "the filter's effect on clustering",
-        BASELINES: "scikit-learn baselines (DBSCAN, HDBSCAN per 0.25 s window and per sequence)",
+        BASELINES: "scikit-learn baselines (DBSCAN, HDBSCAN per 0.25 s window and per sequence; DBSCAN over a "
+        "sliding past window)",
+        OBJECTS: "the object experiment (the framework's stages tuned for PQ)",
     }[key]
 
 

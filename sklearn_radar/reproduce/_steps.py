@@ -44,6 +44,8 @@ from ..experiments import (
     derived_params,
     experiment_pipeline,
     get_experiment,
+    object_pipeline,
+    object_search_space,
     paper_params,
     search_space,
 )
@@ -65,6 +67,7 @@ from ._constants import (
     FILTER,
     FILTER_EFFECT,
     FRAMES,
+    OBJECTS,
     PAPER_FILTER_SETTING,
     SOURCE_PAPER,
     SOURCE_SEARCH,
@@ -85,6 +88,8 @@ from ._results import (
     FilterWindows,
     GridTable,
     InstanceScores,
+    ObjectExperimentResult,
+    ObjectRepeat,
     RepeatResult,
     SearchRecord,
 )
@@ -536,6 +541,78 @@ def _said_baseline_ended(env):
     return lambda job, _: env.progress.search_ended(_repeat_label(job[0], job[1], env.repeats))
 
 
+# ----------------------------------------------------------------------------- the object experiment
+
+
+def run_objects(env, key, needed):
+    """The object experiment: stage 1 searched for PQ, stage 2 on it; scored on the test half offline and causally.
+
+    It is tuned for PQ whatever the run's objective: it is the framework set up for counting objects.  Every
+    repeat is one :meth:`map` job.
+    """
+    start = time.perf_counter()
+    found = env.executor.map(_ObjectRepeat(env), range(env.repeats), on_done=_said_ended(env, OBJECTS, env.repeats))
+    first = found[0].record
+    result = ObjectExperimentResult(
+        stage1_search=found[0].stage1_search,
+        search=found[0].search,
+        stage1_params=first.stage1_params,
+        params=first.params,
+        v1_test=first.v1_test,
+        n_clusters_test=first.n_clusters_test,
+        instance_test=first.instance_test,
+        causal_v1_test=first.causal_v1_test,
+        causal_instance_test=first.causal_instance_test,
+        wall_time_s=time.perf_counter() - start,
+        repeats=[f.record for f in found] if env.repeats > 1 else None,
+    )
+    offline = [f.record.instance_test.pq for f in found]
+    causal = [f.record.causal_instance_test.pq for f in found]
+    summary = f"    objects: test PQ {_mean_sd(offline)} offline, {_mean_sd(causal)} causal"
+    return Outcome(result, summary)
+
+
+@dataclass(frozen=True)
+class _ObjectSearched:
+    record: ObjectRepeat
+    stage1_search: SearchRecord
+    search: SearchRecord
+
+
+@dataclass(frozen=True)
+class _ObjectRepeat:
+    """``job(executor, k)``: repeat ``k`` of the object experiment, its two searches with the seed ``seed + k``."""
+
+    env: RunEnv
+
+    def __call__(self, executor, k):
+        env = dataclasses.replace(self.env.on(executor), objective="pq")
+        label, seed = _repeat_label(OBJECTS, k, env.repeats), env.seed + k
+        stage1, stage1_search = tune(
+            env, OBJECTS, object_pipeline(1), object_search_space(1), f"{label} stage 1", seed=seed
+        )
+        pipeline = object_pipeline(2, stage1_params=stage1, memory=env.cache)
+        params, search = tune(env, OBJECTS, pipeline, object_search_space(2), f"{label} stage 2", seed=seed)
+        offline = score_on_test(env, pipeline.set_params(**params))
+        causal = score_on_test(env, object_pipeline(2, stage1_params=stage1, params=params, causal=True))
+        record = ObjectRepeat(
+            seed=seed,
+            stage1_params=stage1,
+            params=params,
+            v1_test=offline.v1,
+            n_clusters_test=offline.n_clusters,
+            instance_test=offline.instance,
+            causal_v1_test=causal.v1,
+            causal_instance_test=causal.instance,
+        )
+        return _ObjectSearched(record, stage1_search, search)
+
+
+def _mean_sd(values):
+    values = np.asarray(values, dtype=np.float64)
+    return f"{values[0]:.3f}" if len(values) == 1 else f"{values.mean():.3f} +- {values.std(ddof=1):.3f}"
+
+
 # ----------------------------------------------------------------------------- scoring and searching
 
 
@@ -713,10 +790,11 @@ def _experiment_step(number):
 
 #: Every step by key, in run order: its function, the steps whose results it reads, its kind of work.
 #: #10 and #11 (#8's setting transferred), stage 2 (#12, #13: merging #8's clusters) and the filter's effect (at
-#: #8's setting) need #8; every other step needs none.
+#: #8's setting) need #8; every other step needs none (the object experiment tunes its own stage 1).
 STEPS = {
     FILTER: Step(run_filter, kind=FILTER),
     **{key: _experiment_step(int(key)) for key in ALL_EXPERIMENTS if key.isdigit()},
+    OBJECTS: Step(run_objects, kind="stage 2"),
     FILTER_EFFECT: Step(run_filter_effect, (str(BEST_STAGE1),), kind=FILTER_EFFECT),
     BASELINES: Step(run_baselines, kind=BASELINES),
 }
@@ -727,6 +805,8 @@ def units(key, budget, repeats):
     experiment = get_experiment(int(key)) if key.isdigit() else None
     if key == BASELINES:
         return len(SKLEARN_BASELINES) * repeats * (budget.n_iter + 2)
+    if key == OBJECTS:  # two searches, two scorings of the test half
+        return repeats * (2 * budget.n_iter + 2)
     if experiment is not None and experiment.tuned:
         return repeats * (budget.n_iter + 2)
     if experiment is not None and experiment.derived_from is not None:

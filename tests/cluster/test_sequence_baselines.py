@@ -209,3 +209,13 @@ def test_sliding_dbscan_ids_persist_across_scans():
     X = pd.DataFrame({"x": rng.normal(0, 0.2, len(t)), "y": rng.normal(0, 0.2, len(t)), "v_r": 3.0, "t": t})
     labels = SlidingDBSCAN(eps=1.0, min_samples=3, window=0.2).fit(X).labels_
     assert np.all(labels == 0)
+
+
+def test_hdbscan_with_more_min_samples_than_rows_finds_noise_not_an_error():
+    # scikit-learn's HDBSCAN raises when min_samples exceeds the rows; a sequence that small has no cluster.
+    X = _data(7, n=60)
+    labels = SequenceHDBSCAN(min_cluster_size=3, min_samples=40, vr_min=-np.inf).fit(X).labels_
+    assert labels.shape == (len(X),) and np.all(labels == -1)
+    big = pd.concat([X.assign(sequence=1), _data(8, n=400).assign(sequence=2)], ignore_index=True)
+    labels = SequenceHDBSCAN(min_cluster_size=3, min_samples=40, vr_min=-np.inf).fit(big).labels_
+    assert np.all(labels[:60] == -1)

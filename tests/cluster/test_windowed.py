@@ -60,3 +60,18 @@ def test_removed_rows_are_noise():
     for model in (WindowedDBSCAN(eps=2.0), WindowedHDBSCAN()):
         labels = model.fit(X).labels_
         assert (labels[~X["keep"].to_numpy()] == -1).all()
+
+
+def test_windows_with_fewer_rows_than_min_samples_are_noise_not_an_error():
+    # Scikit-learn's HDBSCAN raises when min_samples exceeds the rows: such a window has no cluster.
+    X = _data(3, n=500)
+    X = X[(X["sequence"] == 2) | (np.arange(len(X)) % 8 == 0)].reset_index(drop=True)  # sequence 1 sparse
+    labels = WindowedHDBSCAN(min_cluster_size=3, min_samples=30).fit(X).labels_
+    counts = X.groupby(_windows(X))["t"].transform("size").to_numpy()
+    assert (counts < 30).any() and (counts >= 30).any()
+    assert np.all(labels[counts < 30] == -1)
+    for _, rows in X.groupby(_windows(X)).indices.items():
+        if len(rows) >= 30:  # the others as scikit-learn finds them
+            features = np.c_[X["x"].to_numpy()[rows], X["y"].to_numpy()[rows], X["v_r"].to_numpy()[rows]]
+            reference = HDBSCAN(min_cluster_size=3, min_samples=30, copy=True).fit_predict(features)
+            assert _same_partition(labels[rows], reference)

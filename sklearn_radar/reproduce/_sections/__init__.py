@@ -17,6 +17,7 @@ from . import (
     _filter_effect,
     _header,
     _instance,
+    _objects,
     _stage1,
     _stage2,
     _summary,
@@ -34,6 +35,7 @@ SECTIONS: tuple[Section, ...] = (
     _filter_effect.SECTION,
     _baselines.SECTION,
     _instance.SECTION,
+    _objects.SECTION,
     _figures.SECTION,
     _comparison.SECTION,
 )

@@ -1,0 +1,81 @@
+"""The object experiment in 'sklearn-radar reproduce': its searches, its saved setting rescored, its report section."""
+
+import contextlib
+import io
+import json
+
+import numpy as np
+import pytest
+
+from sklearn_radar._cli import main
+from sklearn_radar.reproduce._results import RunResults
+from sklearn_radar.reproduce._sections._objects import verdict
+
+
+@pytest.fixture(scope="module")
+def objects_report(tiny_folder, tmp_path_factory):
+    out = tmp_path_factory.mktemp("objects") / "out"
+    args = ["reproduce", "--data", str(tiny_folder), "--out", str(out), "--n-iter", "2", "--repeats", "2"]
+    with contextlib.redirect_stdout(io.StringIO()):
+        assert main([*args, "--experiments", "objects"]) == 0
+    return out
+
+
+def _rescored_pq(folder, results, record, causal):
+    """Test PQ of a saved object setting, computed apart from the reproduce code (pipeline, data, metric)."""
+    from sklearn_radar.datasets import load_radarscenes
+    from sklearn_radar.experiments import object_pipeline
+    from sklearn_radar.metrics import panoptic_quality, precluster_target
+
+    test_sequences = results["meta"]["data"]["test_sequences"]
+    scenes = load_radarscenes(folder)
+    test = np.flatnonzero(np.isin(scenes.groups, test_sequences))
+    target = precluster_target(scenes.data, scenes.target)[test]
+    pipeline = object_pipeline(2, stage1_params=record["stage1_params"], params=record["params"], causal=causal)
+    X = scenes.data.iloc[test]
+    labels = pipeline.fit_predict(X)
+    times = X["timestamp"].to_numpy(dtype=np.float64) * 1e-6
+    return panoptic_quality(target, labels, times=times, groups=scenes.groups[test]).pq
+
+
+def test_both_repeats_search_both_stages_and_the_saved_settings_rescore(objects_report, tiny_folder):
+    results = json.loads((objects_report / "results.json").read_text())
+    objects = results["objects"]
+    assert len(objects["repeats"]) == 2 and [r["seed"] for r in objects["repeats"]] == [0, 1]
+    assert len(objects["stage1_search"]["convergence"]) == 2 and len(objects["search"]["convergence"]) == 2
+    assert set(objects["stage1_params"]) == {
+        "filter__vr_threshold", "cluster__eps_xyv", "cluster__vr_scale", "cluster__min_samples",
+    }
+    assert {key.split("__")[0] for key in objects["params"]} == {"merge"}
+    for record in objects["repeats"]:
+        for causal, key in ((False, "instance_test"), (True, "causal_instance_test")):
+            pq = _rescored_pq(tiny_folder, results, record, causal)
+            assert record[key]["pq"] == pytest.approx(pq, abs=1e-9)
+    assert objects["instance_test"] == objects["repeats"][0]["instance_test"]
+
+
+def test_results_read_back_as_written(objects_report):
+    path = objects_report / "results.json"
+    document = json.loads(path.read_text())
+    assert RunResults.read(path).to_json_dict() == document
+
+
+def test_report_section_gives_offline_and_causal_scores(objects_report):
+    report = (objects_report / "report.md").read_text()
+    assert "## Beyond the paper: the framework set up for objects" in report
+    results = json.loads((objects_report / "results.json").read_text())
+    pq = [r["instance_test"]["pq"] for r in results["objects"]["repeats"]]
+    assert f"| object experiment | past and future | {np.mean(pq):.3f} +- {np.std(pq, ddof=1):.3f} |" in report
+    assert "| object experiment, causal | the past |" in report
+    assert "The baselines did not run" in report
+
+
+def test_verdict_needs_repeats_and_a_difference_beyond_two_standard_errors():
+    # One run: a difference is quoted, never judged.
+    assert "cannot tell" in verdict([0.60], [0.50], "B")
+    # Paired differences 0.10, 0.12, 0.08: mean 0.10, sd 0.02, se 0.0115; 0.10 > 2 x 0.0115.
+    said = verdict([0.60, 0.62, 0.58], [0.50, 0.50, 0.50], "B")
+    assert said.startswith("PQ +0.100 +- 0.012") and said.endswith("higher.")
+    # Differences +0.05, -0.03, +0.01: mean 0.01, se 0.023: within the noise.
+    assert "not different beyond the noise" in verdict([0.55, 0.47, 0.51], [0.50, 0.50, 0.50], "B")
+    assert verdict([0.40, 0.41], [0.50, 0.50], "B").endswith("lower.")
