@@ -50,7 +50,7 @@ from sklearn_radar import ClusterMerger, DopplerDensityFilter, FrameTransform, R
 from sklearn_radar._skopt import Integer, Real
 from sklearn_radar.cluster import SequenceDBSCAN, SequenceHDBSCAN, SlidingDBSCAN
 from sklearn_radar.datasets import make_scenes
-from sklearn_radar.experiments import object_pipeline, object_search_space
+from sklearn_radar.experiments import SKLEARN_BASELINES, SLIDING_BASELINE, object_pipeline, object_search_space
 from sklearn_radar.metrics import precluster_target
 from sklearn_radar.metrics._parts import combine_parts, sequence_parts
 from sklearn_radar.model_selection import sequence_train_test_split
@@ -94,6 +94,7 @@ DATA_SETS = {
     "easy": ("easy", None),
     "long-lived": ("realistic", {"traffic": 0.0, "occlusion": 0.0, "object_detection_probability": 0.8}),
 }
+
 
 @dataclass
 class Variant:
@@ -154,20 +155,7 @@ def variants():
         "merge__eps_t2": Real(0.1, 1.0, name="merge__eps_t2"),
         "merge__min_samples": Integer(1, 3, name="merge__min_samples"),
     }
-    sequence_dbscan = {
-        "cluster__eps": Real(0.2, 10.0, prior="log-uniform", name="cluster__eps"),
-        "cluster__min_samples": Integer(2, 40, prior="log-uniform", name="cluster__min_samples"),
-        "cluster__vr_scale": Real(0.05, 50.0, prior="log-uniform", name="cluster__vr_scale"),
-        "cluster__t_scale": Real(0.1, 100.0, prior="log-uniform", name="cluster__t_scale"),
-        "cluster__vr_min": Real(0.0, 3.0, name="cluster__vr_min"),
-    }
-    sequence_hdbscan = {
-        "cluster__min_cluster_size": Integer(2, 120, prior="log-uniform", name="cluster__min_cluster_size"),
-        "cluster__min_samples": Integer(1, 40, prior="log-uniform", name="cluster__min_samples"),
-        "cluster__vr_scale": Real(0.05, 50.0, prior="log-uniform", name="cluster__vr_scale"),
-        "cluster__t_scale": Real(0.1, 100.0, prior="log-uniform", name="cluster__t_scale"),
-        "cluster__vr_min": Real(0.1, 3.0, name="cluster__vr_min"),
-    }
+    sequence_dbscan, sequence_hdbscan, sliding = (SKLEARN_BASELINES[name][1] for name in _BASELINE_NAMES)
     vr_gate = Real(0.0, 1.5, name="cluster__cluster_vr_min")
     return [
         Variant("F0", _stage0(), _cluster(), f0),
@@ -217,13 +205,17 @@ def variants():
         *_object_variants("objects causal", causal=True),
         Variant("SequenceDBSCAN", _stage0(), Pipeline([("cluster", SequenceDBSCAN())]), sequence_dbscan),
         Variant("SequenceHDBSCAN", _stage0(), Pipeline([("cluster", SequenceHDBSCAN())]), sequence_hdbscan),
-        Variant(
-            "SlidingDBSCAN",
-            _stage0(causal=True),
-            Pipeline([("cluster", SlidingDBSCAN())]),
-            {**sequence_dbscan, "cluster__window": Real(0.1, 2.0, prior="log-uniform", name="cluster__window")},
-        ),
+        Variant("SlidingDBSCAN", _stage0(causal=True), Pipeline([("cluster", SlidingDBSCAN())]), sliding),
     ]
+
+
+#: The baselines' search spaces are reproduce's (``experiments.SKLEARN_BASELINES``), widened until no tuned setting
+#: stopped at a bound: per-sequence DBSCAN, per-sequence HDBSCAN, DBSCAN over a sliding past window.
+_BASELINE_NAMES = (
+    "sklearn DBSCAN per sequence (x, y, v_r, t) with Doppler gate",
+    "sklearn HDBSCAN per sequence (x, y, v_r, t) with Doppler gate",
+    SLIDING_BASELINE,
+)
 
 
 def _object_variants(name, causal):

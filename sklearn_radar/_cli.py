@@ -61,6 +61,11 @@ def _silence_stdout():
         pass
 
 
+def _named(experiment):
+    """``#13`` for a paper experiment, ``'objects'`` for the object experiment."""
+    return f"#{experiment}" if isinstance(experiment, int) else repr(experiment)
+
+
 def _shown(path):
     """A path as text that can be printed and written as UTF-8: undecodable bytes appear as ``\\xff``."""
     return os.fsencode(path).decode("utf-8", "backslashreplace")
@@ -131,7 +136,7 @@ def _parser():
         reproduce, "--n-jobs", _n_jobs, help="candidates evaluated in parallel (default: one at a time; -1: all cores)"
     )
     reproduce.add_argument(
-        "--experiments", help="comma-separated: filter, 1-13 (ranges like 2-9), filter-effect, baselines"
+        "--experiments", help="comma-separated: filter, 1-13 (ranges like 2-9), objects, filter-effect, baselines"
     )
     reproduce.add_argument(
         "--full", action="store_true", help="the paper's budget (100 iterations, 30 random) on ~1M detections"
@@ -181,7 +186,7 @@ def _parser():
         required=True,
         help="predictions file to write (JSON); an existing file is replaced only if it is such a predictions file",
     )
-    _add_checked(cluster, "--experiment", _at_least(1), help="which saved experiment (default: the best)")
+    _add_checked(cluster, "--experiment", _saved_experiment, help=_SAVED_EXPERIMENT_HELP)
     _add_cluster_flags(cluster)
 
     stream = commands.add_parser(
@@ -200,7 +205,7 @@ def _parser():
         ("--objects", False, f"object list to write (CSV, one row per live object per scan); {replaced_only} a list"),
     ):
         stream.add_argument(flag, required=required, help=text)
-    _add_checked(stream, "--experiment", _at_least(1), help="which saved experiment (default: the best)")
+    _add_checked(stream, "--experiment", _saved_experiment, help=_SAVED_EXPERIMENT_HELP)
     return parser
 
 
@@ -242,6 +247,20 @@ def _at_least(low):
         return _whole(text, flag, low, None)
 
     return check
+
+
+#: What ``--experiment`` of ``cluster`` and ``stream`` takes.
+_SAVED_EXPERIMENT_HELP = "which saved experiment: a number 1-13 or 'objects' (default: the best)"
+
+
+def _saved_experiment(text, flag):
+    """An experiment number >= 1, or the object experiment's key (the CLI imports no experiment module)."""
+    if text == "objects":
+        return text
+    try:
+        return _whole(text, flag, 1, None)
+    except ValueError:
+        raise ValueError(f"{flag} must be a whole number >= 1 or 'objects', got {text!r}") from None
 
 
 def _seed(text, flag):
@@ -354,7 +373,7 @@ def _cluster(args) -> int:
     summary = cluster_radarscenes(
         args.data, args.params, args.out, experiment=args.experiment, scheduler=args.scheduler, workers=args.workers
     )
-    print(f"applied experiment #{summary['experiment']} of {_shown(args.params)}: {_setting(summary['params'])}")
+    print(f"applied experiment {_named(summary['experiment'])} of {_shown(args.params)}: {_setting(summary['params'])}")
     if summary["stage1_params"] is not None:
         print(f"  with stage 1: {_setting(summary['stage1_params'])}")
     print(f"{summary['n_detections']} detections in {summary['n_clusters']} clusters; wrote {_shown(summary['out'])}")
@@ -367,7 +386,8 @@ def _stream(args) -> int:
     from .online._replay import stream_radarscenes
 
     summary = stream_radarscenes(args.data, args.params, args.out, objects=args.objects, experiment=args.experiment)
-    print(f"streamed experiment #{summary['experiment']} of {_shown(args.params)}: {_setting(summary['params'])}")
+    applied = f"{_named(summary['experiment'])} of {_shown(args.params)}: {_setting(summary['params'])}"
+    print(f"streamed experiment {applied}")
     print(
         f"{summary['n_detections']} detections in {summary['n_scans']} scans, {summary['n_objects']} objects "
         f"({summary['n_aliases']} merges made aliases)"

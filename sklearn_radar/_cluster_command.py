@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import json
 import os
 from numbers import Integral
@@ -9,20 +10,20 @@ from pathlib import Path
 
 import numpy as np
 from sklearn.base import BaseEstimator, clone
-from sklearn.utils._param_validation import Interval, validate_params
+from sklearn.utils._param_validation import Interval, StrOptions, validate_params
 
 from ._executor import connect_executor
 from ._schema import LABELS, STATIC_LABEL
 from .datasets import load_radarscenes
 from .datasets._radarscenes import _read_sensors_json, _read_sequences_json, _resolve_data_dir
-from .experiments import experiment_pipeline, get_experiment
+from .experiments import OBJECT_EXPERIMENT, experiment_pipeline, get_experiment, object_pipeline
 from .reproduce._io import atomic_write
 
 #: Our two "classes" in the devkit's per-point prediction file: clustered or noise.
 CLASS_NAMES = {0: "NOISE", 1: "CLUSTERED"}
 
 
-_EXPERIMENT = [Interval(Integral, 1, None, closed="left"), None]
+_EXPERIMENT = [Interval(Integral, 1, None, closed="left"), StrOptions({OBJECT_EXPERIMENT}), None]
 
 
 @validate_params({"path": [str, os.PathLike], "experiment": _EXPERIMENT}, prefer_skip_nested_validation=True)
@@ -33,8 +34,9 @@ def load_params(path, experiment=None):
     ----------
     path : str or path-like
         ``params.json`` written by ``sklearn-radar reproduce``.
-    experiment : int, default=None
-        Experiment number; None: the run's best (highest test V1).
+    experiment : int or "objects", default=None
+        Experiment number, or the object experiment; None: the run's best (highest test score of its
+        objective).
 
     Returns
     -------
@@ -92,16 +94,22 @@ def _checked_setting(saved, path, experiment):
         if key not in setting:
             raise bad(where, f"lacks the key {key!r}")
     number = setting["experiment"]
-    if isinstance(number, bool) or not isinstance(number, int) or str(number) != chosen:
-        raise bad(f"the key 'experiment' of {where}", f"must be the number {chosen}, got {number!r}")
-    try:
-        get_experiment(number)
-    except ValueError:
-        raise bad(f"the key 'experiment' of {where}", f"must be one of the paper's experiments, got {number}") from None
+    if chosen == OBJECT_EXPERIMENT:
+        if number != OBJECT_EXPERIMENT:
+            raise bad(f"the key 'experiment' of {where}", f"must be {OBJECT_EXPERIMENT!r}, got {number!r}")
+        stage = 2  # the object experiment merges its own stage 1
+    else:
+        if isinstance(number, bool) or not isinstance(number, int) or str(number) != chosen:
+            raise bad(f"the key 'experiment' of {where}", f"must be the number {chosen}, got {number!r}")
+        try:
+            stage = get_experiment(number).stage
+        except ValueError:
+            problem = f"must be one of the paper's experiments, got {number}"
+            raise bad(f"the key 'experiment' of {where}", problem) from None
     if not isinstance(setting["params"], dict):
         got = _json_type(setting["params"])
         raise bad(f"the key 'params' of {where}", f"must be an object of parameters, got {got}")
-    _check_stage1_params(setting.get("stage1_params", _ABSENT), get_experiment(number).stage, f"{path}: {where}")
+    _check_stage1_params(setting.get("stage1_params", _ABSENT), stage, f"{path}: {where}")
     return setting
 
 
@@ -163,8 +171,8 @@ def cluster_radarscenes(data, params, out, experiment=None, *, scheduler=None, w
         ``params.json`` written by ``sklearn-radar reproduce``.
     out : str or path-like
         Predictions file to write.
-    experiment : int, default=None
-        Which saved experiment; None: the best.
+    experiment : int or "objects", default=None
+        Which saved experiment (a number, or the object experiment); None: the best.
     scheduler : str, default=None
         Address of a running dask scheduler: the sequences are loaded and
         clustered on its workers (which must see ``data`` at the same
@@ -272,21 +280,26 @@ def setting_pipeline(setting, path):
     """The pipeline of a checked setting; ValueError names the file and the parameter it cannot set."""
     number = setting["experiment"]
     where = f"{path}: experiments['{number}']"
+    named = f"#{number}" if number != OBJECT_EXPERIMENT else repr(number)
     params = {k: v for k, v in setting["params"].items() if k.split("__")[0] in ("cluster", "merge", "filter")}
-    stage1_params = setting.get("stage1_params") if get_experiment(number).stage == 2 else None
-    known = experiment_pipeline(number).get_params()
+    if number == OBJECT_EXPERIMENT:
+        build = functools.partial(object_pipeline, 2, stage1_params=setting["stage1_params"])
+    else:
+        stage1_params = setting.get("stage1_params") if get_experiment(number).stage == 2 else None
+        build = functools.partial(experiment_pipeline, number, stage1_params=stage1_params)
+    known = build().get_params()
     unknown = sorted(key for key in params if key not in known)
     if unknown:
-        raise ValueError(f"{where}: key 'params' holds parameters that experiment #{number} does not have: {unknown}")
+        raise ValueError(f"{where}: key 'params' holds parameters that experiment {named} does not have: {unknown}")
     try:
-        pipeline = experiment_pipeline(number, params=params, stage1_params=stage1_params)
+        pipeline = build(params=params)
         # Check every value now, before the data are loaded, rather than when the pipeline is fitted.
         for estimator in [pipeline, *pipeline.get_params(deep=True).values()]:
             if isinstance(estimator, BaseEstimator) and hasattr(estimator, "_validate_params"):
                 estimator._validate_params()
     except (ValueError, TypeError) as error:
         first_line = str(error).splitlines()[0] if str(error) else type(error).__name__
-        raise ValueError(f"{where}: cannot build experiment #{number}'s pipeline: {first_line}") from None
+        raise ValueError(f"{where}: cannot build experiment {named}'s pipeline: {first_line}") from None
     return pipeline
 
 

@@ -21,9 +21,9 @@ _BY_DESIGN_NOISE = (
     "The same check passes with vr_min=-inf (second RadarDBSCAN instance)."
 )
 _SEQUENCE_GATE_NOISE = (
-    "The per-sequence and sliding-window baselines' default Doppler gate vr_min = 0.4 m/s (as the paper's expert) makes every "
-    "detection with |v_r| <= 0.4 m/s noise; the check's blobs have no Doppler column (v_r = 0), so every point "
-    "is noise by design. The same check passes with vr_min=-inf (second instance of each)."
+    "The per-sequence and sliding-window baselines' default Doppler gate vr_min = 0.4 m/s (as the paper's "
+    "expert) makes every detection with |v_r| <= 0.4 m/s noise; the check's blobs have no Doppler column "
+    "(v_r = 0), so every point is noise by design. The same check passes with vr_min=-inf (second instance of each)."
 )
 _NEEDS_GROUPS = (
     "SequenceSearchCV.fit needs groups (the sequence of each detection: its folds are whole sequences, as "

@@ -188,6 +188,7 @@ FIT = {
     "sklearn_radar.cluster.WindowedHDBSCAN": lambda klass: klass().fit(_detections()[1]),
     "sklearn_radar.cluster.SequenceDBSCAN": lambda klass: klass().fit(_detections()[1]),
     "sklearn_radar.cluster.SequenceHDBSCAN": lambda klass: klass().fit(_detections()[1]),
+    "sklearn_radar.cluster.SlidingDBSCAN": lambda klass: klass().fit(_detections()[1]),
     "sklearn_radar.model_selection.ProgressBayesSearchCV": _fit_progress_bayes_search,
     "sklearn_radar.model_selection.SequenceSearchCV": _fit_sequence_search,
 }

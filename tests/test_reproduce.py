@@ -42,7 +42,16 @@ def test_reproduce_writes_report_results_params_and_figures(tiny_report):
     assert not [n for n in names if n.endswith(".tmp")]
     results = json.loads((tiny_report / "results.json").read_text())
     assert results["meta"]["completed"] == [
-        "filter", "1", "2", "8", "10", "11", "13", "objects", "filter-effect", "baselines",
+        "filter",
+        "1",
+        "2",
+        "8",
+        "10",
+        "11",
+        "13",
+        "objects",
+        "filter-effect",
+        "baselines",
     ]
     assert list(results["experiments"]) == ["1", "2", "8", "10", "11", "13"]
     assert len(results["experiments"]["2"]["convergence"]) == 2

@@ -10,7 +10,7 @@ clusterers the run compares with, on #3's input; :func:`object_pipeline` and
 set up for panoptic quality, from the object-level ablation).
 """
 
-from ._baselines import BASELINE_INPUT, SKLEARN_BASELINES, baseline_pipeline
+from ._baselines import BASELINE_INPUT, SKLEARN_BASELINES, SLIDING_BASELINE, baseline_pipeline
 from ._objects import GATE_RULE, OBJECT_EXPERIMENT, object_pipeline, object_search_space
 from ._paper import (
     PAPER_EXPERIMENTS,
@@ -31,6 +31,7 @@ __all__ = [
     "PAPER_EXPERIMENTS",
     "PIPELINE_COLUMNS",
     "SKLEARN_BASELINES",
+    "SLIDING_BASELINE",
     "PaperExperiment",
     "baseline_pipeline",
     "derived_params",

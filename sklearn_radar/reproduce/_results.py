@@ -51,6 +51,7 @@ from dataclasses import MISSING, dataclass, field, fields, is_dataclass
 from pathlib import Path
 from typing import Any, NamedTuple
 
+from ..experiments import OBJECT_EXPERIMENT
 from ._constants import PAPER_N_ITER
 
 _RECORD = {"slots": True, "kw_only": True}
@@ -1099,7 +1100,8 @@ class RunResults(_JsonRecord):
         document : dict or None
             ``{"best": key, "objective": ..., "experiments": {key: {"experiment",
             "v1_test", ["pq_test",] "params", "stage1_params"}}}``; ``best`` is the
-            first experiment with the highest test score of the run's objective.
+            first experiment with the highest test score of the run's objective.  The object experiment, when
+            it ran, is the key ``"objects"`` (with ``causal_pq_test`` besides).
         """
         experiments = {}
         for number, result in self.experiments.items():
@@ -1108,6 +1110,15 @@ class RunResults(_JsonRecord):
                 entry["pq_test"] = result.instance_test.pq
             entry.update(params=result.params, stage1_params=result.stage1_params)
             experiments[str(number)] = entry
+        if self.objects is not None:
+            experiments[OBJECT_EXPERIMENT] = {
+                "experiment": OBJECT_EXPERIMENT,
+                "v1_test": self.objects.v1_test,
+                "pq_test": self.objects.instance_test.pq,
+                "causal_pq_test": self.objects.causal_instance_test.pq,
+                "params": self.objects.params,
+                "stage1_params": self.objects.stage1_params,
+            }
         if not experiments:
             return None
         score = "pq_test" if self.meta.objective == "pq" else "v1_test"

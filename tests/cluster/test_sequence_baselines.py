@@ -4,10 +4,9 @@ sliding-window one equals scikit-learn on each scan's past window, with ids hand
 import numpy as np
 import pandas as pd
 import pytest
-from sklearn.cluster import DBSCAN, HDBSCAN
-
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from sklearn.cluster import DBSCAN, HDBSCAN
 
 from sklearn_radar.cluster import SequenceDBSCAN, SequenceHDBSCAN, SlidingDBSCAN
 
@@ -170,9 +169,7 @@ def _slow_sliding(X, eps, min_samples, vr_scale, t_scale, vr_min, window):
     return labels
 
 
-@pytest.mark.parametrize(
-    ("eps", "min_samples", "window"), [(1.5, 3, 0.3), (1.0, 2, 0.12), (2.5, 5, 1.0)]
-)
+@pytest.mark.parametrize(("eps", "min_samples", "window"), [(1.5, 3, 0.3), (1.0, 2, 0.12), (2.5, 5, 1.0)])
 def test_sliding_dbscan_equals_the_rule_written_out(eps, min_samples, window):
     X = _scanned(sequences=(1, 2))
     params = dict(eps=eps, min_samples=min_samples, vr_scale=2.0, t_scale=3.0, vr_min=0.3, window=window)

@@ -22,8 +22,13 @@ def test_the_gate_removes_every_slow_detection_and_the_isolated_ones(scenes):
     speed = np.abs(framed["v_r"].to_numpy())
     # Eq. 1 by hand: no neighbour within 1.4 m and 0.15 s (the filter's defaults), or |v_r| < 0.6 m/s.
     n = neighbor_counts(
-        framed["x"].to_numpy(), framed["y"].to_numpy(), framed["t"].to_numpy(), framed["sequence"].to_numpy(),
-        d_xy=DopplerDensityFilter().d_xy, dt=DopplerDensityFilter().dt, cap=1,
+        framed["x"].to_numpy(),
+        framed["y"].to_numpy(),
+        framed["t"].to_numpy(),
+        framed["sequence"].to_numpy(),
+        d_xy=DopplerDensityFilter().d_xy,
+        dt=DopplerDensityFilter().dt,
+        cap=1,
     )
     np.testing.assert_array_equal(kept, (speed >= 0.6) & (n >= 1))
     assert 0 < kept.mean() < 1

@@ -77,11 +77,7 @@ def verdict(ours, theirs, name):
 
 def _best_baselines(results: RunResults):
     """(name, result) of the offline and of the causal baseline with the highest mean test PQ, or None each."""
-    scored = {
-        name: result
-        for name, result in (results.baselines or {}).items()
-        if result.instance_test is not None
-    }
+    scored = {name: result for name, result in (results.baselines or {}).items() if result.instance_test is not None}
     best = {}
     for causal in (False, True):
         named = [(name, r) for name, r in scored.items() if (CAUSAL_MARK in name) == causal]
