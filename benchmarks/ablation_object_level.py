@@ -26,7 +26,8 @@ Run (the issue's scale: 5 seeds, both presets, 6 x 20 s; about an hour on 2 idle
 
     python benchmarks/ablation_object_level.py --seeds 0 1 2 3 4 --n-iter 40
 
-``--variants`` picks a subset, ``--quick`` runs a small smoke configuration.  The table gives, per preset,
+``--variants`` picks a subset, ``--quick`` runs a small smoke configuration, ``--from-logs`` prints the tables from
+the output of earlier runs (for example of seeds run in parallel processes).  The table gives, per preset,
 each variant's mean test PQ and V1 over the seeds with the standard error, and its mean paired PQ
 difference to F0 and to the best per-sequence baseline with the standard error of that difference.
 
@@ -37,7 +38,10 @@ task per training sequence); its public form is :class:`~sklearn_radar.model_sel
 from __future__ import annotations
 
 import argparse
+import ast
+import json
 import math
+import re
 import sys
 import time
 from dataclasses import dataclass, field
@@ -306,10 +310,39 @@ def run_one(preset, seed, chosen, options):
         print(
             f"  {preset} seed {seed} {variant.name:<26} test PQ {record['pq']:.3f} V1 {record['v1']:.3f} "
             f"(cv PQ {record['cv_pq']:.3f}, {record['seconds']:.0f} s)"
-            + (f" @bound {record['bounds']}" if record["bounds"] else ""),
+            + (f" @bound {record['bounds']}" if record["bounds"] else "")
+            + f" params {json.dumps(record['params'])}",
             flush=True,
         )
     return found
+
+
+_LINE = re.compile(
+    r"^  (?P<preset>\S+) seed (?P<seed>\d+) (?P<name>.+?)\s+test PQ (?P<pq>[\d.]+) V1 (?P<v1>[\d.]+) "
+    r"\(cv PQ (?P<cv>[\d.]+), \d+ s\)(?: @bound (?P<bounds>\[.*?\]))?(?: params (?P<params>\{.*\}))?$"
+)
+
+
+def read_logs(paths):
+    """``{preset: {seed: {variant: record}}}`` from the per-variant lines of earlier runs' output (``--from-logs``).
+
+    Runs of the same seed split over several processes combine; the settings are those printed in the lines.
+    """
+    runs = {}
+    for path in paths:
+        for line in open(path, encoding="utf-8"):
+            match = _LINE.match(line.rstrip("\n"))
+            if match is None:
+                continue
+            record = {
+                "pq": float(match["pq"]),
+                "v1": float(match["v1"]),
+                "cv_pq": float(match["cv"]),
+                "bounds": ast.literal_eval(match["bounds"]) if match["bounds"] else [],
+                "params": json.loads(match["params"]) if match["params"] else {},
+            }
+            runs.setdefault(match["preset"], {}).setdefault(int(match["seed"]), {})[match["name"]] = record
+    return runs
 
 
 def _rows_per_sequence(groups, rows):
@@ -378,7 +411,15 @@ def main(argv=None):
     parser.add_argument("--cv-folds", type=int, default=3)
     parser.add_argument("--variants", nargs="+", help="subset of the variants (F0 and the baselines are added)")
     parser.add_argument("--quick", action="store_true", help="1 seed, 1 preset, 4 x 10 s, 6 iterations")
+    parser.add_argument(
+        "--from-logs", nargs="+", metavar="FILE", help="print the tables of earlier runs' output (seeds complete in all)"
+    )
     options = parser.parse_args(argv)
+    if options.from_logs:
+        for preset, by_seed in read_logs(options.from_logs).items():
+            names = [v.name for v in variants() if all(v.name in run for run in by_seed.values())]
+            print(_table(preset, [by_seed[seed] for seed in sorted(by_seed)], names))
+        return 0
     if options.quick:
         options.seeds, options.presets = options.seeds[:1], options.presets[:1]
         options.n_sequences, options.duration, options.n_iter = 4, 10.0, 6

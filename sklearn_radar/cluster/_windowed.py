@@ -360,21 +360,18 @@ class SequenceHDBSCAN(_SequenceClusterer):
             With ``labels_``.
         """
         features, active, sequences, _ = self._features(X, reset=True)
-        labels = np.full(len(features), -1, dtype=np.int64)
-        offset = 0
-        for rows in sequences:
-            rows = rows[active[rows]]
+
+        def label(rows):
             if len(rows) < _fewest_hdbscan_rows(self.min_cluster_size, self.min_samples):
-                continue
-            found = HDBSCAN(
+                return np.full(len(rows), -1, dtype=np.int64)
+            return HDBSCAN(
                 min_cluster_size=self.min_cluster_size,
                 min_samples=self.min_samples,
                 cluster_selection_epsilon=float(self.cluster_selection_epsilon),
                 copy=True,
             ).fit_predict(features[rows] - features[rows].min(axis=0))
-            labels[rows] = np.where(found >= 0, found + offset, -1)
-            offset += max(found.max() + 1, 0)
-        self.labels_ = consecutive_labels(labels)
+
+        self.labels_ = _each_sequence(label, len(features), active, sequences)
         return self
 
 
@@ -459,15 +456,26 @@ class SlidingDBSCAN(_SequenceClusterer):
             With ``labels_``.
         """
         features, active, sequences, times = self._features(X, reset=True)
-        labels = np.full(len(features), -1, dtype=np.int64)
-        offset = 0
-        for rows in sequences:
-            rows = rows[active[rows]]
-            found = _sliding_window_labels(features[rows], times[rows], self.window, self.eps, self.min_samples)
-            labels[rows] = np.where(found >= 0, found + offset, -1)
-            offset += max(found.max(initial=-1) + 1, 0)
-        self.labels_ = consecutive_labels(labels)
+
+        def label(rows):
+            return _sliding_window_labels(features[rows], times[rows], self.window, self.eps, self.min_samples)
+
+        self.labels_ = _each_sequence(label, len(features), active, sequences)
         return self
+
+
+def _each_sequence(label, n_rows, active, sequences):
+    """Labels of every row: ``label(rows)`` on each sequence's active rows, ids made unique and consecutive."""
+    labels = np.full(n_rows, -1, dtype=np.int64)
+    offset = 0
+    for rows in sequences:
+        rows = rows[active[rows]]
+        if len(rows) == 0:
+            continue
+        found = label(rows)
+        labels[rows] = np.where(found >= 0, found + offset, -1)
+        offset += max(found.max(initial=-1) + 1, 0)
+    return consecutive_labels(labels)
 
 
 def _sliding_window_labels(features, t, window, eps, min_samples):

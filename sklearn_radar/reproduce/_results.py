@@ -887,29 +887,25 @@ class ObjectExperimentResult(_JsonRecord):
     Attributes
     ----------
     stage1_search, search : SearchRecord
-        The stage-1 and the stage-2 search (their CV scores are PQ).
-    stage1_params, params : dict
-        The kept stage-1 and stage-2 settings (of the first repeat).
-    v1_test, n_clusters_test, instance_test, causal_v1_test, causal_instance_test
-        As :class:`ObjectRepeat`, of the first repeat.
+        The stage-1 and the stage-2 search of the first repeat (their CV scores are PQ).
+    kept : ObjectRepeat
+        The first repeat: its settings and scores (written among this record's keys).
     wall_time_s : float
         Searches and scoring, s.
     repeats : list of ObjectRepeat or None, default=None
-        Every repeat of a run with more than one (the first is the one the other fields hold); None for a single
-        run.
+        Every repeat of a run with more than one (the first is ``kept``); None for a single run.
     """
 
     stage1_search: SearchRecord
     search: SearchRecord
-    stage1_params: dict[str, Any]
-    params: dict[str, Any]
-    v1_test: float
-    n_clusters_test: int
-    instance_test: InstanceScores
-    causal_v1_test: float
-    causal_instance_test: InstanceScores
+    kept: ObjectRepeat = field(metadata=_WRITTEN_FLAT)
     wall_time_s: float
     repeats: list[ObjectRepeat] | None = None
+
+    @property
+    def every_repeat(self):
+        """list of ObjectRepeat : The repeats, or the one run."""
+        return self.repeats or [self.kept]
 
 
 # ----------------------------------------------------------------------------- the filter's effect
@@ -1113,11 +1109,11 @@ class RunResults(_JsonRecord):
         if self.objects is not None:
             experiments[OBJECT_EXPERIMENT] = {
                 "experiment": OBJECT_EXPERIMENT,
-                "v1_test": self.objects.v1_test,
-                "pq_test": self.objects.instance_test.pq,
-                "causal_pq_test": self.objects.causal_instance_test.pq,
-                "params": self.objects.params,
-                "stage1_params": self.objects.stage1_params,
+                "v1_test": self.objects.kept.v1_test,
+                "pq_test": self.objects.kept.instance_test.pq,
+                "causal_pq_test": self.objects.kept.causal_instance_test.pq,
+                "params": self.objects.kept.params,
+                "stage1_params": self.objects.kept.stage1_params,
             }
         if not experiments:
             return None

@@ -552,17 +552,10 @@ def run_objects(env, key, needed):
     """
     start = time.perf_counter()
     found = env.executor.map(_ObjectRepeat(env), range(env.repeats), on_done=_said_ended(env, OBJECTS, env.repeats))
-    first = found[0].record
     result = ObjectExperimentResult(
         stage1_search=found[0].stage1_search,
         search=found[0].search,
-        stage1_params=first.stage1_params,
-        params=first.params,
-        v1_test=first.v1_test,
-        n_clusters_test=first.n_clusters_test,
-        instance_test=first.instance_test,
-        causal_v1_test=first.causal_v1_test,
-        causal_instance_test=first.causal_instance_test,
+        kept=found[0].record,
         wall_time_s=time.perf_counter() - start,
         repeats=[f.record for f in found] if env.repeats > 1 else None,
     )
