@@ -411,9 +411,7 @@ def main(argv=None):
     parser.add_argument("--cv-folds", type=int, default=3)
     parser.add_argument("--variants", nargs="+", help="subset of the variants (F0 and the baselines are added)")
     parser.add_argument("--quick", action="store_true", help="1 seed, 1 preset, 4 x 10 s, 6 iterations")
-    parser.add_argument(
-        "--from-logs", nargs="+", metavar="FILE", help="print the tables of earlier runs' output"
-    )
+    parser.add_argument("--from-logs", nargs="+", metavar="FILE", help="print the tables of earlier runs' output")
     options = parser.parse_args(argv)
     if options.from_logs:
         for preset, by_seed in read_logs(options.from_logs).items():
