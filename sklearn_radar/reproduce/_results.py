@@ -709,7 +709,8 @@ class RepeatResult(_JsonRecord):
     Attributes
     ----------
     seed : int
-        Random seed of the repeat's search (the run's seed plus the repeat's index).
+        The repeat's seed (the run's seed plus the repeat's index); its search's seed is derived from it and the
+        experiment or baseline (``reproduce._steps.search_seed``).
     search : SearchRecord or None, default=None
         The repeat's search; None for #10 and #11, which take the same repeat's #8 setting.
     params : dict

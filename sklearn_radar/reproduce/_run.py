@@ -203,8 +203,11 @@ def reproduce(
     full : bool, default=False
         The paper's budget on about a million simulated detections.
     seed : int, default=0
-        Random seed of the simulated data, the split and the searches
-        (``seed + repeats - 1`` at most ``2**32 - 1``).
+        Random seed of the simulated data and the split; each search draws
+        from its own stream, derived from it and the experiment (or
+        baseline) by :func:`~._steps.search_seed`, so that searches of
+        equal spaces are independent (``seed + repeats - 1`` at most
+        ``2**32 - 1``).
     stream : file-like, default=None
         Progress output; None: standard output.  Plain lines (no carriage
         returns): first an estimate of the run's length (and of ``full``'s),
@@ -239,8 +242,9 @@ def reproduce(
         it, not on where the fits run: for the same seed and ``n_points`` a
         cluster run equals a single-process one.
     repeats : int, default=None
-        Searches per tuned experiment and per baseline, with the seeds
-        ``seed``, ``seed + 1``, ... on the same split, each repeat's kept
+        Searches per tuned experiment and per baseline, with the repeat
+        seeds ``seed``, ``seed + 1``, ... (each search's seed derived from
+        its repeat's) on the same split, each repeat's kept
         setting scored on the test half; None: 1, or 3 with ``full``.  The
         report gives test scores as mean and standard deviation over the
         repeats and checks the paper's findings by paired differences

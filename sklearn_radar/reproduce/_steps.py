@@ -10,7 +10,8 @@ Stages 0-2 never cross sequences, so every figure is combined from
 per-sequence summaries computed where each sequence lives (:mod:`._sequences`),
 and a search's candidate is one task per block of training sequences
 (:mod:`._search`).  The repeats of a search are one :meth:`map` over the
-executor (:mod:`sklearn_radar._executor`), each with the seed ``seed + k``.
+executor (:mod:`sklearn_radar._executor`); repeat ``k`` of a search has the
+seed :func:`search_seed` ``(seed + k, its experiment or baseline)``.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from __future__ import annotations
 import dataclasses
 import threading
 import time
+import zlib
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -113,7 +115,8 @@ class RunEnv:
         The training and the test sequences.
     budget : Budget
     seed : int
-        Repeat ``k`` of a search has the seed ``seed + k``.
+        The run's seed: repeat ``k`` of a search has the seed
+        :func:`search_seed` ``(seed + k, key)``.
     objective : {"v1", "pq"}
     repeats : int
     n_points : int
@@ -376,7 +379,8 @@ class _ExperimentRepeat:
         if experiment.tuned:
             space = with_cluster_gate(search_space(number), experiment.stage, env.objective)
             label = _repeat_label(f"#{number}", k, self.repeats)
-            params, search = tune(env, str(number), pipeline, space, label, paper_params(number), seed=env.seed + k)
+            seed = search_seed(env.seed + k, str(number))
+            params, search = tune(env, str(number), pipeline, space, label, paper_params(number), seed=seed)
         elif experiment.derived_from is None:  # the expert setting (#1): the paper's, as it is
             params = {}
         else:  # #10, #11: #8's setting, transferred
@@ -515,7 +519,7 @@ def run_baselines(env, key, needed):
 
 @dataclass(frozen=True)
 class _BaselineRepeat:
-    """``job(executor, (name, k))``: repeat ``k`` of baseline ``name`` (its search with the seed ``seed + k``)."""
+    """``job(executor, (name, k))``: repeat ``k`` of baseline ``name`` (its search seeded by :func:`search_seed`)."""
 
     env: RunEnv
 
@@ -525,7 +529,8 @@ class _BaselineRepeat:
         env = self.env.on(executor)
         pipeline = baseline_pipeline(name, memory=env.cache)
         space = SKLEARN_BASELINES[name][1]
-        params, search = tune(env, BASELINES, pipeline, space, _repeat_label(name, k, env.repeats), seed=env.seed + k)
+        label, seed = _repeat_label(name, k, env.repeats), search_seed(env.seed + k, name)
+        params, search = tune(env, BASELINES, pipeline, space, label, seed=seed)
         test = score_on_test(env, pipeline.set_params(**params))
         return Repeat(params, search, test, time.perf_counter() - start)
 
@@ -537,6 +542,30 @@ def _said_baseline_ended(env):
 
 
 # ----------------------------------------------------------------------------- scoring and searching
+
+
+def search_seed(run_seed, key):
+    """The random seed of the search of ``key`` (an experiment's number or a baseline's name) in repeat ``run_seed``.
+
+    Each search has its own stream, ``SeedSequence(run_seed, spawn_key=(id,))``
+    with ``id`` the experiment's number or, for a name, its CRC-32 (stable
+    across processes and Python versions, unlike ``hash``): searches with
+    equal spaces (#2-#5) no longer draw the same random candidates.
+
+    Parameters
+    ----------
+    run_seed : int
+        The run's seed plus the repeat's index.
+    key : str
+        ``"3"``, or a baseline's name.
+
+    Returns
+    -------
+    seed : int
+        In ``[0, 2**32)``.
+    """
+    stream = int(key) if key.isdigit() else zlib.crc32(key.encode("utf-8"))
+    return int(np.random.SeedSequence(run_seed, spawn_key=(stream,)).generate_state(1)[0])
 
 
 def score_on_test(env, pipeline):
@@ -734,4 +763,4 @@ def units(key, budget, repeats):
     return 1
 
 
-__all__ = ["STEPS", "Outcome", "RunEnv", "Step", "TrainingData", "data_statistics", "units"]
+__all__ = ["STEPS", "Outcome", "RunEnv", "Step", "TrainingData", "data_statistics", "search_seed", "units"]

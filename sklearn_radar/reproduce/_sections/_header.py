@@ -27,8 +27,9 @@ def markdown(results: RunResults) -> list[str]:
     ]
     if meta.repeats > 1:
         lines.append(
-            f"- repeats: every tuned experiment and baseline searched {meta.repeats} times, with the seeds "
-            f"{meta.seed}-{meta.seed + meta.repeats - 1}, on the same split; each repeat's kept setting scored on the "
+            f"- repeats: every tuned experiment and baseline searched {meta.repeats} times, with the repeat "
+            f"seeds {meta.seed}-{meta.seed + meta.repeats - 1} (each search's own seed derived from its repeat's and "
+            "its experiment), on the same split; each repeat's kept setting scored on the "
             "test half. Test scores are mean \u00b1 standard deviation over the repeats."
         )
     if meta.interrupted:
