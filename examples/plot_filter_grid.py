@@ -98,14 +98,14 @@ print(f"{grid.errors.size} settings in {grid.elapsed_s:.1f} s")
 
 fig, (left, right) = plt.subplots(1, 2, figsize=(13, 5))
 plot_filter_errors(grid.errors, ax=left)
-image = right.imshow(100 * grid.background_removed.to_numpy(), origin="lower", aspect="auto", cmap="Blues")
+image = right.imshow(100 * grid.background_removed.to_numpy(), origin="upper", aspect="auto", cmap="Blues")
 fig.colorbar(image, ax=right, label="background removed (%)")
 right.set_xticks(range(grid.errors.shape[1]), [f"{d:g}" for d in grid.errors.columns])
-right.set_yticks(range(grid.errors.shape[0]), [f"{v:g}" for v in grid.errors.index])
+right.set_yticks(range(grid.errors.shape[0]), [f"{v:.2f}" for v in grid.errors.index])
 for i in range(grid.errors.shape[0]):
     for j in range(grid.errors.shape[1]):
         right.text(j, i, f"{100 * grid.background_removed.iat[i, j]:.0f}", ha="center", va="center", fontsize=8)
-right.set(xlabel="d_xy (m)", ylabel="eta_1 = vr_threshold (m/s)", title="Background removed (%)")
+right.set(xlabel="d_xy (m)", ylabel="eta_1 (m/s)", title="Background removed (%)")
 fig.tight_layout()
 plt.show()
 
