@@ -757,3 +757,20 @@ def test_the_filters_time_saving_is_a_finding_only_beyond_the_noise_of_its_timin
     old = effect([0.03], [0.04])
     old.filtered.clustering_times_s = old.unfiltered.clustering_times_s = None  # an older version's results
     assert time_saving_text(old).startswith("The time saving cannot be measured from these results")
+
+
+def test_the_header_counts_in_the_singular_for_one(tiny_report):
+    import dataclasses
+
+    from sklearn_radar.reproduce._sections import _header
+    from sklearn_radar.reproduce._sections._base import counted
+
+    assert (counted(1, "iteration"), counted(10, "iteration"), counted(1234, "sequence")) == (
+        "1 iteration",
+        "10 iterations",
+        "1,234 sequences",
+    )
+    results = _typed(tiny_report)
+    results.meta.budget = dataclasses.replace(results.meta.budget, n_iter=1)
+    text = "\n".join(_header.markdown(results))
+    assert "1 Bayesian-optimisation iteration per tuned experiment" in text and "4 sequences" in text

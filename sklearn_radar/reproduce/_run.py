@@ -59,6 +59,7 @@ from ._io import (
 from ._progress import DATA, REPORT, RunProgress, duration, uncompiled_kernels
 from ._report import write_report
 from ._results import Budget, DataMeta, RunMeta, RunResults
+from ._sections._base import counted
 from ._sections._figures import CONVERGENCE, SCENE, V1_BARS
 from ._sections._filter import FILTER_SCENE, HEATMAP
 from ._sequences import RunSequences
@@ -351,8 +352,9 @@ def _reproduce(data, out, keys, budget, seed, repeats, stream, objective, diffic
     run.progress.finish(DATA, time.perf_counter() - started)
     _start_folder(run)
     run.say(
-        f"data: {source}, {meta.data.n_detections:,} detections in {meta.data.n_sequences} sequences; "
-        f"train {meta.data.n_train:,} / test {meta.data.n_test:,}; budget: {budget.label}, {budget.n_iter} iterations"
+        f"data: {source}, {meta.data.n_detections:,} detections in {counted(meta.data.n_sequences, 'sequence')}; "
+        f"train {meta.data.n_train:,} / test {meta.data.n_test:,}; budget: {budget.label}, "
+        f"{counted(budget.n_iter, 'iteration')}"
         + (f"; {repeats} repeats of each search (seeds {seed}-{seed + repeats - 1})" if repeats > 1 else ""),
     )
     _say_the_work(run, keys, budget, repeats)

@@ -76,6 +76,11 @@ def format_params(params):
 _SHORT = {"eps_phi": "eps_phi (rad)"}
 
 
+def counted(n, noun):
+    """``"1 iteration"``, ``"10 iterations"``: ``n`` and the noun, plural unless ``n`` is 1 (an ``s`` appended)."""
+    return f"{n:,} {noun}" + ("" if n == 1 else "s")
+
+
 def percent(value):
     """A share 0-1 as ``"71.55 %"``; ``"-"`` for None or NaN."""
     return "-" if value is None or (isinstance(value, float) and np.isnan(value)) else f"{100 * value:.2f} %"
@@ -327,6 +332,7 @@ __all__ = [
     "Markdown",
     "Section",
     "column_legend",
+    "counted",
     "cv_cell",
     "experiment_row",
     "experiment_table",

@@ -154,13 +154,18 @@ def judge(finding: Finding, scores):
         verdict, mean, se = paired_verdict(_paired(scores, a, b), strict=strict)
         verdicts.append(verdict)
         if not single:
-            shown.append(f"#{a} \u2212 #{b} {100 * mean:+.2f} \u00b1 {100 * N_STANDARD_ERRORS * se:.2f} points")
+            shown.append(f"#{a} \u2212 #{b} {_points(mean)} \u00b1 {100 * N_STANDARD_ERRORS * se:.2f} points")
     if single:
         shown = [f"#{n} {percent(scores[n][0])}" for n in finding.numbers]
         if len(finding.claims) == 1:
             ((a, b, _),) = finding.claims
-            shown.append(f"#{a} \u2212 #{b} {100 * (scores[a][0] - scores[b][0]):+.2f} points")
+            shown.append(f"#{a} \u2212 #{b} {_points(scores[a][0] - scores[b][0])} points")
     return combined_verdict(verdicts), ", ".join(shown)
+
+
+def _points(difference):
+    """A difference of scores 0-1 in signed percentage points, ``"+0.24"``; never ``"-0.00"``."""
+    return f"{round(100 * difference, 2) + 0.0:+.2f}"
 
 
 @dataclass(frozen=True)

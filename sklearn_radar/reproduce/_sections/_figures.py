@@ -218,8 +218,9 @@ def _convergence_panel(ax, curves):
         iterations = np.arange(1, len(median) + 1)
         if len(curves[name]) > 1:
             ax.fill_between(iterations, low, high, color=colour, alpha=0.12, linewidth=0, zorder=1.5)
-        # Markers every tenth of the line's length, each curve's shifted along it: coinciding curves alternate.
-        every = (MARKER_STEP * k / max(len(others), 1), MARKER_STEP)
+        # Markers spaced along the line, each curve's shifted by another share of the spacing (the golden ratio's
+        # multiples spread any two curves' shifts apart): the markers of coinciding curves alternate.
+        every = (MARKER_STEP * ((k * GOLDEN) % 1.0), MARKER_STEP)
         ax.plot(
             iterations,
             median,
@@ -250,8 +251,10 @@ def _convergence_panel(ax, curves):
         )
 
 
-#: The spacing of a convergence curve's markers, as a share of the axes' diagonal.
-MARKER_STEP = 0.1
+#: The spacing of a convergence curve's markers, as a share of the axes' diagonal (about 5 markers per curve).
+MARKER_STEP = 0.2
+#: The golden ratio's fractional part: the k-th curve's markers are shifted by ``(k * GOLDEN) % 1`` of the spacing.
+GOLDEN = (5**0.5 - 1) / 2
 
 
 def v1_bars_figure(results: RunResults):

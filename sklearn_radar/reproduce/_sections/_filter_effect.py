@@ -40,7 +40,7 @@ def time_saving_text(effect):
         return f"The time saving cannot be measured from these results: {times}, timed once (paper: {paper} %)."
     savings = time_savings_percent(filtered, unfiltered)
     verdict, mean, se = paired_verdict(savings)
-    times = times.replace("takes", f"takes (median of {len(savings)} timing rounds)", 1)
+    times = times.replace("not counted)", f"not counted; median of {len(savings)} timing rounds)", 1)
     spread = f"{mean:+.1f} \u00b1 {N_STANDARD_ERRORS * se:.1f} % saved (mean \u00b1 {N_STANDARD_ERRORS} standard errors"
     spread += f" over the rounds; paper: {paper} %)"
     if verdict == HOLDS:
