@@ -36,7 +36,8 @@ def markdown(results: RunResults) -> list[str]:
     lines = ["", "## Figures", ""]
     if drawn.get("v1_bars"):
         lines += [
-            "V1 on the test half, ours beside the paper's, per experiment (Tables III and IV); a dagger (\u2020) "
+            "V1 on the test half, ours beside the paper's, per experiment (Tables III and IV), on an axis from 0 "
+            "(bar lengths compare as the scores do); a dagger (\u2020) "
             "after the number marks experiments whose setting is the paper's, kept because the search found nothing "
             "better."
             + (
