@@ -31,14 +31,23 @@ from sklearn_radar.datasets import make_scenes
 from sklearn_radar.evaluation import filter_removal_rates
 
 fig, ax = plt.subplots(figsize=(6, 6.5))
-ax.add_patch(Rectangle((-0.95, -1.0), 1.9, 4.9, fc="0.9", ec="k"))  # car body, drawn as (y, x)
+ax.add_patch(
+    Rectangle((-0.95, -1.0), 1.9, 4.9, fc="0.9", ec="k")
+)  # car body, drawn as (y, x)
 colours = plt.get_cmap("tab10")
 for sensor, mount in RADARSCENES_MOUNTING.items():
     boresight = np.rad2deg(mount["yaw"])
     # Field of view +-60 deg, drawn to 6 m.  The plot's horizontal axis is y,
     # so a direction a in the car frame is drawn at 90 deg - a.
     ax.add_patch(
-        Wedge((mount["y"], mount["x"]), 6.0, 90 - boresight - 60, 90 - boresight + 60, fc=colours(sensor), alpha=0.25)
+        Wedge(
+            (mount["y"], mount["x"]),
+            6.0,
+            90 - boresight - 60,
+            90 - boresight + 60,
+            fc=colours(sensor),
+            alpha=0.25,
+        )
     )
     ax.plot(mount["y"], mount["x"], "o", c=colours(sensor))
     ax.text(
@@ -80,7 +89,9 @@ Xt = FrameTransform(frame="frame").fit_transform(data)
 
 t = Xt["t"].to_numpy()
 t0 = t.min()
-turn = int(np.argmax(np.abs(data["ego_yaw_rate"].to_numpy()) * data["ego_vx"].to_numpy()))
+turn = int(
+    np.argmax(np.abs(data["ego_yaw_rate"].to_numpy()) * data["ego_vx"].to_numpy())
+)
 start = t[turn] - 0.125
 window = (t >= start) & (t < start + 0.25)
 los = np.rad2deg(data["azimuth_sc"] + data["sensor_yaw"]).to_numpy()
@@ -91,12 +102,15 @@ w = window & static
 ax.scatter(los[w], data["vr"][w], s=6, label="measured vr (static)")
 ax.scatter(los[w], Xt["v_r"][w], s=6, label="compensated v_r (static)")
 w = window & ~static
-ax.scatter(los[w], Xt["v_r"][w], s=14, marker="x", c="C3", label="compensated v_r (road users)")
+ax.scatter(
+    los[w], Xt["v_r"][w], s=14, marker="x", c="C3", label="compensated v_r (road users)"
+)
 ax.axhline(0, c="k", lw=0.6)
 ax.set(
     xlabel="line of sight azimuth_sc + sensor_yaw (deg, car frame)",
     ylabel="radial velocity (m/s)",
-    title=f"0.25 s at ego speed {data['ego_vx'][turn]:.1f} m/s (negative = approaching)",
+    title=f"0.25 s at ego speed {data['ego_vx'][turn]:.1f} m/s "
+    "(negative = approaching)",
 )
 ax.legend(loc="lower right")
 fig.tight_layout()
@@ -116,7 +130,9 @@ plt.show()
 span = (t >= t[turn] - 0.5) & (t < t[turn] + 0.5)
 ccs = FrameTransform(frame="car").fit_transform(data)
 last = np.flatnonzero(span)[np.argmax(t[span])]
-ego_x, ego_y, ego_yaw = (data[name].to_numpy()[last] for name in ("ego_x_seq", "ego_y_seq", "ego_yaw_seq"))
+ego_x, ego_y, ego_yaw = (
+    data[name].to_numpy()[last] for name in ("ego_x_seq", "ego_y_seq", "ego_yaw_seq")
+)
 c, s = np.cos(ego_yaw), np.sin(ego_yaw)
 dx, dy = Xt["x"].to_numpy() - ego_x, Xt["y"].to_numpy() - ego_y
 fcs_in_car = (c * dx + s * dy, -s * dx + c * dy)  # world -> car frame of the last scan
@@ -127,21 +143,36 @@ print(
     f"i.e. {rotation * 50:.1f} m of lateral smear at 50 m range"
 )
 
-fig, axes = plt.subplots(1, 2, figsize=(12, 6.4), sharex=True, sharey=True, layout="constrained")
+fig, axes = plt.subplots(
+    1, 2, figsize=(12, 6.4), sharex=True, sharey=True, layout="constrained"
+)
 for ax, (x, y), title in zip(
     axes,
     [(ccs["x"].to_numpy(), ccs["y"].to_numpy()), fcs_in_car],
-    ["CCS: each scan in its own car frame", "FCS: fixed frame (shown in the last car frame)"],
+    [
+        "CCS: each scan in its own car frame",
+        "FCS: fixed frame (shown in the last car frame)",
+    ],
     strict=True,
 ):
-    points = ax.scatter(y[span], x[span], c=t[span] - t[span].min(), s=5, cmap="viridis", vmin=0, vmax=1.0)
+    points = ax.scatter(
+        y[span],
+        x[span],
+        c=t[span] - t[span].min(),
+        s=5,
+        cmap="viridis",
+        vmin=0,
+        vmax=1.0,
+    )
     ax.plot(0, 0, "k^", ms=9)
-    ax.set(title=title, xlabel="y (m, left)", aspect="equal", xlim=(35, -35), ylim=(-5, 65))
+    ax.set(
+        title=title, xlabel="y (m, left)", aspect="equal", xlim=(35, -35), ylim=(-5, 65)
+    )
 axes[0].set_ylabel("x (m, forward)")
 fig.colorbar(points, ax=axes, label="time (s)", shrink=0.9)
 fig.suptitle(
-    f"1 s of static and moving detections, yaw rate {data['ego_yaw_rate'][turn]:+.2f} rad/s "
-    f"at {data['ego_vx'][turn]:.1f} m/s"
+    "1 s of static and moving detections, yaw rate "
+    f"{data['ego_yaw_rate'][turn]:+.2f} rad/s at {data['ego_vx'][turn]:.1f} m/s"
 )
 plt.show()
 

@@ -35,7 +35,13 @@ from sklearn_radar.preprocessing import neighbor_counts
 scenes = make_scenes(n_sequences=2, duration=20.0, random_state=0)
 Xt = FrameTransform(frame="frame").fit_transform(scenes.data)
 counts = neighbor_counts(
-    Xt["x"].to_numpy(), Xt["y"].to_numpy(), Xt["t"].to_numpy(), Xt["sequence"].to_numpy(), d_xy=1.4, dt=0.25, cap=12
+    Xt["x"].to_numpy(),
+    Xt["y"].to_numpy(),
+    Xt["t"].to_numpy(),
+    Xt["sequence"].to_numpy(),
+    d_xy=1.4,
+    dt=0.25,
+    cap=12,
 )
 speed = np.abs(Xt["v_r"].to_numpy())
 
@@ -56,7 +62,13 @@ ax.scatter(
     c="0.5",
     label="background (15 % sample)",
 )
-ax.scatter((counts + jitter)[~background], np.maximum(speed, floor)[~background], s=2, c="C3", label="road users")
+ax.scatter(
+    (counts + jitter)[~background],
+    np.maximum(speed, floor)[~background],
+    s=2,
+    c="C3",
+    label="road users",
+)
 ax.set(
     yscale="log",
     ylim=(floor, 30),
@@ -98,14 +110,26 @@ print(f"{grid.errors.size} settings in {grid.elapsed_s:.1f} s")
 
 fig, (left, right) = plt.subplots(1, 2, figsize=(13, 5))
 plot_filter_errors(grid.errors, ax=left)
-image = right.imshow(100 * grid.background_removed.to_numpy(), origin="lower", aspect="auto", cmap="Blues")
+image = right.imshow(
+    100 * grid.background_removed.to_numpy(),
+    origin="upper",
+    aspect="auto",
+    cmap="Blues",
+)
 fig.colorbar(image, ax=right, label="background removed (%)")
 right.set_xticks(range(grid.errors.shape[1]), [f"{d:g}" for d in grid.errors.columns])
-right.set_yticks(range(grid.errors.shape[0]), [f"{v:g}" for v in grid.errors.index])
+right.set_yticks(range(grid.errors.shape[0]), [f"{v:.2f}" for v in grid.errors.index])
 for i in range(grid.errors.shape[0]):
     for j in range(grid.errors.shape[1]):
-        right.text(j, i, f"{100 * grid.background_removed.iat[i, j]:.0f}", ha="center", va="center", fontsize=8)
-right.set(xlabel="d_xy (m)", ylabel="eta_1 = vr_threshold (m/s)", title="Background removed (%)")
+        right.text(
+            j,
+            i,
+            f"{100 * grid.background_removed.iat[i, j]:.0f}",
+            ha="center",
+            va="center",
+            fontsize=8,
+        )
+right.set(xlabel="d_xy (m)", ylabel="eta_1 (m/s)", title="Background removed (%)")
 fig.tight_layout()
 plt.show()
 

@@ -32,22 +32,38 @@ import tempfile
 import matplotlib.pyplot as plt
 import numpy as np
 
-from sklearn_radar import ClusterMerger, DopplerDensityFilter, FrameTransform, RadarDBSCAN
+from sklearn_radar import (
+    ClusterMerger,
+    DopplerDensityFilter,
+    FrameTransform,
+    RadarDBSCAN,
+)
 from sklearn_radar.cluster import estimate_velocity
 from sklearn_radar.datasets import make_scenes
 from sklearn_radar.experiments import get_experiment
-from sklearn_radar.metrics import precluster_target, radar_homogeneity_completeness_v_measure
+from sklearn_radar.metrics import (
+    precluster_target,
+    radar_homogeneity_completeness_v_measure,
+)
 
 eps_t2 = 0.35
 a_start, a_end, s_b, b_end = 0.0, 0.9, 1.05, 1.9
 tau = min(b_end, s_b + eps_t2)
 fig, ax = plt.subplots(figsize=(9, 3.8))
 ax.axvspan(s_b - eps_t2, tau, color="0.9")
-ax.text(s_b - eps_t2 + 0.01, 5.1, "Eq. (6): A and B\nwithin [s_B - eps_t2, tau]", va="top", fontsize=9)
+ax.text(
+    s_b - eps_t2 + 0.01,
+    5.1,
+    "Eq. (6): A and B\nwithin [s_B - eps_t2, tau]",
+    va="top",
+    fontsize=9,
+)
 ax.broken_barh([(a_start, a_end - a_start)], (2.6, 0.8), color="C0")
 ax.broken_barh([(s_b, tau - s_b)], (1.1, 0.8), color="C1")
 ax.broken_barh([(tau, b_end - tau)], (1.1, 0.8), color="C1", alpha=0.3)
-ax.text((tau + b_end) / 2, 1.5, "after tau: not used", ha="center", va="center", fontsize=9)
+ax.text(
+    (tau + b_end) / 2, 1.5, "after tau: not used", ha="center", va="center", fontsize=9
+)
 ax.axvline(s_b, c="k", ls="--")
 ax.text(s_b - 0.01, 0.15, "s_B", ha="right")
 ax.axvline(tau, c="C3", lw=2)
@@ -73,7 +89,9 @@ plt.show()
 # ``ClusterMerger(memory=...)`` caches the stage-1 labels, so stage 1 runs
 # once for both modes.  ``merges_`` lists the pairs that met the criterion.
 scenes = make_scenes(n_sequences=2, duration=20.0, random_state=0)
-X = DopplerDensityFilter().fit_transform(FrameTransform(frame="frame").fit_transform(scenes.data))
+X = DopplerDensityFilter().fit_transform(
+    FrameTransform(frame="frame").fit_transform(scenes.data)
+)
 target = precluster_target(X, scenes.target)
 stage1 = RadarDBSCAN(**get_experiment(8).params)
 
@@ -81,13 +99,23 @@ models = {}
 with tempfile.TemporaryDirectory() as cache:
     for number in (12, 13):
         params = get_experiment(number).params
-        models[params["mode"]] = ClusterMerger(**params, stage1=stage1, memory=cache).fit(X)
+        models[params["mode"]] = ClusterMerger(
+            **params, stage1=stage1, memory=cache
+        ).fit(X)
 
 rows = [("stage 1 (#8)", models["velocity"].stage1_labels_, 0)]
-rows += [(f"{mode} (#{12 if mode == 'velocity' else 13})", m.labels_, len(m.merges_)) for mode, m in models.items()]
+rows += [
+    (f"{mode} (#{12 if mode == 'velocity' else 13})", m.labels_, len(m.merges_))
+    for mode, m in models.items()
+]
 for name, labels, n_merges in rows:
-    h, c, v = radar_homogeneity_completeness_v_measure(target, labels, groups=scenes.groups)
-    print(f"{name:<20} homogeneity {h:.4f}  completeness {c:.4f}  V {v:.4f}  merges {n_merges}")
+    h, c, v = radar_homogeneity_completeness_v_measure(
+        target, labels, groups=scenes.groups
+    )
+    print(
+        f"{name:<20} homogeneity {h:.4f}  completeness {c:.4f}  V {v:.4f}  "
+        f"merges {n_merges}"
+    )
 
 # %%
 # The velocity of a cluster
@@ -108,13 +136,19 @@ theta = (X["azimuth_sc"] + X["sensor_yaw"] + X["heading"]).to_numpy()[rows_of]
 v_r = X["v_r"].to_numpy()[rows_of]
 vx, vy, n_inliers = estimate_velocity(v_r, theta)
 print(
-    f"cluster {largest}, 0.35 s: {rows_of.sum()} detections, velocity ({vx:.2f}, {vy:.2f}) m/s, "
-    f"speed {np.hypot(vx, vy):.2f} m/s, {n_inliers} inliers"
+    f"cluster {largest}, 0.35 s: {rows_of.sum()} detections, "
+    f"velocity ({vx:.2f}, {vy:.2f}) m/s, speed {np.hypot(vx, vy):.2f} m/s, "
+    f"{n_inliers} inliers"
 )
 grid = np.linspace(theta.min() - 0.05, theta.max() + 0.05, 100)
 fig, ax = plt.subplots(figsize=(8, 4))
 ax.scatter(np.rad2deg(theta), v_r, s=12, label="detections")
-ax.plot(np.rad2deg(grid), vx * np.cos(grid) + vy * np.sin(grid), c="C3", label="v_x cos(theta) + v_y sin(theta)")
+ax.plot(
+    np.rad2deg(grid),
+    vx * np.cos(grid) + vy * np.sin(grid),
+    c="C3",
+    label="v_x cos(theta) + v_y sin(theta)",
+)
 ax.set(
     xlabel="line of sight theta (deg, FCS)",
     ylabel="compensated v_r (m/s)",
@@ -146,7 +180,13 @@ for ax, labels, title in (
 ):
     ids = labels[pair]
     for k, cluster in enumerate(np.unique(ids)):
-        ax.scatter(t[ids == cluster], along[ids == cluster], s=10, c=f"C{k}", label=f"cluster {cluster}")
+        ax.scatter(
+            t[ids == cluster],
+            along[ids == cluster],
+            s=10,
+            c=f"C{k}",
+            label=f"cluster {cluster}",
+        )
     ax.axvline(t[stage1_labels[pair] == b].min(), c="k", ls=":", lw=0.8)
     ax.set(title=title, xlabel="time (s)")
     ax.legend()

@@ -19,13 +19,22 @@ import matplotlib.pyplot as plt
 import numpy as np
 from sklearn.pipeline import make_pipeline
 
-from sklearn_radar import ClusterMerger, DopplerDensityFilter, FrameTransform, RadarDBSCAN
+from sklearn_radar import (
+    ClusterMerger,
+    DopplerDensityFilter,
+    FrameTransform,
+    RadarDBSCAN,
+)
 from sklearn_radar.datasets import make_scenes
-from sklearn_radar.metrics import precluster_target, radar_homogeneity_completeness_v_measure
+from sklearn_radar.metrics import (
+    precluster_target,
+    radar_homogeneity_completeness_v_measure,
+)
 
 scenes = make_scenes(n_sequences=2, duration=20.0, random_state=0)
 print(
-    f"{len(scenes.data)} detections, {np.unique(scenes.target[scenes.target >= 0]).size} road users, "
+    f"{len(scenes.data)} detections, "
+    f"{np.unique(scenes.target[scenes.target >= 0]).size} road users, "
     f"{100 * np.mean(scenes.target == -1):.0f} % background"
 )
 
@@ -35,10 +44,22 @@ print(
 # Stage 1 uses the paper's best setting (experiment #8: Eq. 5 with a
 # range-adaptive minimum of points, Eq. 2); stage 2 the cluster continuation
 # (#13), which is :class:`~sklearn_radar.ClusterMerger`'s default.
-stage1 = RadarDBSCAN(metric="xyv", eps_xyv=1.04, vr_scale=1.03, min_samples=3.87, alpha_r=0.99, vr_min=1.0)
-model = make_pipeline(FrameTransform(frame="frame"), DopplerDensityFilter(), ClusterMerger(stage1=stage1))
+stage1 = RadarDBSCAN(
+    metric="xyv",
+    eps_xyv=1.04,
+    vr_scale=1.03,
+    min_samples=3.87,
+    alpha_r=0.99,
+    vr_min=1.0,
+)
+model = make_pipeline(
+    FrameTransform(frame="frame"), DopplerDensityFilter(), ClusterMerger(stage1=stage1)
+)
 labels = model.fit_predict(scenes.data)
-print(f"{labels.max() + 1} clusters, {100 * np.mean(labels == -1):.0f} % of the detections are noise")
+print(
+    f"{labels.max() + 1} clusters, "
+    f"{100 * np.mean(labels == -1):.0f} % of the detections are noise"
+)
 
 # %%
 # Score
@@ -48,7 +69,9 @@ print(f"{labels.max() + 1} clusters, {100 * np.mean(labels == -1):.0f} % of the 
 # V-measure whose completeness ignores background detections.
 target = precluster_target(scenes.data, scenes.target)
 for name, predicted in (("stage 1", model[-1].stage1_labels_), ("stage 1 + 2", labels)):
-    h, c, v = radar_homogeneity_completeness_v_measure(target, predicted, groups=scenes.groups)
+    h, c, v = radar_homogeneity_completeness_v_measure(
+        target, predicted, groups=scenes.groups
+    )
     print(f"{name:<12} homogeneity {h:.3f}  completeness {c:.3f}  V-measure {v:.3f}")
 
 # %%
@@ -65,7 +88,10 @@ start = t[first].min() + 6.0
 now = first & (t >= start) & (t < start + 0.5)
 palette = plt.get_cmap("tab20")
 # Frame the road users of the window and the ego car (black triangle).
-ego_x, ego_y = Xt["ego_x_seq"].to_numpy()[now].mean(), Xt["ego_y_seq"].to_numpy()[now].mean()
+ego_x, ego_y = (
+    Xt["ego_x_seq"].to_numpy()[now].mean(),
+    Xt["ego_y_seq"].to_numpy()[now].mean(),
+)
 users = now & (scenes.target >= 0)
 centre_x = (Xt["x"].to_numpy()[users].mean() + ego_x) / 2
 centre_y = (Xt["y"].to_numpy()[users].mean() + ego_y) / 2
@@ -79,7 +105,9 @@ def draw(ax, ids, title):
     ax.scatter(x[grey], y[grey], s=3, c="0.8", label="background / noise")
     ax.scatter(x[~grey], y[~grey], s=10, c=palette(ids[~grey] % 20))
     ax.plot(ego_x, ego_y, "k^", ms=9)
-    ax.set(title=title, xlabel="x (m, FCS)", ylabel="y (m, FCS)", aspect="equal", **limits)
+    ax.set(
+        title=title, xlabel="x (m, FCS)", ylabel="y (m, FCS)", aspect="equal", **limits
+    )
 
 
 fig, axes = plt.subplots(1, 2, figsize=(12, 5.5), sharex=True, sharey=True)
@@ -110,7 +138,9 @@ for ax, (title, ids, keep) in zip(axes, stages, strict=True):
         ax.scatter(x[keep], y[keep], s=6, c="k")
     else:
         grey = ids < 0
-        ax.scatter(x[grey], y[grey], s=3, c="0.6" if title.startswith("raw") else "0.85")
+        ax.scatter(
+            x[grey], y[grey], s=3, c="0.6" if title.startswith("raw") else "0.85"
+        )
         ax.scatter(x[~grey], y[~grey], s=8, c=palette(ids[~grey] % 20))
     ax.plot(ego_x, ego_y, "k^", ms=7)
     ax.set(title=title, xlabel="x (m)", aspect="equal", **limits)

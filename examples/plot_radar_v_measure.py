@@ -24,12 +24,20 @@ from sklearn_radar.metrics import radar_homogeneity_completeness_v_measure
 
 rng = np.random.default_rng(0)
 truth = np.array([0] * 6 + [1] * 6 + [-1] * 8)
-xy = np.r_[rng.normal((0, 0), 0.4, (6, 2)), rng.normal((4, 0), 0.4, (6, 2)), rng.uniform((-2, 2), (6, 5), (8, 2))]
+xy = np.r_[
+    rng.normal((0, 0), 0.4, (6, 2)),
+    rng.normal((4, 0), 0.4, (6, 2)),
+    rng.uniform((-2, 2), (6, 5), (8, 2)),
+]
 
 cases = {
     "perfect, background is noise": np.array([0] * 6 + [1] * 6 + [-1] * 8),
-    "1. background forms clusters": np.array([0] * 6 + [1] * 6 + [2, 2, 2, 3, 3, 3, -1, -1]),
-    "2. background inside a road user's cluster": np.array([0] * 6 + [1] * 6 + [0, 0, 0, -1, -1, -1, -1, -1]),
+    "1. background forms clusters": np.array(
+        [0] * 6 + [1] * 6 + [2, 2, 2, 3, 3, 3, -1, -1]
+    ),
+    "2. background inside a road user's cluster": np.array(
+        [0] * 6 + [1] * 6 + [0, 0, 0, -1, -1, -1, -1, -1]
+    ),
     "3. a road user split in two": np.array([0] * 3 + [4] * 3 + [1] * 6 + [-1] * 8),
 }
 
@@ -50,8 +58,12 @@ objects = truth != -1
 print(
     "property 4:",
     np.allclose(
-        radar_homogeneity_completeness_v_measure(truth[objects], cases["3. a road user split in two"][objects]),
-        homogeneity_completeness_v_measure(truth[objects], cases["3. a road user split in two"][objects]),
+        radar_homogeneity_completeness_v_measure(
+            truth[objects], cases["3. a road user split in two"][objects]
+        ),
+        homogeneity_completeness_v_measure(
+            truth[objects], cases["3. a road user split in two"][objects]
+        ),
     ),
 )
 
@@ -70,7 +82,9 @@ for ax, (name, predicted) in zip(axes, cases.items(), strict=True):
     h, c, v = radar_homogeneity_completeness_v_measure(truth, predicted)
     sh, sc, sv = homogeneity_completeness_v_measure(truth, predicted)
     ax.set_title(
-        f"{name}\nradar: h {h:.2f}  c {c:.2f}  V {v:.2f}\nsklearn: h {sh:.2f}  c {sc:.2f}  V {sv:.2f}", fontsize=10
+        f"{name}\nradar: h {h:.2f}  c {c:.2f}  V {v:.2f}\n"
+        f"sklearn: h {sh:.2f}  c {sc:.2f}  V {sv:.2f}",
+        fontsize=10,
     )
     ax.set(xlabel="x (m)", aspect="equal")
 axes[0].set_ylabel("y (m)")

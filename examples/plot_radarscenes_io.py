@@ -44,7 +44,12 @@ for path in sorted(folder.rglob("*")):
 with h5py.File(folder / "sequence_1" / "radar_data.h5") as h5:
     for name in ("radar_data", "odometry"):
         print(f"{name}: {h5[name].shape[0]} rows")
-        print("   " + ", ".join(f"{field} {h5[name].dtype[field]}" for field in h5[name].dtype.names))
+        print(
+            "   "
+            + ", ".join(
+                f"{field} {h5[name].dtype[field]}" for field in h5[name].dtype.names
+            )
+        )
 
 # %%
 # ``scenes.json`` has one entry per scan ("scene") of one sensor, keyed by its
@@ -68,12 +73,17 @@ print(loaded.DESCR)
 print("same columns:", list(loaded.data.columns) == list(scenes.data.columns))
 print("same targets:", np.array_equal(loaded.target, scenes.target))
 largest = max(
-    np.abs(loaded.data[c].to_numpy(np.float64) - scenes.data[c].to_numpy(np.float64)).max()
+    np.abs(
+        loaded.data[c].to_numpy(np.float64) - scenes.data[c].to_numpy(np.float64)
+    ).max()
     for c in ("range_sc", "azimuth_sc", "vr", "x_seq", "y_seq", "ego_x_seq")
 )
 print(f"largest difference in range, angle, Doppler or position: {largest:.2g}")
 print(describe_columns())
-print("road-user classes:", sorted({LABELS[k] for k in loaded.data["label_id"][loaded.target >= 0]}))
+print(
+    "road-user classes:",
+    sorted({LABELS[k] for k in loaded.data["label_id"][loaded.target >= 0]}),
+)
 
 # %%
 # One scan of each sensor
@@ -95,7 +105,9 @@ for sensor in (1, 2, 3, 4):
         c=f"C{sensor}",
         label=f"sensor {sensor} ({rows.sum()} detections)",
     )
-    ax.scatter(data["y_cc"][moving], data["x_cc"][moving], s=40, marker="x", c=f"C{sensor}")
+    ax.scatter(
+        data["y_cc"][moving], data["x_cc"][moving], s=40, marker="x", c=f"C{sensor}"
+    )
 ax.set(
     xlim=(60, -60),
     ylim=(-10, 100),

@@ -36,8 +36,16 @@ for alpha, style in ((0.0, ":"), (0.5, "--"), (0.99, "-")):
     for form, colour in (("reciprocal", "C0"), ("linear", "C1")):
         if alpha == 0.0 and form == "linear":
             continue
-        label = "fixed (alpha_r = 0)" if alpha == 0.0 else f"{form}, alpha_r = {alpha:g}"
-        ax.plot(r, min_points_at_range(r, 3.87, alpha, form), style, c="k" if alpha == 0 else colour, label=label)
+        label = (
+            "fixed (alpha_r = 0)" if alpha == 0.0 else f"{form}, alpha_r = {alpha:g}"
+        )
+        ax.plot(
+            r,
+            min_points_at_range(r, 3.87, alpha, form),
+            style,
+            c="k" if alpha == 0 else colour,
+            label=label,
+        )
 ax.axvspan(0, 25, color="0.92")
 ax.axvspan(125, 140, color="0.92")
 ax.set(
@@ -60,8 +68,12 @@ plt.show()
 # reciprocal form.
 scenes = make_scenes(n_sequences=3, duration=20.0, random_state=4)
 data, target = scenes.data, scenes.target
-objects = data.loc[target >= 0, ["timestamp", "range_sc"]].assign(instance=target[target >= 0])
-per_scan = objects.groupby(["instance", "timestamp"])["range_sc"].agg(["size", "median"])
+objects = data.loc[target >= 0, ["timestamp", "range_sc"]].assign(
+    instance=target[target >= 0]
+)
+per_scan = objects.groupby(["instance", "timestamp"])["range_sc"].agg(
+    ["size", "median"]
+)
 bins = np.arange(0, 105, 10)
 which = np.digitize(per_scan["median"], bins) - 1
 mean = [per_scan["size"][which == k].mean() for k in range(len(bins) - 1)]
@@ -116,10 +128,19 @@ print("best fixed-N_min candidate:", {k: round(float(v), 2) for k, v in best.ite
 alphas = (0.0, 0.25, 0.5, 0.75, 0.99)
 fig, ax = plt.subplots(figsize=(8, 4))
 for form, colour in (("reciprocal", "C0"), ("linear", "C1")):
-    held_out = np.array([score(dict(best, alpha_r=a, range_scaling=form), ~train) for a in alphas])
-    print(f"{form:<10} held-out V-measure (%): " + " ".join(f"{100 * v:.2f}" for v in held_out))
+    held_out = np.array(
+        [score(dict(best, alpha_r=a, range_scaling=form), ~train) for a in alphas]
+    )
+    print(
+        f"{form:<10} held-out V-measure (%): "
+        + " ".join(f"{100 * v:.2f}" for v in held_out)
+    )
     ax.plot(alphas, 100 * held_out, "o-", c=colour, label=form)
-ax.set(xlabel="alpha_r", ylabel="held-out radar V-measure (%)", title="Raising alpha_r from 0 to 0.99")
+ax.set(
+    xlabel="alpha_r",
+    ylabel="held-out radar V-measure (%)",
+    title="Raising alpha_r from 0 to 0.99",
+)
 ax.legend()
 fig.tight_layout()
 plt.show()

@@ -73,7 +73,9 @@ with threadpool_limits(1):
     plain = make_bayes_search(pipeline, space, **options).fit(X, y, groups=groups)
 plain_seconds = time.perf_counter() - start
 
-print(f"make_bayes_search: {plain_seconds:.1f} s, SequenceSearchCV: {fast_seconds:.1f} s")
+print(
+    f"make_bayes_search: {plain_seconds:.1f} s, SequenceSearchCV: {fast_seconds:.1f} s"
+)
 print(f"speed-up: {plain_seconds / fast_seconds:.1f}x")
 
 # %%
@@ -90,17 +92,29 @@ print(f"speed-up: {plain_seconds / fast_seconds:.1f}x")
 fast_scores = fast.cv_results_["mean_test_score"]
 plain_scores = plain.cv_results_["mean_test_score"]
 for i, params in enumerate(fast.cv_results_["params"]):
-    shown = ", ".join(f"{name.removeprefix('cluster__')}={value:.3g}" for name, value in params.items())
-    print(f"{i + 1}. {shown}: {fast_scores[i]:.4f} (BayesSearchCV {plain_scores[i]:.4f})")
+    shown = ", ".join(
+        f"{name.removeprefix('cluster__')}={value:.3g}"
+        for name, value in params.items()
+    )
+    print(
+        f"{i + 1}. {shown}: {fast_scores[i]:.4f} (BayesSearchCV {plain_scores[i]:.4f})"
+    )
 
 same = all(
-    np.isclose(fast.best_params_[name], value, rtol=1e-9, atol=0.0) for name, value in plain.best_params_.items()
+    np.isclose(fast.best_params_[name], value, rtol=1e-9, atol=0.0)
+    for name, value in plain.best_params_.items()
 )
-print(f"same best parameters: {same}; best score {fast.best_score_:.4f} and {plain.best_score_:.4f}")
+print(
+    f"same best parameters: {same}; "
+    f"best score {fast.best_score_:.4f} and {plain.best_score_:.4f}"
+)
 print("max score difference:", float(np.max(np.abs(fast_scores - plain_scores))))
 
 # %%
 # Like scikit-learn's searches, ``best_estimator_`` is the best candidate
 # refitted on all the data (``refit=True``), ready to cluster:
 labels = fast.best_estimator_[-1].labels_
-print(f"{len(np.unique(labels[labels >= 0]))} clusters, {np.mean(labels < 0):.0%} of the detections noise")
+print(
+    f"{len(np.unique(labels[labels >= 0]))} clusters, "
+    f"{np.mean(labels < 0):.0%} of the detections noise"
+)

@@ -26,16 +26,31 @@ print(format_statistics(*scene_statistics(scenes)))
 data, target = scenes.data, scenes.target
 background = target == -1
 fig, (world, window) = plt.subplots(1, 2, figsize=(12, 5.5))
-world.scatter(data.x_seq[background], data.y_seq[background], s=0.2, c="0.75", label="background")
-world.scatter(data.x_seq[~background], data.y_seq[~background], s=1.0, c=target[~background] % 10, cmap="tab10")
+world.scatter(
+    data.x_seq[background], data.y_seq[background], s=0.2, c="0.75", label="background"
+)
+world.scatter(
+    data.x_seq[~background],
+    data.y_seq[~background],
+    s=1.0,
+    c=target[~background] % 10,
+    cmap="tab10",
+)
 world.plot(scenes.odometry.x_seq, scenes.odometry.y_seq, "k-", lw=0.8, label="ego path")
-world.set(xlabel="x_seq (m)", ylabel="y_seq (m)", title="20 s in the sequence frame", aspect="equal")
+world.set(
+    xlabel="x_seq (m)",
+    ylabel="y_seq (m)",
+    title="20 s in the sequence frame",
+    aspect="equal",
+)
 world.legend(loc="lower left", markerscale=10)
 
 t = data.timestamp.to_numpy()
 now = (t >= t.min() + 8_000_000) & (t < t.min() + 8_250_000)
 colour = np.where(target[now] >= 0, target[now] % 10, np.nan)
-window.scatter(data.y_cc[now][background[now]], data.x_cc[now][background[now]], s=6, c="0.6")
+window.scatter(
+    data.y_cc[now][background[now]], data.x_cc[now][background[now]], s=6, c="0.6"
+)
 window.scatter(
     data.y_cc[now][~background[now]],
     data.x_cc[now][~background[now]],

@@ -30,7 +30,10 @@ from matplotlib.patches import Ellipse, Rectangle
 from sklearn_radar import DopplerDensityFilter, FrameTransform, RadarDBSCAN
 from sklearn_radar.datasets import make_scenes
 from sklearn_radar.experiments import get_experiment
-from sklearn_radar.metrics import precluster_target, radar_homogeneity_completeness_v_measure
+from sklearn_radar.metrics import (
+    precluster_target,
+    radar_homogeneity_completeness_v_measure,
+)
 
 settings = {number: get_experiment(number).params for number in (3, 5, 6)}
 for number, params in settings.items():
@@ -41,8 +44,12 @@ box, xy, xyv = settings[3], settings[5], settings[6]
 shapes = [
     (
         "Eq. (3) box, #3",
-        Rectangle((-box["eps_xy"], -box["eps_xy"]), 2 * box["eps_xy"], 2 * box["eps_xy"]),
-        Rectangle((-box["eps_xy"], -box["eps_vr"]), 2 * box["eps_xy"], 2 * box["eps_vr"]),
+        Rectangle(
+            (-box["eps_xy"], -box["eps_xy"]), 2 * box["eps_xy"], 2 * box["eps_xy"]
+        ),
+        Rectangle(
+            (-box["eps_xy"], -box["eps_vr"]), 2 * box["eps_xy"], 2 * box["eps_vr"]
+        ),
     ),
     (
         "Eq. (4) xy, #5",
@@ -61,7 +68,9 @@ for column, (title, spatial, doppler) in enumerate(shapes):
         patch.set(fc="C0", alpha=0.35, ec="C0", lw=2)
     top.add_patch(spatial)
     bottom.add_patch(doppler)
-    top.set(title=title, xlim=(-1.2, 1.2), ylim=(-1.2, 1.2), aspect="equal", xlabel="dx (m)")
+    top.set(
+        title=title, xlim=(-1.2, 1.2), ylim=(-1.2, 1.2), aspect="equal", xlabel="dx (m)"
+    )
     bottom.set(xlim=(-1.2, 1.2), ylim=(-16, 16), xlabel="dx (m)")
     for ax in (top, bottom):
         ax.axhline(0, c="k", lw=0.5)
@@ -79,15 +88,19 @@ plt.show()
 # tuned setting; the score is the radar V-measure against the pre-clustered
 # target (see the user guide on scoring).
 scenes = make_scenes(n_sequences=2, duration=20.0, random_state=2)
-X = DopplerDensityFilter().fit_transform(FrameTransform(frame="frame").fit_transform(scenes.data))
+X = DopplerDensityFilter().fit_transform(
+    FrameTransform(frame="frame").fit_transform(scenes.data)
+)
 target = precluster_target(X, scenes.target)
 labels = {}
 for number, params in settings.items():
     labels[number] = RadarDBSCAN(**params).fit_predict(X)
-    h, c, v = radar_homogeneity_completeness_v_measure(target, labels[number], groups=scenes.groups)
+    h, c, v = radar_homogeneity_completeness_v_measure(
+        target, labels[number], groups=scenes.groups
+    )
     print(
-        f"#{number} {params['metric']:<4} homogeneity {h:.3f} completeness {c:.3f} V {v:.3f}, "
-        f"{labels[number].max() + 1} clusters"
+        f"#{number} {params['metric']:<4} homogeneity {h:.3f} "
+        f"completeness {c:.3f} V {v:.3f}, {labels[number].max() + 1} clusters"
     )
 
 # %%
@@ -97,7 +110,9 @@ for number, params in settings.items():
 # cluster ids (independent between panels); grey is noise.
 t = X["t"].to_numpy()
 first = scenes.groups == scenes.groups[0]
-users, sizes = np.unique(scenes.target[first & (scenes.target >= 0)], return_counts=True)
+users, sizes = np.unique(
+    scenes.target[first & (scenes.target >= 0)], return_counts=True
+)
 busiest = users[np.argmax(sizes)]
 middle = np.median(t[scenes.target == busiest])
 now = first & (np.abs(t - middle) < 0.25)
@@ -105,7 +120,9 @@ centre = X.loc[now & (scenes.target == busiest), ["x", "y"]].mean().to_numpy()
 palette = plt.get_cmap("tab20")
 
 fig, axes = plt.subplots(1, 4, figsize=(16, 4.4), sharex=True, sharey=True)
-panels = [("target (pre-clustered)", target)] + [(f"#{n} {settings[n]['metric']}", labels[n]) for n in settings]
+panels = [("target (pre-clustered)", target)] + [
+    (f"#{n} {settings[n]['metric']}", labels[n]) for n in settings
+]
 x, y = X["x"].to_numpy()[now], X["y"].to_numpy()[now]
 for ax, (title, ids) in zip(axes, panels, strict=True):
     ids = ids[now]

@@ -49,7 +49,11 @@ online = OnlinePipeline(experiment_pipeline(13))
 timestamp = data["timestamp"].to_numpy()
 order = np.argsort(timestamp, kind="stable")
 scans = np.split(order, np.flatnonzero(np.diff(timestamp[order])) + 1)
-columns = {name: data[name].to_numpy() for name in data.columns if name not in ("uuid", "track_id")}
+columns = {
+    name: data[name].to_numpy()
+    for name in data.columns
+    if name not in ("uuid", "track_id")
+}
 
 labels = np.full(len(data), -1)
 object_ids = np.full(len(data), -1)
@@ -65,10 +69,13 @@ for rows in scans:
 end = online.finish()
 aliases += end.aliases
 merges += end.merges
-latency = np.array(latency[1:]) * 1e3  # ms; the first call, which loads the kernels, is left out
+latency = (
+    np.array(latency[1:]) * 1e3
+)  # ms; the first call, which loads the kernels, is left out
 print(
-    f"{len(scans)} scans, {len(data) / len(scans):.1f} detections per scan, latency median "
-    f"{np.median(latency):.3f} ms, 99th percentile {np.percentile(latency, 99):.3f} ms; {len(aliases)} aliases"
+    f"{len(scans)} scans, {len(data) / len(scans):.1f} detections per scan, "
+    f"latency median {np.median(latency):.3f} ms, "
+    f"99th percentile {np.percentile(latency, 99):.3f} ms; {len(aliases)} aliases"
 )
 
 # %%
@@ -91,12 +98,20 @@ offline_stage1 = causal[-1].stage1_labels_
 # The merged clusters are the connected components of the graph whose edges are the merges.
 n_labels = labels.max() + 1
 edges = np.array(merges, dtype=np.int64).reshape(-1, 2)
-graph = coo_matrix((np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(n_labels, n_labels))
+graph = coo_matrix(
+    (np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(n_labels, n_labels)
+)
 component = connected_components(graph, directed=False)[1]
 merged = np.where(labels >= 0, component[np.maximum(labels, 0)], -1)
-for name, ours, theirs in [("stage 1", labels, offline_stage1), ("stage 2", merged, offline)]:
+for name, ours, theirs in [
+    ("stage 1", labels, offline_stage1),
+    ("stage 2", merged, offline),
+]:
     clustered = ours >= 0
-    same = np.array_equal(ours < 0, theirs < 0) and adjusted_rand_score(ours[clustered], theirs[clustered]) == 1.0
+    same = (
+        np.array_equal(ours < 0, theirs < 0)
+        and adjusted_rand_score(ours[clustered], theirs[clustered]) == 1.0
+    )
     print(f"{name}: same as offline causal: {same}")
 
 # %%
@@ -117,7 +132,10 @@ def resolve(object_id):
 final_ids = np.array([resolve(i) if i >= 0 else -1 for i in object_ids])
 for name, ids in [("as reported", object_ids), ("aliases resolved", final_ids)]:
     scores = tracking_scores(scenes.target, ids, times=timestamp * 1e-6)
-    print(f"{name}: ID switches {scores['id_switches']}, MOTA {scores['mota']:.3f}, IDF1 {scores['idf1']:.3f}")
+    print(
+        f"{name}: ID switches {scores['id_switches']}, "
+        f"MOTA {scores['mota']:.3f}, IDF1 {scores['idf1']:.3f}"
+    )
 
 # %%
 # Latency against the budget
@@ -126,7 +144,12 @@ for name, ids in [("as reported", object_ids), ("aliases resolved", final_ids)]:
 fig, ax = plt.subplots(figsize=(8, 3.8))
 ax.hist(latency, bins=np.logspace(-2, 2, 61), color="C0")
 ax.axvline(15.0, c="C3", lw=2, label="budget: 15 ms per scan")
-ax.set(xscale="log", xlabel="time per scan (ms)", ylabel="scans", title="OnlinePipeline.update latency")
+ax.set(
+    xscale="log",
+    xlabel="time per scan (ms)",
+    ylabel="scans",
+    title="OnlinePipeline.update latency",
+)
 ax.legend()
 fig.tight_layout()
 plt.show()
@@ -143,14 +166,17 @@ low = np.percentile(np.c_[x, y][clustered], 1, axis=0) - 10
 high = np.percentile(np.c_[x, y][clustered], 99, axis=0) + 10
 fig, ax = plt.subplots(figsize=(8, 6))
 ax.scatter(x[~clustered], y[~clustered], s=1, c="0.85")
-ax.scatter(x[clustered], y[clustered], s=3, c=plt.get_cmap("tab20")(final_ids[clustered] % 20))
+ax.scatter(
+    x[clustered], y[clustered], s=3, c=plt.get_cmap("tab20")(final_ids[clustered] % 20)
+)
 ax.set(
     xlabel="x (m, FCS)",
     ylabel="y (m, FCS)",
     aspect="equal",
     xlim=(low[0], high[0]),
     ylim=(low[1], high[1]),
-    title=f"{len(np.unique(final_ids[clustered]))} objects over {np.ptp(timestamp) * 1e-6:.0f} s",
+    title=f"{len(np.unique(final_ids[clustered]))} objects "
+    f"over {np.ptp(timestamp) * 1e-6:.0f} s",
 )
 fig.tight_layout()
 plt.show()

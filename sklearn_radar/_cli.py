@@ -146,8 +146,8 @@ def _parser():
         reproduce,
         "--repeats",
         _at_least(1),
-        help="searches per tuned experiment and baseline, with the seeds seed, seed+1, ... on the same split; the "
-        "report gives mean +- sd and checks the findings beyond the noise (default: 1; 3 with --full)",
+        help="searches per tuned experiment and baseline, with the repeat seeds seed, seed+1, ... on the same split; "
+        "the report gives mean +- sd and checks the findings beyond the noise (default: 1; 3 with --full)",
     )
     reproduce.add_argument(
         "--difficulty",

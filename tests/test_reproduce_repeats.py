@@ -13,10 +13,10 @@ from hypothesis import strategies as st
 
 from sklearn_radar._cli import main
 from sklearn_radar.reproduce._sections._comparison import (
+    CANNOT_TELL,
     DOES_NOT_HOLD,
     FINDINGS,
     HOLDS,
-    UNCLEAR,
     combined_verdict,
     judge,
     paired_verdict,
@@ -26,8 +26,8 @@ from sklearn_radar.reproduce._sections._comparison import (
 def _reference(differences, strict=True):
     """The report's rule, written out with the statistics module: mean vs 2 standard errors of the mean."""
     mean = statistics.fmean(differences)
-    if len(differences) == 1:
-        return HOLDS if mean > 0 or (mean == 0 and not strict) else DOES_NOT_HOLD
+    if len(differences) == 1:  # no spread: no verdict
+        return CANNOT_TELL
     se = statistics.stdev(differences) / math.sqrt(len(differences))
     if mean > 2 * se:
         return HOLDS
@@ -35,7 +35,7 @@ def _reference(differences, strict=True):
         return DOES_NOT_HOLD
     if se == 0:
         return DOES_NOT_HOLD if strict else HOLDS
-    return UNCLEAR
+    return CANNOT_TELL
 
 
 @pytest.mark.parametrize(
@@ -43,13 +43,14 @@ def _reference(differences, strict=True):
     [
         ([0.010, 0.012, 0.011], True, HOLDS),  # mean 0.011, se 0.00058: far beyond the noise
         ([-0.010, -0.012, -0.011], True, DOES_NOT_HOLD),
-        ([0.020, -0.010, 0.005], True, UNCLEAR),  # mean 0.005, se 0.0087
+        ([0.020, -0.010, 0.005], True, CANNOT_TELL),  # mean 0.005, se 0.0087
         ([0.004, 0.001, 0.003], True, HOLDS),  # mean 0.00267, 2 se = 0.00176
-        ([0.004, 0.000, 0.003], True, UNCLEAR),  # mean 0.00233, 2 se = 0.00240
+        ([0.004, 0.000, 0.003], True, CANNOT_TELL),  # mean 0.00233, 2 se = 0.00240
         ([0.0, 0.0, 0.0], True, DOES_NOT_HOLD),  # equal everywhere: not better
         ([0.0, 0.0, 0.0], False, HOLDS),  # ... but at least as good
-        ([0.001], True, HOLDS),  # a single run: its sign, noise or not
-        ([-0.001], False, DOES_NOT_HOLD),
+        ([0.05], True, CANNOT_TELL),  # a single run gives no verdict, however large its difference
+        ([-0.05], False, CANNOT_TELL),
+        ([0.0], False, CANNOT_TELL),
     ],
 )
 def test_the_rule_on_planted_differences(differences, strict, expected):
@@ -69,6 +70,9 @@ def test_the_rule_on_planted_differences(differences, strict, expected):
 )
 def test_the_rule_matches_its_statement_and_flips_with_the_sign(differences, strict):
     verdict, _, _ = paired_verdict(differences, strict=strict)
+    if len(differences) == 1:
+        assert verdict == CANNOT_TELL
+        return
     if not any(differences):  # exactly zero is decided by strictness alone
         return
     # Away from the boundary the written-out rule decides alike (rounding can move a value exactly on it).
@@ -77,7 +81,7 @@ def test_the_rule_matches_its_statement_and_flips_with_the_sign(differences, str
     if abs(abs(mean) - 2 * se) > 1e-12:
         assert verdict == _reference(differences, strict)
     flipped, _, _ = paired_verdict([-d for d in differences], strict=strict)
-    swap = {HOLDS: DOES_NOT_HOLD, DOES_NOT_HOLD: HOLDS, UNCLEAR: UNCLEAR}
+    swap = {HOLDS: DOES_NOT_HOLD, DOES_NOT_HOLD: HOLDS, CANNOT_TELL: CANNOT_TELL}
     if abs(abs(mean) - 2 * se) > 1e-12:
         assert flipped == swap[verdict]
 
@@ -91,8 +95,8 @@ def test_the_rule_rejects_no_values():
 
 def test_a_finding_of_several_comparisons_needs_all_of_them():
     assert combined_verdict([HOLDS, HOLDS]) == HOLDS
-    assert combined_verdict([HOLDS, UNCLEAR]) == UNCLEAR
-    assert combined_verdict([UNCLEAR, DOES_NOT_HOLD, HOLDS]) == DOES_NOT_HOLD
+    assert combined_verdict([HOLDS, CANNOT_TELL]) == CANNOT_TELL
+    assert combined_verdict([CANNOT_TELL, DOES_NOT_HOLD, HOLDS]) == DOES_NOT_HOLD
 
 
 def _finding(text):
@@ -114,17 +118,17 @@ def test_findings_are_judged_on_paired_differences_not_on_the_spread_of_each_exp
     verdict, values = judge(_finding("merging by continuation"), scores)
     assert verdict == HOLDS and values.startswith("#13 \u2212 #8 +0.2")
     assert judge(_finding("merging by velocity"), scores)[0] == HOLDS
-    assert judge(_finding("#8's setting transferred"), scores)[0] == UNCLEAR
+    assert judge(_finding("#8's setting transferred"), scores)[0] == CANNOT_TELL
     scores[13] = list(v8 - 0.0024)  # planted the other way
     assert judge(_finding("merging by continuation"), scores)[0] == DOES_NOT_HOLD
 
 
-def test_the_fixed_expert_setting_counts_the_same_in_every_repeat_and_a_single_run_shows_the_scores():
+def test_the_fixed_expert_setting_counts_the_same_in_every_repeat_and_a_single_run_cannot_tell():
     finding = _finding("a tuned baseline beats the expert")
     assert judge(finding, {1: [0.70], 2: [0.72, 0.73, 0.71]})[0] == HOLDS  # +2 points, se 0.58
-    assert judge(finding, {1: [0.70], 2: [0.69, 0.73, 0.71]})[0] == UNCLEAR  # +1 point, se 1.15
-    verdict, values = judge(finding, {1: [0.70], 2: [0.7001]})
-    assert verdict == HOLDS and values == "#1 70.00 %, #2 70.01 %"
+    assert judge(finding, {1: [0.70], 2: [0.69, 0.73, 0.71]})[0] == CANNOT_TELL  # +1 point, se 1.15
+    verdict, values = judge(finding, {1: [0.70], 2: [0.7501]})  # 5 points, but a single run
+    assert verdict == CANNOT_TELL and values == "#1 70.00 %, #2 75.01 %, #2 \u2212 #1 +5.01 points"
     with pytest.raises(ValueError, match="cannot be paired"):
         judge(finding, {1: [0.70, 0.71], 2: [0.72, 0.73, 0.71]})
 

@@ -86,7 +86,8 @@ def format_statistics(summary, table) -> str:
     text : str
         One line per summary figure, with the RadarScenes figure
         (:data:`RADARSCENES_PUBLISHED`) beside it where one is published,
-        then the table with two decimals.
+        then the table with two decimals ("-" where no object of the class
+        was seen in the range, with a line that says so).
 
     Examples
     --------
@@ -115,7 +116,12 @@ def format_statistics(summary, table) -> str:
             f"(RadarScenes about {published['annotated_per_instance']:.0f})",
             f"class mix (annotated) {mix or 'none'}",
         ]
-    lines += ["detections per object per scan (when detected), by range bin in m:", table.round(2).to_string()]
+    lines += [
+        "detections per object per scan (when detected), by range bin in m:",
+        table.round(2).to_string(na_rep="-"),
+    ]
+    if table.isna().to_numpy().any():
+        lines.append("(-: no object of that class in that range)")
     return "\n".join(lines)
 
 

@@ -526,10 +526,12 @@ def _count_settings(X, target, table, options, time_eps, label):
         "errors": [pd.DataFrame],
         "ax": [HasMethods(["imshow", "text"]), None],
         "chosen": [tuple, None],
+        "vmax": [Interval(Real, 0, None, closed="neither"), None],
+        "colorbar": ["boolean"],
     },
     prefer_skip_nested_validation=True,
 )
-def plot_filter_errors(errors, ax=None, chosen=(0.10, 1.4)):
+def plot_filter_errors(errors, ax=None, chosen=(0.10, 1.4), *, vmax=None, colorbar=True):
     """Heatmap of the filter error matrix (Table I).
 
     Parameters
@@ -541,15 +543,24 @@ def plot_filter_errors(errors, ax=None, chosen=(0.10, 1.4)):
         Axes to draw into (anything with ``imshow`` and ``text``); a new
         figure when None.
     chosen : tuple of (vr_threshold, d_xy) or None, default=(0.10, 1.4)
-        Setting marked with an asterisk (the paper's choice); None for no
-        mark.  Matched to the grid with a tolerance of 1e-9.
+        Setting marked with an asterisk (the paper's choice), centred above
+        the cell's count, and an outline; None for no mark.  Matched to the
+        grid with a tolerance of 1e-9.
+    vmax : float or None, default=None
+        Count of the darkest colour; the scale starts at 0.  None: the
+        grid's largest count.  Give two grids the same ``vmax`` to compare
+        their shades.
+    colorbar : bool, default=True
+        Draw a colour bar beside the axes (False: draw one yourself, e.g.
+        one for several grids, from ``ax.images[0]``).
 
     Returns
     -------
     ax : matplotlib Axes
         With one text per cell (its count), the asterisk as one more text,
-        ``d_xy`` on x, ``vr_threshold`` on y (increasing upwards) and a
-        colour bar.
+        ``d_xy`` on x, ``vr_threshold`` (eta_1) on y in the order of the
+        table's rows (the first on top) and, with ``colorbar``, a colour
+        bar.
 
     Raises
     ------
@@ -571,15 +582,19 @@ def plot_filter_errors(errors, ax=None, chosen=(0.10, 1.4)):
     if ax is None:
         _, ax = plt.subplots(figsize=(1.0 + 0.8 * len(d_values), 0.8 + 0.6 * len(vr_values)))
 
-    image = ax.imshow(values, origin="lower", aspect="auto", cmap="Reds", interpolation="nearest")
-    ax.figure.colorbar(image, ax=ax, label="errors (object windows below min. kept share)")
-    ax.set_xticks(np.arange(len(d_values)), [f"{d:g}" for d in d_values])
-    ax.set_yticks(np.arange(len(vr_values)), [f"{v:g}" for v in vr_values])
-    ax.set_xlabel(r"$d_{xy}$ (m)")
-    ax.set_ylabel(r"$\eta_{v_r,1}$ = vr_threshold (m/s)")
-
     finite = values[np.isfinite(values)]
-    high = finite.max() if finite.size else 0.0
+    high = float(vmax) if vmax is not None else (float(finite.max()) if finite.size else 0.0)
+    # The first row on top, as in the table; the scale from 0, so that a shade means one count.
+    image = ax.imshow(
+        values, origin="upper", aspect="auto", cmap="Reds", interpolation="nearest", vmin=0, vmax=max(high, 1.0)
+    )
+    if colorbar:
+        ax.figure.colorbar(image, ax=ax, label="errors (object windows below min. kept share)")
+    ax.set_xticks(np.arange(len(d_values)), [f"{d:.1f}" for d in d_values])
+    ax.set_yticks(np.arange(len(vr_values)), [f"{v:.2f}" for v in vr_values])
+    ax.set_xlabel("d_xy (m)")
+    ax.set_ylabel("eta_1 (m/s)")
+
     for i in range(len(vr_values)):
         for j in range(len(d_values)):
             value = values[i, j]
@@ -595,15 +610,9 @@ def plot_filter_errors(errors, ax=None, chosen=(0.10, 1.4)):
             raise ValueError(f"chosen={chosen!r} is not a cell of the error grid")
         i, j = rows[0], cols[0]
         dark = high > 0 and values[i, j] > 0.6 * high
-        ax.text(
-            j + 0.3,
-            i + 0.25,
-            "*",
-            ha="center",
-            va="center",
-            fontsize="x-large",
-            fontweight="bold",
-            color="white" if dark else "black",
-        )
+        colour = "white" if dark else "black"
+        # Centred in its cell, above the count (the first row is on top: up is -y).
+        ax.text(j, i - 0.27, "*", ha="center", va="center", fontsize="large", fontweight="bold", color=colour)
+        ax.add_patch(plt.Rectangle((j - 0.5, i - 0.5), 1, 1, fill=False, edgecolor=colour, linewidth=2))
     ax.set_title("Filter errors per setting (* chosen)")
     return ax

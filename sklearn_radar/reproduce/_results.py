@@ -710,7 +710,8 @@ class RepeatResult(_JsonRecord):
     Attributes
     ----------
     seed : int
-        Random seed of the repeat's search (the run's seed plus the repeat's index).
+        The repeat's seed (the run's seed plus the repeat's index); its search's seed is derived from it and the
+        experiment or baseline (``reproduce._steps.search_seed``).
     search : SearchRecord or None, default=None
         The repeat's search; None for #10 and #11, which take the same repeat's #8 setting.
     params : dict
@@ -918,15 +919,36 @@ class ClusteringCost(_JsonRecord):
     Attributes
     ----------
     clustering_s : float
-        Clustering time of the test half, s: each test sequence's best of
-        three clustering runs (stage 0 done before), summed over the
-        sequences.
+        Clustering time of the test half, s: the median over the timing
+        rounds of ``clustering_times_s``.
     n_clusters : int
         Clusters, summed over the test sequences.
+    clustering_times_s : list of float or None, default=None
+        Each timing round's clustering time of the test half, s (stage 0
+        done before; each sequence clustered once a round, the times
+        summed); None in results of older versions, which timed each
+        sequence's fastest of three runs.
     """
 
     clustering_s: float
     n_clusters: int
+    clustering_times_s: list[float] | None = None
+
+
+def time_savings_percent(filtered, unfiltered):
+    """The clustering time that filtering saved in each timing round, % of the unfiltered round's.
+
+    Parameters
+    ----------
+    filtered, unfiltered : ClusteringCost
+        With their ``clustering_times_s``.
+
+    Returns
+    -------
+    savings : list of float
+        Per round, in order.
+    """
+    return [100 * (1 - f / u) for f, u in zip(filtered.clustering_times_s, unfiltered.clustering_times_s, strict=True)]
 
 
 @dataclass(frozen=True, **_RECORD)
@@ -936,7 +958,7 @@ class FilterEffectFigures(_JsonRecord):
     Attributes
     ----------
     time_saving_percent : float
-        Clustering time saved by filtering, %.
+        Clustering time saved by filtering, %: ours the mean over the timing rounds of each round's saving.
     fewer_clusters_per_sequence_percent : float
         Fewer clusters per sequence with the filter, mean over sequences, %.
     fewer_clusters_overall_percent : float
@@ -1146,4 +1168,5 @@ __all__ = [
     "RunResults",
     "SearchRecord",
     "repeated_scores",
+    "time_savings_percent",
 ]

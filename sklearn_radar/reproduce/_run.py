@@ -59,6 +59,7 @@ from ._io import (
 from ._progress import DATA, REPORT, RunProgress, duration, uncompiled_kernels
 from ._report import write_report
 from ._results import Budget, DataMeta, RunMeta, RunResults
+from ._sections._base import counted
 from ._sections._figures import CONVERGENCE, SCENE, V1_BARS
 from ._sections._filter import FILTER_SCENE, HEATMAP
 from ._sequences import RunSequences
@@ -203,8 +204,11 @@ def reproduce(
     full : bool, default=False
         The paper's budget on about a million simulated detections.
     seed : int, default=0
-        Random seed of the simulated data, the split and the searches
-        (``seed + repeats - 1`` at most ``2**32 - 1``).
+        Random seed of the simulated data and the split; each search draws
+        from its own stream, derived from it and the experiment (or
+        baseline) by :func:`~._steps.search_seed`, so that searches of
+        equal spaces are independent (``seed + repeats - 1`` at most
+        ``2**32 - 1``).
     stream : file-like, default=None
         Progress output; None: standard output.  Plain lines (no carriage
         returns): first an estimate of the run's length (and of ``full``'s),
@@ -239,8 +243,9 @@ def reproduce(
         it, not on where the fits run: for the same seed and ``n_points`` a
         cluster run equals a single-process one.
     repeats : int, default=None
-        Searches per tuned experiment and per baseline, with the seeds
-        ``seed``, ``seed + 1``, ... on the same split, each repeat's kept
+        Searches per tuned experiment and per baseline, with the repeat
+        seeds ``seed``, ``seed + 1``, ... (each search's seed derived from
+        its repeat's) on the same split, each repeat's kept
         setting scored on the test half; None: 1, or 3 with ``full``.  The
         report gives test scores as mean and standard deviation over the
         repeats and checks the paper's findings by paired differences
@@ -349,8 +354,9 @@ def _reproduce(data, out, keys, budget, seed, repeats, stream, objective, diffic
     run.progress.finish(DATA, time.perf_counter() - started)
     _start_folder(run)
     run.say(
-        f"data: {source}, {meta.data.n_detections:,} detections in {meta.data.n_sequences} sequences; "
-        f"train {meta.data.n_train:,} / test {meta.data.n_test:,}; budget: {budget.label}, {budget.n_iter} iterations"
+        f"data: {source}, {meta.data.n_detections:,} detections in {counted(meta.data.n_sequences, 'sequence')}; "
+        f"train {meta.data.n_train:,} / test {meta.data.n_test:,}; budget: {budget.label}, "
+        f"{counted(budget.n_iter, 'iteration')}"
         + (f"; {repeats} repeats of each search (seeds {seed}-{seed + repeats - 1})" if repeats > 1 else ""),
     )
     _say_the_work(run, keys, budget, repeats)

@@ -10,7 +10,8 @@ Stages 0-2 never cross sequences, so every figure is combined from
 per-sequence summaries computed where each sequence lives (:mod:`._sequences`),
 and a search's candidate is one task per block of training sequences
 (:mod:`._search`).  The repeats of a search are one :meth:`map` over the
-executor (:mod:`sklearn_radar._executor`), each with the seed ``seed + k``.
+executor (:mod:`sklearn_radar._executor`); repeat ``k`` of a search has the
+seed :func:`search_seed` ``(seed + k, its experiment or baseline)``.
 """
 
 from __future__ import annotations
@@ -18,6 +19,7 @@ from __future__ import annotations
 import dataclasses
 import threading
 import time
+import zlib
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
@@ -92,6 +94,7 @@ from ._results import (
     ObjectRepeat,
     RepeatResult,
     SearchRecord,
+    time_savings_percent,
 )
 
 #: Length of the frames of the object-level scores, s (Scheiner et al. 2021 evaluate 500 ms).
@@ -102,6 +105,10 @@ INSTANCE_FIELDS = tuple(name for name in InstanceScores.__dataclass_fields__ if 
 WINDOWS_FRAME, WINDOW_S, WINDOW_MIN_KEPT = "frame", 0.15, 0.75
 #: Stage-0 outputs kept per run (:class:`Prepared`): the inputs of the experiments, not of every setting.
 PREPARED_KEPT = 4
+#: Rounds of the filter effect's timing: each clusters every test sequence filtered and unfiltered once (after a
+#: warm-up), so that the saving has a spread over the rounds.  The default run's clustering takes 0.03-0.06 s a
+#: round, 10 rounds about a second.
+TIMING_ROUNDS = 10
 
 
 @dataclass(frozen=True)
@@ -118,7 +125,8 @@ class RunEnv:
         The training and the test sequences.
     budget : Budget
     seed : int
-        Repeat ``k`` of a search has the seed ``seed + k``.
+        The run's seed: repeat ``k`` of a search has the seed
+        :func:`search_seed` ``(seed + k, key)``.
     objective : {"v1", "pq"}
     repeats : int
     n_points : int
@@ -381,7 +389,8 @@ class _ExperimentRepeat:
         if experiment.tuned:
             space = with_cluster_gate(search_space(number), experiment.stage, env.objective)
             label = _repeat_label(f"#{number}", k, self.repeats)
-            params, search = tune(env, str(number), pipeline, space, label, paper_params(number), seed=env.seed + k)
+            seed = search_seed(env.seed + k, str(number))
+            params, search = tune(env, str(number), pipeline, space, label, paper_params(number), seed=seed)
         elif experiment.derived_from is None:  # the expert setting (#1): the paper's, as it is
             params = {}
         else:  # #10, #11: #8's setting, transferred
@@ -452,9 +461,12 @@ def run_filter_effect(env, key, needed):
     per_sequence, cost = {}, {}
     for filtered in (True, False):
         per_sequence[filtered] = {f["id"]: f[filtered][1] for f in found}
-        # Each sequence's fastest of 3 clusterings (after a warm-up), summed over the test sequences.
+        # Each round's clustering time of the whole test half: the sequences' times of that round, summed.
+        rounds = np.sum([f[filtered][0] for f in found], axis=0)
         cost[filtered] = ClusteringCost(
-            clustering_s=sum(f[filtered][0] for f in found), n_clusters=sum(f[filtered][1] for f in found)
+            clustering_s=float(np.median(rounds)),
+            n_clusters=sum(f[filtered][1] for f in found),
+            clustering_times_s=rounds.tolist(),
         )
     with_filter, without = per_sequence[True], per_sequence[False]
     fewer = [1 - with_filter[g] / without[g] for g in with_filter if without[g] > 0]
@@ -465,7 +477,7 @@ def run_filter_effect(env, key, needed):
         filtered=filtered,
         unfiltered=unfiltered,
         measured=FilterEffectFigures(
-            time_saving_percent=100 * (1 - filtered.clustering_s / unfiltered.clustering_s),
+            time_saving_percent=float(np.mean(time_savings_percent(filtered, unfiltered))),
             fewer_clusters_per_sequence_percent=100 * float(np.mean(fewer)) if fewer else float("nan"),
             fewer_clusters_overall_percent=100 * (1 - filtered.n_clusters / max(unfiltered.n_clusters, 1)),
         ),
@@ -474,19 +486,25 @@ def run_filter_effect(env, key, needed):
 
 
 def _filter_effect_sequence(sequence, params):
-    """One test sequence clustered with and without the filter: ``{filtered: (fastest of 3 s, clusters)}``."""
+    """One test sequence clustered with and without the filter: ``{filtered: (time per round s, clusters)}``.
+
+    After a warm-up of each (JIT compilation is not clustering time), every
+    round clusters both, in turn first, so that a drift of the machine's
+    speed touches both alike.
+    """
     found = {"id": sequence.id}
+    clusterers, prepared = {}, {}
     for filtered in (True, False):
         pipeline = experiment_pipeline(BEST_STAGE1 if filtered else BEST_STAGE1_UNFILTERED, params=params)
-        prepared = pipeline[:-1].fit_transform(sequence.X)
-        clusterer = pipeline[-1]
-        clusterer.fit(prepared)  # warm-up: JIT compilation is not clustering time
-        times = []
-        for _ in range(3):
+        prepared[filtered] = pipeline[:-1].fit_transform(sequence.X)
+        clusterers[filtered] = pipeline[-1]
+        labels = clusterers[filtered].fit(prepared[filtered]).labels_
+        found[filtered] = ([], len(np.unique(labels[labels >= 0])))
+    for k in range(TIMING_ROUNDS):
+        for filtered in (True, False) if k % 2 == 0 else (False, True):
             start = time.perf_counter()
-            labels = clusterer.fit(prepared).labels_
-            times.append(time.perf_counter() - start)
-        found[filtered] = (min(times), len(np.unique(labels[labels >= 0])))
+            clusterers[filtered].fit(prepared[filtered])
+            found[filtered][0].append(time.perf_counter() - start)
     return found
 
 
@@ -520,7 +538,7 @@ def run_baselines(env, key, needed):
 
 @dataclass(frozen=True)
 class _BaselineRepeat:
-    """``job(executor, (name, k))``: repeat ``k`` of baseline ``name`` (its search with the seed ``seed + k``)."""
+    """``job(executor, (name, k))``: repeat ``k`` of baseline ``name`` (its search seeded by :func:`search_seed`)."""
 
     env: RunEnv
 
@@ -530,7 +548,8 @@ class _BaselineRepeat:
         env = self.env.on(executor)
         pipeline = baseline_pipeline(name, memory=env.cache)
         space = SKLEARN_BASELINES[name][1]
-        params, search = tune(env, BASELINES, pipeline, space, _repeat_label(name, k, env.repeats), seed=env.seed + k)
+        label, seed = _repeat_label(name, k, env.repeats), search_seed(env.seed + k, name)
+        params, search = tune(env, BASELINES, pipeline, space, label, seed=seed)
         test = score_on_test(env, pipeline.set_params(**params))
         return Repeat(params, search, test, time.perf_counter() - start)
 
@@ -607,6 +626,30 @@ def _mean_sd(values):
 
 
 # ----------------------------------------------------------------------------- scoring and searching
+
+
+def search_seed(run_seed, key):
+    """The random seed of the search of ``key`` (an experiment's number or a baseline's name) in repeat ``run_seed``.
+
+    Each search has its own stream, ``SeedSequence(run_seed, spawn_key=(id,))``
+    with ``id`` the experiment's number or, for a name, its CRC-32 (stable
+    across processes and Python versions, unlike ``hash``): searches with
+    equal spaces (#2-#5) no longer draw the same random candidates.
+
+    Parameters
+    ----------
+    run_seed : int
+        The run's seed plus the repeat's index.
+    key : str
+        ``"3"``, or a baseline's name.
+
+    Returns
+    -------
+    seed : int
+        In ``[0, 2**32)``.
+    """
+    stream = int(key) if key.isdigit() else zlib.crc32(key.encode("utf-8"))
+    return int(np.random.SeedSequence(run_seed, spawn_key=(stream,)).generate_state(1)[0])
 
 
 def score_on_test(env, pipeline):
@@ -807,4 +850,4 @@ def units(key, budget, repeats):
     return 1
 
 
-__all__ = ["STEPS", "Outcome", "RunEnv", "Step", "TrainingData", "data_statistics", "units"]
+__all__ = ["STEPS", "Outcome", "RunEnv", "Step", "TrainingData", "data_statistics", "search_seed", "units"]

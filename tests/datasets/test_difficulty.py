@@ -269,6 +269,13 @@ def test_statistics_count_annotations_by_hand_and_print_the_published_figures():
     text = format_statistics(summary, table)
     assert f"RadarScenes about {RADARSCENES_PUBLISHED['annotated_per_scan']:.1f}" in text
     assert "class mix (annotated) CAR 75 %, PEDESTRIAN 25 %" in text
+    assert "-: no object" not in text  # every cell filled
+    # The pedestrian at 30 m: no pedestrian within 10 m and no car at 25-50 m: a dash and a line saying so, no NaN.
+    data.loc[4, "range_sc"] = 30.0
+    summary, table = scene_statistics(Bunch(data=data, target=np.array([0, 0, -1, 0, 1, -1])))
+    text = format_statistics(summary, table)
+    assert table.isna().to_numpy().sum() == 2 and "nan" not in text.lower()
+    assert text.endswith("PEDESTRIAN            -           1.0\n(-: no object of that class in that range)")
 
 
 def test_realistic_data_come_closer_to_the_published_annotation_density_than_easy_data():

@@ -355,6 +355,10 @@ def test_plot_filter_errors():
     assert "m" in ax.get_xlabel() and "m/s" in ax.get_ylabel()
     assert len(ax.figure.axes) == 2  # the heatmap and its colour bar
     assert len(plot_filter_errors(errors, ax=plt.subplots()[1], chosen=None).texts) == 12
+    assert ax.get_ylim()[0] > ax.get_ylim()[1]  # the first row (0.05) on top, as in a table
+    assert ax.images[0].get_clim() == (0, 11)  # from 0 to the largest count
+    shared = plot_filter_errors(errors, ax=plt.subplots()[1], vmax=50, colorbar=False)
+    assert shared.images[0].get_clim() == (0, 50) and len(shared.figure.axes) == 1
     with pytest.raises(ValueError, match="chosen"):
         plot_filter_errors(errors, chosen=(0.3, 1.4))
     plt.close("all")

@@ -76,6 +76,11 @@ def format_params(params):
 _SHORT = {"eps_phi": "eps_phi (rad)"}
 
 
+def counted(n, noun):
+    """``"1 iteration"``, ``"10 iterations"``: ``n`` and the noun, plural unless ``n`` is 1 (an ``s`` appended)."""
+    return f"{n:,} {noun}" + ("" if n == 1 else "s")
+
+
 def percent(value):
     """A share 0-1 as ``"71.55 %"``; ``"-"`` for None or NaN."""
     return "-" if value is None or (isinstance(value, float) and np.isnan(value)) else f"{100 * value:.2f} %"
@@ -288,12 +293,30 @@ def _count(value):
     return "-" if value is None else f"{value:,}"
 
 
+#: Inches a figure's y-axis label and tick labels take on the left, and between two panels in a row.
+FIGURE_LEFT_MARGIN, PANEL_GAP = 0.9, 0.15
+
+
+def scene_size(x, y, *, width, extra_height, panels=1):
+    """(width, height) in inches of a figure of ``panels`` equal-aspect scatter panels in a row, fitted to ``x, y``.
+
+    The panels' height follows the data's extent (m) so that the figure has
+    no empty bands above and below them; ``extra_height`` (in) holds the
+    titles, axis labels and legend.
+    """
+    span_x = max(float(np.ptp(x)), 1.0) if len(x) else 1.0
+    span_y = max(float(np.ptp(y)), 1.0) if len(y) else 1.0
+    panel_width = (width - FIGURE_LEFT_MARGIN) / panels - PANEL_GAP * (panels - 1) / panels
+    return width, panel_width * span_y / span_x + extra_height
+
+
 def save_figure(fig, path):
-    """Lay out ``fig``, write it to ``path`` as PNG (90 dpi) atomically, and close it."""
+    """Lay out ``fig`` (tightly, unless it has a layout engine), write it to ``path`` as PNG (90 dpi), close it."""
     import matplotlib.pyplot as plt
 
     buffer = io.BytesIO()
-    fig.tight_layout()
+    if fig.get_layout_engine() is None:
+        fig.tight_layout()
     fig.savefig(buffer, format="png", dpi=90)
     plt.close(fig)
     atomic_write(path, lambda stream: stream.write(buffer.getvalue()))
@@ -309,6 +332,7 @@ __all__ = [
     "Markdown",
     "Section",
     "column_legend",
+    "counted",
     "cv_cell",
     "experiment_row",
     "experiment_table",
@@ -322,6 +346,7 @@ __all__ = [
     "percent",
     "repeats_legend",
     "save_figure",
+    "scene_size",
     "score_cell",
     "setting_source",
     "test_score",

@@ -12,23 +12,33 @@ from .._results import FilterResult, RunResults, repeated_scores
 from ._base import Section, frame_name, percent
 
 #: The verdicts of a finding.
-HOLDS, DOES_NOT_HOLD, UNCLEAR = "holds", "does not hold", "unclear"
+HOLDS, DOES_NOT_HOLD, CANNOT_TELL = "holds", "does not hold", "cannot tell"
 
 #: A difference is beyond the noise when it exceeds this many standard errors of its mean.
 N_STANDARD_ERRORS = 2
+
+#: How large the noise of a single search is, measured on the default run's data (user guide, "Repeats: findings
+#: beyond the noise"): what a single run of the experiments would have to exceed, and cannot measure itself.
+SINGLE_RUN_NOISE = (
+    "On the default run's data, three searches of each experiment (`--repeats 3`, seeds 0-2) moved test V1 by a "
+    "standard deviation of 0.4 to 4.3 points per tuned stage-1 experiment, and a paired difference had to exceed "
+    "0.2 to 6.4 points (2 standard errors over the three) to tell; one run cannot measure its own noise."
+)
 
 
 def paired_verdict(differences, *, strict=True):
     """The verdict on a claim that a difference of test scores is positive, from its values over repeats.
 
-    The rule of the report: with ``d_k`` the paired difference of repeat
-    ``k`` (the same seed and split for both experiments), mean ``m`` and
-    standard error ``se = sd(d, ddof=1) / sqrt(K)``, the claim *holds* when
-    ``m > 2 se`` and *does not hold* when ``m < -2 se``; otherwise it is
-    *unclear*.  Without any spread (``se = 0``, e.g. two settings that
-    label alike) a zero difference holds a non-strict claim (``>=``) and
-    not a strict one (``>``).  A single run (K = 1) has no standard error:
-    its verdict is the sign of its one difference, noise or not.
+    The rule of the report, the only place it is decided: with ``d_k`` the
+    paired difference of repeat ``k`` (the same repeat seed and split for
+    both), ``K >= 2`` repeats, mean ``m`` and standard error
+    ``se = sd(d, ddof=1) / sqrt(K)``, the claim *holds* when ``m > 2 se``
+    and *does not hold* when ``m < -2 se``; otherwise the run *cannot tell*
+    (the difference would have to exceed ``2 se`` either way).  Without any
+    spread (``se = 0``, e.g. two settings that label alike in every repeat)
+    a zero difference holds a non-strict claim (``>=``) and not a strict
+    one (``>``).  A single run (K = 1) has no spread to measure the noise
+    by: it *cannot tell*, whatever its one difference.
 
     Parameters
     ----------
@@ -39,7 +49,7 @@ def paired_verdict(differences, *, strict=True):
 
     Returns
     -------
-    verdict : {"holds", "does not hold", "unclear"}
+    verdict : {"holds", "does not hold", "cannot tell"}
     mean : float
         Mean difference.
     se : float or None
@@ -49,23 +59,25 @@ def paired_verdict(differences, *, strict=True):
     if d.ndim != 1 or len(d) == 0 or not np.isfinite(d).all():
         raise ValueError(f"differences must be a non-empty list of finite numbers, got {differences!r}")
     mean = float(d.mean())
-    se = float(d.std(ddof=1) / np.sqrt(len(d))) if len(d) > 1 else None
-    noise = N_STANDARD_ERRORS * (se or 0.0)
+    if len(d) == 1:
+        return CANNOT_TELL, mean, None
+    se = float(d.std(ddof=1) / np.sqrt(len(d)))
+    noise = N_STANDARD_ERRORS * se
     if mean > noise:
         return HOLDS, mean, se
     if mean < -noise:
         return DOES_NOT_HOLD, mean, se
     if noise == 0.0:  # no difference at all, and no spread
         return (DOES_NOT_HOLD if strict else HOLDS), mean, se
-    return UNCLEAR, mean, se
+    return CANNOT_TELL, mean, se
 
 
 def combined_verdict(verdicts):
-    """A finding of several comparisons: holds when all hold, does not when one does not, else unclear."""
+    """A finding of several comparisons: holds when all hold, does not when one does not, else cannot tell."""
     verdicts = list(verdicts)
     if all(v == HOLDS for v in verdicts):
         return HOLDS
-    return DOES_NOT_HOLD if DOES_NOT_HOLD in verdicts else UNCLEAR
+    return DOES_NOT_HOLD if DOES_NOT_HOLD in verdicts else CANNOT_TELL
 
 
 @dataclass(frozen=True)
@@ -131,9 +143,10 @@ def judge(finding: Finding, scores):
 
     Returns
     -------
-    verdict : {"holds", "does not hold", "unclear"}
+    verdict : {"holds", "does not hold", "cannot tell"}
     values : str
-        The scores (single run) or each mean paired difference in points with twice its standard error.
+        The scores (single run) or each mean paired difference in points with twice its standard error, the
+        margin it has to exceed.
     """
     verdicts, shown = [], []
     single = all(len(scores[n]) == 1 for n in finding.numbers)
@@ -141,10 +154,18 @@ def judge(finding: Finding, scores):
         verdict, mean, se = paired_verdict(_paired(scores, a, b), strict=strict)
         verdicts.append(verdict)
         if not single:
-            shown.append(f"#{a} \u2212 #{b} {100 * mean:+.2f} \u00b1 {100 * N_STANDARD_ERRORS * se:.2f} points")
+            shown.append(f"#{a} \u2212 #{b} {_points(mean)} \u00b1 {100 * N_STANDARD_ERRORS * se:.2f} points")
     if single:
         shown = [f"#{n} {percent(scores[n][0])}" for n in finding.numbers]
+        if len(finding.claims) == 1:
+            ((a, b, _),) = finding.claims
+            shown.append(f"#{a} \u2212 #{b} {_points(scores[a][0] - scores[b][0])} points")
     return combined_verdict(verdicts), ", ".join(shown)
+
+
+def _points(difference):
+    """A difference of scores 0-1 in signed percentage points, ``"+0.24"``; never ``"-0.00"``."""
+    return f"{round(100 * difference, 2) + 0.0:+.2f}"
 
 
 @dataclass(frozen=True)
@@ -213,7 +234,7 @@ def checked(results: RunResults):
     Returns
     -------
     checks : list of (str, str, str)
-        The verdict is ``"holds"``, ``"does not hold"`` or ``"unclear"`` (:func:`paired_verdict`).
+        The verdict is ``"holds"``, ``"does not hold"`` or ``"cannot tell"`` (:func:`paired_verdict`).
     """
     scores = {number: repeated_scores(result) for number, result in results.experiments.items()}
     checks = []
@@ -235,7 +256,7 @@ def markdown(results: RunResults) -> list[str]:
     if not checks:
         return []
     repeats = results.meta.repeats
-    single = "here" if repeats > 1 else "in this single run"
+    single = "here" if repeats > 1 else "from this single run"
     lines = [
         f"- {text}: **{verdict}** {'here' if text in FILTER_TEXTS else single} ({values})."
         for text, verdict, values in checks
@@ -251,20 +272,19 @@ def markdown(results: RunResults) -> list[str]:
             "test V1 over the repeats (repeat k of one experiment against repeat k of the other; the fixed #1 is "
             "the same in every repeat). A finding **holds** when the mean difference has the paper's sign and "
             f"exceeds {N_STANDARD_ERRORS} standard errors of the mean, **does not hold** when it has the opposite "
-            f"sign beyond {N_STANDARD_ERRORS} standard errors, and is **unclear** otherwise; a finding of several "
-            "comparisons holds when all hold. The numbers are the mean differences in percentage points "
-            f"\u00b1 {N_STANDARD_ERRORS} standard errors. The filter's findings come from fixed tables: no search, "
-            "no seed."
+            f"sign beyond {N_STANDARD_ERRORS} standard errors, and the run **cannot tell** otherwise; a finding of "
+            "several comparisons holds when all hold. The numbers are the mean differences in percentage points "
+            f"\u00b1 {N_STANDARD_ERRORS} standard errors: the margin a difference has to exceed to tell. The "
+            "filter's findings come from fixed tables: no search, no seed."
         )
     else:
         rule = (
-            "The rule: this is a single run (`--repeats 1`): each verdict about the experiments compares one search "
-            "per experiment, and cannot tell a difference from the noise of the search's random start, which moved "
-            "test V1 by about a point between two runs of the same search on the `--full` data, and by 1 to 8 "
-            "points (standard deviation over 3 seeds) on the default run's. The filter's findings come from fixed "
-            "tables: no search, no seed. `--repeats 3` searches each experiment with "
-            f"3 seeds and calls a finding holding (or not) only when the mean paired difference exceeds "
-            f"{N_STANDARD_ERRORS} standard errors, and unclear otherwise."
+            "The rule: this is a single run (`--repeats 1`), one search per experiment, and a single search's "
+            "random start moves its test V1 by more than most of these differences, so a single run gives no "
+            f"verdict about the experiments: each **cannot tell**. {SINGLE_RUN_NOISE} `--repeats 3` searches each "
+            "experiment with 3 seeds and calls a finding holding (or not) only when the mean paired difference "
+            f"exceeds {N_STANDARD_ERRORS} standard errors of the repeats. The filter's findings come from fixed "
+            "tables: no search, no seed."
         )
     return [
         "",

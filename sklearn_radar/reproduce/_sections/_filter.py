@@ -9,7 +9,7 @@ import numpy as np
 from .._constants import FRAMES, PAPER_FILTER_SETTING
 from .._context import RunContext
 from .._results import RunResults
-from ._base import Section, frame_name, grid_markdown, percent, save_figure
+from ._base import Section, frame_name, grid_markdown, percent, save_figure, scene_size
 
 #: The figures' files in the output folder.
 HEATMAP = "table1_heatmap.png"
@@ -66,9 +66,10 @@ def markdown(results: RunResults) -> list[str]:
         "moving road users' detections that the filter removes (the paper does not report it; errors count only "
         "the windows where this loss is concentrated).",
         "",
-        "Table I as heatmaps (FCS left, CCS right), one cell per setting with its error count; the asterisk (*) "
-        f"marks the paper's chosen setting, eta_1 = {CHOSEN[0]:.2f} m/s and d_xy = {CHOSEN[1]:.1f} m, as in the "
-        "paper's Table I.",
+        "Table I as heatmaps (FCS left, CCS right), one cell per setting with its error count, rows and columns "
+        "in the tables' order, both panels on one colour scale from 0 (a shade is the same count in both); the "
+        f"outlined cell with the asterisk (*) is the paper's chosen setting, eta_1 = {CHOSEN[0]:.2f} m/s and d_xy = "
+        f"{CHOSEN[1]:.1f} m, as in the paper's Table I.",
         "",
         f"![Table I as a heatmap]({HEATMAP})",
     ]
@@ -154,49 +155,70 @@ def figures(out: Path, results: RunResults, context: RunContext) -> dict[str, st
     """Table I's errors (from the saved results) as heatmaps, FCS beside CCS; what the filter removes in a sequence."""
     if results.filter is None:
         return {}
-    import matplotlib.pyplot as plt
-
-    _filter_scene(plt, out / FILTER_SCENE, context)
-
-    from ...evaluation import plot_filter_errors
-
-    fig, axes = plt.subplots(1, 2, figsize=(12, 5))
-    for ax, frame in zip(axes, FRAMES, strict=True):
-        plot_filter_errors(results.filter.table_i[frame].errors.to_frame(), ax=ax, chosen=CHOSEN)
-        ax.set_title(f"Table I errors, {frame_name(frame)}")
-    save_figure(fig, out / HEATMAP)
+    save_figure(filter_scene_figure(context), out / FILTER_SCENE)
+    save_figure(heatmap_figure(results), out / HEATMAP)
     return {"table1_heatmap": HEATMAP, "filter_scene": FILTER_SCENE}
 
 
-def _filter_scene(plt, path, context):
+def heatmap_figure(results: RunResults):
+    """Table I's error counts, FCS beside CCS, on one colour scale from 0 (one shade is one count in both)."""
+    import matplotlib.pyplot as plt
+
+    from ...evaluation import plot_filter_errors
+
+    grids = {frame: results.filter.table_i[frame].errors.to_frame() for frame in FRAMES}
+    highest = max(float(np.nanmax(grid.to_numpy(dtype=float))) for grid in grids.values())
+    fig, axes = plt.subplots(1, len(grids), figsize=(12, 5), sharey=True, layout="constrained")
+    for ax, (frame, grid) in zip(axes, grids.items(), strict=True):
+        plot_filter_errors(grid, ax=ax, chosen=CHOSEN, vmax=highest, colorbar=False)
+        ax.set_title(f"Table I errors, {frame_name(frame)}")
+    for ax in axes[1:]:
+        ax.set_ylabel("")
+    fig.colorbar(axes[0].images[0], ax=axes, label="error windows (object, 150 ms) below 75 % kept", shrink=0.9)
+    return fig
+
+
+#: How what the filter keeps and removes is drawn, in drawing order (what it keeps on top of what it removes): the
+#: removed object detections are few (tens against thousands kept), so they are small red crosses, visible on top
+#: without hiding the kept ones.
+FILTER_SCENE_KINDS = (
+    ("removed background", {"s": 0.6, "c": "lightskyblue", "marker": "o"}),
+    ("kept background", {"s": 0.6, "c": "0.35", "marker": "o"}),
+    ("kept, moving road users", {"s": 1.5, "c": "tab:green", "marker": "o"}),
+    ("removed, moving road users", {"s": 7, "c": "tab:red", "marker": "x", "linewidths": 0.7}),
+)
+
+
+def filter_scene_figure(context: RunContext):
     """One test sequence in FCS: kept, removed background and removed object detections at the chosen setting."""
+    import matplotlib.pyplot as plt
+    from matplotlib.lines import Line2D
+
     from ...preprocessing import DopplerDensityFilter, FrameTransform
 
     drawn = context.sequences.fetch(context.drawn_sequence)
-    sequence = drawn.id
     prepared = FrameTransform(frame="frame").fit_transform(drawn.scenes.data)
     keep = DopplerDensityFilter(vr_threshold=CHOSEN[0], d_xy=CHOSEN[1]).fit_transform(prepared)["keep"]
     keep = keep.to_numpy(dtype=bool)
     is_object = np.asarray(drawn.scenes.target) >= 0
     x, y = prepared["x"].to_numpy(), prepared["y"].to_numpy()
-    kinds = [  # in drawing order: what the filter keeps on top of the background it removes
-        (~keep & ~is_object, "removed background", {"s": 0.8, "c": "lightskyblue"}),
-        (keep & ~is_object, "kept background", {"s": 0.8, "c": "0.35"}),
-        (keep & is_object, "kept, moving road users", {"s": 2.0, "c": "tab:green"}),
-        (~keep & is_object, "removed, moving road users", {"s": 30, "c": "tab:red", "marker": "x", "linewidths": 1}),
-    ]
-    fig, ax = plt.subplots(figsize=(8, 7))
-    for zorder, (mask, name, style) in enumerate(kinds):
-        ax.scatter(x[mask], y[mask], label=f"{name}: {int(mask.sum()):,}", zorder=zorder + 1, **style)
+    masks = (~keep & ~is_object, keep & ~is_object, keep & is_object, ~keep & is_object)
+    fig, ax = plt.subplots(figsize=scene_size(x, y, width=9.0, extra_height=1.6), layout="constrained")
+    handles = []
+    for zorder, (mask, (name, style)) in enumerate(zip(masks, FILTER_SCENE_KINDS, strict=True)):
+        ax.scatter(x[mask], y[mask], zorder=zorder + 1, **style)
+        # The legend's markers all of one readable size, whatever the size drawn.
+        marker = {"marker": style["marker"], "markersize": 6 if style["marker"] == "x" else 5}
+        handles.append(Line2D([], [], linestyle="", color=style["c"], label=f"{name}: {int(mask.sum()):,}", **marker))
     ax.set(
         xlabel="x (m, FCS)",
         ylabel="y (m, FCS)",
         aspect="equal",
-        title=f"what the filter removes: test sequence {sequence}, FCS, eta_1 = {CHOSEN[0]:.2f} m/s, "
+        title=f"what the filter removes: test sequence {drawn.id}, FCS, eta_1 = {CHOSEN[0]:.2f} m/s, "
         f"d_xy = {CHOSEN[1]:.1f} m",
     )
-    ax.legend(loc="best", fontsize=8, markerscale=3)
-    save_figure(fig, path)
+    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=2, fontsize=9, frameon=False)
+    return fig
 
 
 SECTION = Section("filter", markdown, figures)

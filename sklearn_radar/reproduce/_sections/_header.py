@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 from .._results import RunResults
-from ._base import Section
+from ._base import Section, counted
 
 
 def markdown(results: RunResults) -> list[str]:
@@ -14,9 +14,9 @@ def markdown(results: RunResults) -> list[str]:
     lines = [
         "# sklearn-radar: the experiments of Scheiner et al. (ITSC 2019), re-run",
         "",
-        f"- data: {data.source}; {data.n_detections:,} detections in {data.n_sequences} sequences, split by "
-        f"sequence into a training half ({data.n_train:,} detections) and a test half ({data.n_test:,}).",
-        f"- budget: {budget.label}: {budget.n_iter} Bayesian-optimisation iterations per tuned experiment "
+        f"- data: {data.source}; {data.n_detections:,} detections in {counted(data.n_sequences, 'sequence')}, split "
+        f"by sequence into a training half ({data.n_train:,} detections) and a test half ({data.n_test:,}).",
+        f"- budget: {budget.label}: {counted(budget.n_iter, 'Bayesian-optimisation iteration')} per tuned experiment "
         f"({budget.n_initial_points} random), {budget.cv_folds}-fold CV grouped by sequence on the training half. "
         "The paper used 100 iterations (30 random) on about a million detections of real data: "
         "`sklearn-radar reproduce --full` uses that budget on about a million simulated ones. "
@@ -27,8 +27,9 @@ def markdown(results: RunResults) -> list[str]:
     ]
     if meta.repeats > 1:
         lines.append(
-            f"- repeats: every tuned experiment and baseline searched {meta.repeats} times, with the seeds "
-            f"{meta.seed}-{meta.seed + meta.repeats - 1}, on the same split; each repeat's kept setting scored on the "
+            f"- repeats: every tuned experiment and baseline searched {meta.repeats} times, with the repeat "
+            f"seeds {meta.seed}-{meta.seed + meta.repeats - 1} (each search's own seed derived from its repeat's and "
+            "its experiment), on the same split; each repeat's kept setting scored on the "
             "test half. Test scores are mean \u00b1 standard deviation over the repeats."
         )
     if meta.interrupted:

@@ -8,7 +8,7 @@ from ...experiments import get_experiment
 from .._constants import BEST_STAGE1, STAGE1
 from .._results import RunResults, repeated_scores
 from ._base import OVERFIT_GAP, SETTING_PAPER, Section, objective_name, score_cell, setting_source, test_score
-from ._comparison import FILTER_TEXTS, HOLDS, UNCLEAR, _chosen_rows, checked
+from ._comparison import CANNOT_TELL, DOES_NOT_HOLD, HOLDS, N_STANDARD_ERRORS, _chosen_rows, checked
 
 
 def markdown(results: RunResults) -> list[str]:
@@ -29,19 +29,7 @@ def markdown(results: RunResults) -> list[str]:
         lines.append(f"- best point clustering by test V1{mean}: #{best} {e.method}, {score_cell(e)}{paper}.")
     checks = checked(results)
     if checks:
-        held = [text for text, verdict, _ in checks if verdict == HOLDS]
-        unclear = [text for text, verdict, _ in checks if verdict == UNCLEAR]
-        within = f", {len(unclear)} unclear (within the noise of the repeats)" if unclear else ""
-        searched = sum(text not in FILTER_TEXTS for text, _, _ in checks)
-        single = (
-            f" ({searched} of them compare single searches, which cannot tell a difference from noise)"
-            if results.meta.repeats == 1 and searched
-            else ""
-        )
-        lines.append(
-            f"- the paper's findings: {len(held)} of {len(checks)} hold here{within}{single} (last section, "
-            "'The paper's findings, checked')."
-        )
+        lines.append(f"- {findings_line(checks, results.meta.repeats)}")
     named = [(f"#{n}", e) for n, e in sorted(experiments.items())] + list((results.baselines or {}).items())
     over = [
         name for name, r in named if r.search is not None and r.search.cv_best - test_score(r, results) > OVERFIT_GAP
@@ -78,6 +66,23 @@ def markdown(results: RunResults) -> list[str]:
     if not lines:
         return []
     return ["", "## At a glance", "", *lines]
+
+
+def findings_line(checks, repeats):
+    """How many findings hold, do not and cannot be told, and why the run cannot tell."""
+    count = {verdict: sum(v == verdict for _, v, _ in checks) for verdict in (HOLDS, DOES_NOT_HOLD, CANNOT_TELL)}
+    why = ""
+    if count[CANNOT_TELL]:
+        why = (
+            f" (within {N_STANDARD_ERRORS} standard errors of the repeats)"
+            if repeats > 1
+            else " (they compare single searches, and a single run gives no verdict on them: `--repeats 3` repeats "
+            "each search)"
+        )
+    return (
+        f"the paper's findings, {len(checks)} checked: {count[HOLDS]} hold, {count[DOES_NOT_HOLD]} do not hold, "
+        f"{count[CANNOT_TELL]} cannot tell{why} (last section, 'The paper's findings, checked')."
+    )
 
 
 #: How the summary names each figure.
