@@ -80,5 +80,5 @@ def test_verdict_needs_repeats_and_a_difference_beyond_two_standard_errors():
     said = verdict([0.60, 0.62, 0.58], [0.50, 0.50, 0.50], "B")
     assert said.startswith("PQ +0.100 +- 0.012") and said.endswith("higher.")
     # Differences +0.05, -0.03, +0.01: mean 0.01, se 0.023: within the noise.
-    assert "not different beyond the noise" in verdict([0.55, 0.47, 0.51], [0.50, 0.50, 0.50], "B")
+    assert "cannot tell (within the noise)" in verdict([0.55, 0.47, 0.51], [0.50, 0.50, 0.50], "B")
     assert verdict([0.40, 0.41], [0.50, 0.50], "B").endswith("lower.")

@@ -852,7 +852,7 @@ class ObjectRepeat(_JsonRecord):
     Attributes
     ----------
     seed : int
-        Random seed of the repeat's searches.
+        The run's seed plus the repeat's index; each search draws from its own stream of it (``search_seed``).
     stage1_params, params : dict
         The kept stage-1 (``filter__``, ``cluster__``) and stage-2 (``merge__``) settings.
     v1_test : float

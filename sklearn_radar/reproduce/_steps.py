@@ -593,7 +593,7 @@ class _ObjectSearched:
 
 @dataclass(frozen=True)
 class _ObjectRepeat:
-    """``job(executor, k)``: repeat ``k`` of the object experiment, its two searches with the seed ``seed + k``."""
+    """``job(executor, k)``: repeat ``k`` of the object experiment; each of its two searches has its own seed stream."""
 
     env: RunEnv
 
@@ -601,10 +601,16 @@ class _ObjectRepeat:
         env = dataclasses.replace(self.env.on(executor), objective="pq")
         label, seed = _repeat_label(OBJECTS, k, env.repeats), env.seed + k
         stage1, stage1_search = tune(
-            env, OBJECTS, object_pipeline(1), object_search_space(1), f"{label} stage 1", seed=seed
+            env,
+            OBJECTS,
+            object_pipeline(1),
+            object_search_space(1),
+            f"{label} stage 1",
+            seed=search_seed(seed, f"{OBJECTS} stage 1"),
         )
         pipeline = object_pipeline(2, stage1_params=stage1, memory=env.cache)
-        params, search = tune(env, OBJECTS, pipeline, object_search_space(2), f"{label} stage 2", seed=seed)
+        stage2_seed = search_seed(seed, f"{OBJECTS} stage 2")
+        params, search = tune(env, OBJECTS, pipeline, object_search_space(2), f"{label} stage 2", seed=stage2_seed)
         offline = score_on_test(env, pipeline.set_params(**params))
         causal = score_on_test(env, object_pipeline(2, stage1_params=stage1, params=params, causal=True))
         record = ObjectRepeat(

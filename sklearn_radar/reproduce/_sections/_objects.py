@@ -2,17 +2,14 @@
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from .._results import RunResults, repeated_scores
 from ._base import Section, format_params
+from ._comparison import DOES_NOT_HOLD, HOLDS, N_STANDARD_ERRORS, paired_verdict
 
 #: Baselines that decide from the past only, set beside the object experiment's causal run.
 CAUSAL_MARK = "sliding past window"
-#: A mean paired difference counts as one only beyond this many standard errors.
-STANDARD_ERRORS = 2.0
 
 
 def markdown(results: RunResults) -> list[str]:
@@ -57,23 +54,45 @@ def markdown(results: RunResults) -> list[str]:
 
 
 def verdict(ours, theirs, name):
-    """What the paired PQ differences (repeat k against repeat k, same split) say, beyond the noise or not.
+    """What the paired PQ differences (repeat k against repeat k, same split) say, by the report's one rule.
 
-    One run cannot tell: its difference is quoted, and no verdict is drawn.  With repeats, the difference counts
-    only when its mean lies beyond :data:`STANDARD_ERRORS` standard errors of the paired differences.
+    :func:`~._comparison.paired_verdict`: one run cannot tell (its difference is quoted, no verdict drawn); with
+    repeats the difference counts only beyond two standard errors of the paired differences.
     """
     n = min(len(ours), len(theirs))
     differences = np.asarray(ours[:n], dtype=np.float64) - np.asarray(theirs[:n], dtype=np.float64)
-    mean = float(differences.mean())
-    if n < 2:
+    said, mean, se = paired_verdict(differences)
+    if se is None:
         return (
             f"PQ {mean:+.3f} against {name} in one run: one run cannot tell a difference from the seed-to-seed "
             "spread; run with `--repeats 5` for a verdict."
         )
-    se = float(differences.std(ddof=1) / math.sqrt(n))
-    beyond = abs(mean) > STANDARD_ERRORS * se
-    said = ("higher" if mean > 0 else "lower") if beyond else "not different beyond the noise"
-    return f"PQ {mean:+.3f} +- {se:.3f} (mean paired difference +- standard error, {n} repeats) against {name}: {said}."
+    words = {HOLDS: "higher", DOES_NOT_HOLD: "lower"}.get(said, "cannot tell (within the noise)")
+    return (
+        f"PQ {mean:+.3f} +- {se:.3f} (mean paired difference +- standard error, {n} repeats; it counts beyond "
+        f"{N_STANDARD_ERRORS:g} standard errors) against {name}: {words}."
+    )
+
+
+def glance_line(results: RunResults):
+    """The object experiment's PQ offline and causally beside the best baselines', for "At a glance"; or None."""
+    objects = results.objects
+    if objects is None:
+        return None
+    ours = {
+        "offline": [r.instance_test.pq for r in objects.every_repeat],
+        "causally": [r.causal_instance_test.pq for r in objects.every_repeat],
+    }
+    parts = []
+    for (mode, pq), baseline in zip(ours.items(), _best_baselines(results), strict=True):
+        part = f"{_cell(pq)} {mode}"
+        if baseline is not None:
+            theirs = repeated_scores(baseline[1], "pq")
+            n = min(len(pq), len(theirs))
+            said = paired_verdict(np.subtract(pq[:n], theirs[:n]))[0]
+            part += f" against {_cell(theirs)} for {baseline[0]} (higher: {said})"
+        parts.append(part)
+    return f"the framework set up for objects, tuned for PQ: test PQ {'; '.join(parts)}; its section has the details."
 
 
 def _best_baselines(results: RunResults):

@@ -9,6 +9,7 @@ from .._constants import BEST_STAGE1, STAGE1
 from .._results import RunResults, repeated_scores
 from ._base import OVERFIT_GAP, SETTING_PAPER, Section, objective_name, score_cell, setting_source, test_score
 from ._comparison import CANNOT_TELL, DOES_NOT_HOLD, HOLDS, N_STANDARD_ERRORS, _chosen_rows, checked
+from ._objects import glance_line
 
 
 def markdown(results: RunResults) -> list[str]:
@@ -30,6 +31,9 @@ def markdown(results: RunResults) -> list[str]:
     checks = checked(results)
     if checks:
         lines.append(f"- {findings_line(checks, results.meta.repeats)}")
+    objects = glance_line(results)
+    if objects:
+        lines.append(f"- {objects}")
     named = [(f"#{n}", e) for n, e in sorted(experiments.items())] + list((results.baselines or {}).items())
     over = [
         name for name, r in named if r.search is not None and r.search.cv_best - test_score(r, results) > OVERFIT_GAP
