@@ -41,6 +41,10 @@ class ScanResult:
     merges : list of (int, int)
         The stage-2 pairs (A, B) accepted at this scan, as stage-1 labels: the offline ``ClusterMerger``'s
         ``merges_``, decided here.
+    joins : list of (int, int)
+        The pairs of stage-1 labels that stage 2 made one object at this scan: ``merges`` when
+        ``min_samples`` is 1; with a larger one the joins of the DBSCAN over clusters (core partners, a
+        non-core cluster with its first core partner), each as soon as it is certain.
     """
 
     labels: np.ndarray
@@ -49,6 +53,7 @@ class ScanResult:
     objects: ObjectList
     aliases: list
     merges: list
+    joins: list
 
 
 class _Sequence:
@@ -78,7 +83,10 @@ class OnlinePipeline:
     * stage 1 is :class:`~sklearn_radar.cluster.ScanStream` (the last ``eps_t``);
     * stage 2 decides a pair (A, B) at ``tau = min(end of B, s_B + eps_t2)``
       from the detections at or before tau, as soon as they have all arrived
-      (at the latest ``eps_t`` after B's last detection).
+      (at the latest ``eps_t`` after B's last detection); with ClusterMerger's
+      ``min_samples`` above 1 a join of the DBSCAN over clusters is made as
+      soon as it is certain (:attr:`ScanResult.joins`), which for a non-core
+      cluster can be later: when the partner counts it depends on are final.
 
     The stage-1 labels equal the causal pipeline's detection for detection,
     and the object ids resolved through the stage-2 aliases give its merged
@@ -105,10 +113,8 @@ class OnlinePipeline:
     ----------
     pipeline : sklearn.pipeline.Pipeline
         The offline pipeline; read once, at construction.  Stage 1's
-        ``eps_t`` must be set (the window), ``cluster_vr_min`` of both stages
-        None (the gate judges whole clusters) and ClusterMerger's
-        ``min_samples`` 1 (the paper's; a larger one makes a merge depend on
-        later pairs): a ValueError otherwise.
+        ``eps_t`` must be set (the window) and ``cluster_vr_min`` of both
+        stages None (the gate judges whole clusters): a ValueError otherwise.
 
     Examples
     --------
@@ -207,7 +213,7 @@ class OnlinePipeline:
         c = _read_scan(scan)
         n = len(c["timestamp"])
         if n == 0:
-            return _empty_result([], [])
+            return _empty_result([], [], [])
         sequence, us = int(c["sequence"][0]), int(c["timestamp"][0])
         state = self._sequences.get(sequence)
         if state is None:
@@ -228,8 +234,8 @@ class OnlinePipeline:
                 aliases.append(self._ids.merge(s, a, us, "stage1"))
         window = self._stage1._windows.get(float(sequence))
         growing = set() if window is None else set(np.unique(window.cluster).tolist())
-        merges = state.merge.decide(float(t[0]), growing)
-        for a, b in merges:
+        merges, joins = state.merge.decide(float(t[0]), growing)
+        for a, b in joins:
             aliases.append(self._ids.merge(a, b, us, "stage2"))
         result = ScanResult(
             labels=labels,
@@ -240,6 +246,7 @@ class OnlinePipeline:
             else empty_object_list(),
             aliases=[alias for alias in aliases if alias is not None],
             merges=merges,
+            joins=joins,
         )
         self._ids.forget(state.merge.gone)
         return result
@@ -253,12 +260,13 @@ class OnlinePipeline:
             Without detections; its ``aliases`` and ``merges`` are those decided now, the aliases stamped
             with the last time of their sequence.
         """
-        aliases, merges = [], []
+        aliases, merges, joins = [], [], []
         for state in self._sequences.values():
-            decided = state.merge.decide(np.inf, None)
+            decided, joined = state.merge.decide(np.inf, None)
             merges += decided
-            aliases += [self._ids.merge(a, b, state.last_us, "stage2") for a, b in decided]
-        return _empty_result([alias for alias in aliases if alias is not None], merges)
+            joins += joined
+            aliases += [self._ids.merge(a, b, state.last_us, "stage2") for a, b in joined]
+        return _empty_result([alias for alias in aliases if alias is not None], merges, joins)
 
     def _objects(self, state, sequence, now_us, now, labels, aliases):
         """The scan's object list: the objects it updated (detected or merged) get new figures."""
@@ -279,10 +287,10 @@ class OnlinePipeline:
         return state.objects.listed(sequence, now_us, oldest_us, self._ids.first_us)
 
 
-def _empty_result(aliases, merges):
+def _empty_result(aliases, merges, joins):
     """A ScanResult without detections."""
     none = np.zeros(0, dtype=np.int64)
-    return ScanResult(none, none, np.zeros(0, dtype=bool), empty_object_list(), aliases, merges)
+    return ScanResult(none, none, np.zeros(0, dtype=bool), empty_object_list(), aliases, merges, joins)
 
 
 def _stages(pipeline):
@@ -316,11 +324,6 @@ def _stages(pipeline):
     if merger is not None:
         if merger.cluster_vr_min is not None:
             raise ValueError("OnlinePipeline: ClusterMerger's cluster_vr_min judges whole clusters; set it to None")
-        if merger.min_samples != 1:
-            raise ValueError(
-                f"OnlinePipeline: ClusterMerger's min_samples must be 1 (a merge would depend on later pairs), "
-                f"got {merger.min_samples}"
-            )
     return frame, filter_, stage1, merger
 
 

@@ -30,9 +30,9 @@ def replay(online, data):
         result = online.update({name: values[rows] for name, values in columns.items()}, objects=False)
         labels[rows], object_ids[rows], keep[rows] = result.labels, result.object_ids, result.keep
         aliases += result.aliases
-        merges += result.merges
+        merges += result.joins
     end = online.finish()
-    return labels, object_ids, keep, aliases + end.aliases, merges + end.merges
+    return labels, object_ids, keep, aliases + end.aliases, merges + end.joins
 
 
 def stage2_resolution(labels, merges):
@@ -146,7 +146,6 @@ def test_a_scan_older_than_its_sensor_raises():
     [
         (make_pipeline(FrameTransform(), RadarDBSCAN(eps_t=None)), "eps_t"),
         (make_pipeline(FrameTransform(), RadarDBSCAN(cluster_vr_min=0.2)), "cluster_vr_min"),
-        (make_pipeline(FrameTransform(), ClusterMerger(min_samples=2)), "min_samples"),
         (make_pipeline(FrameTransform(), ClusterMerger(cluster_vr_min=0.2)), "cluster_vr_min"),
         (make_pipeline(DopplerDensityFilter(), RadarDBSCAN()), "FrameTransform"),
     ],
@@ -222,19 +221,26 @@ def test_the_windows_keep_a_bounded_span_of_time():
     """Memory stays flat: no window keeps detections older than its span, however long the stream runs."""
     data = make_scenes(n_sequences=1, duration=12.0, random_state=7, difficulty="realistic").data
     online = OnlinePipeline(experiment_pipeline(13))
-    merger = online._merger
-    eps_t, eps_t2 = 0.25, float(merger.eps_t2)
-    # Stage 2 keeps max(eps_t2, 4 eps_t) + 0.05 s before the oldest undecided cluster, which is at most
-    # eps_t2 + eps_t (+ one scan gap) old: a bound that does not grow with the recording.
-    bound = max(eps_t2, 4 * eps_t) + 0.05 + eps_t2 + eps_t + 0.1
+    eps_t, eps_t2 = 0.25, float(online._merger.eps_t2)
+    # The oldest undecided cluster is at most eps_t2 + eps_t (+ one scan gap) old; before it, stage 2 keeps the
+    # rows of eps_t (the object list) and the scan centres of eps_t2 + 4 eps_t (the continuation's five last
+    # scans), each + 0.05 s: bounds that do not grow with the recording.
+    pending = eps_t2 + eps_t + 0.1
+    bounds = {"rows": eps_t + 0.05 + pending, "tracks": eps_t2 + 4 * eps_t + 0.05 + pending, "stage 1": eps_t + 0.05}  # stage 1 prunes at scans with active rows
     columns = {name: data[name].to_numpy() for name in data.columns if name not in ("uuid", "track_id")}
-    spans = []
+    spans = {name: [] for name in bounds}
     for rows in scans_in_time_order(data):
         online.update({name: values[rows] for name, values in columns.items()}, objects=False)
         now = columns["timestamp"][rows[0]] * 1e-6
         state = online._sequences[int(columns["sequence"][rows[0]])]
-        kept = [state.merge.rows["t"], online._stage1._windows[float(columns["sequence"][rows[0]])].points.t]
-        spans.append(max(now - times.min() for times in kept if len(times)))
+        kept = {
+            "rows": state.merge.rows["t"],
+            "tracks": state.merge.tracks["t"],
+            "stage 1": online._stage1._windows[float(columns["sequence"][rows[0]])].points.t,
+        }
+        for name, times in kept.items():
+            spans[name].append(now - times.min() if len(times) else 0.0)
         assert len(online._ids.root) <= len(state.merge.clusters) + len(online._stage1._windows)
-    assert max(spans) <= bound
-    assert max(spans) > 0.5 * bound  # the check sees windows that do fill
+    for name, bound in bounds.items():
+        assert max(spans[name]) <= bound + 1e-9, name
+        assert max(spans[name]) > 0.5 * bound, name  # the check sees windows that do fill
