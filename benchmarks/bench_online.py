@@ -51,7 +51,8 @@ def retained_rows(online):
     """Rows held by the windows of the stream (filter, stage 1, stage 2) and the ids remembered."""
     rows = sum(window.points.t.shape[0] for window in online._stage1._windows.values())
     for state in online._sequences.values():
-        rows += state.merge.rows["t"].shape[0] + (0 if state.filter is None else state.filter.block.shape[1])
+        rows += state.merge.rows["t"].shape[0] + state.merge.tracks["t"].shape[0]
+        rows += 0 if state.filter is None else state.filter.t.shape[0]
     return rows, len(online._ids.root)
 
 

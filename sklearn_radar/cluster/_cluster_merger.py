@@ -22,7 +22,7 @@ from ._merge_kernels import (
     velocity_frames,
 )
 from ._radar_dbscan import RadarDBSCAN, _gate_static_clusters
-from ._velocity import _estimate_velocities
+from ._velocity import _VELOCITY_DEFAULTS, _estimate, _estimate_velocities
 
 
 def _stage1_labels(stage1, columns):
@@ -248,9 +248,14 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
         group = np.repeat(np.arange(len(first)), length)
         position = np.arange(len(group)) - np.repeat(np.cumsum(length) - length, length) + np.repeat(first, length)
         rows = runs.order[position]
-        vx, vy, _, groups = _estimate_velocities(v_r[rows], los[rows], group)
-        velocity = np.full((len(first), 2), np.nan)
-        velocity[groups.astype(np.int64)] = np.c_[vx, vy]
+        frame_v_r, frame_los = v_r[rows], los[rows]
+        if np.isfinite(frame_v_r.sum() + frame_los.sum()):  # groups 0, 1, ... sorted, none empty: no regrouping
+            vx, vy, _ = _estimate(frame_v_r, frame_los, group, len(first), *_VELOCITY_DEFAULTS)
+            velocity = np.c_[vx, vy]
+        else:
+            vx, vy, _, groups = _estimate_velocities(frame_v_r, frame_los, group)
+            velocity = np.full((len(first), 2), np.nan)
+            velocity[groups.astype(np.int64)] = np.c_[vx, vy]
         va, vb = velocity[0::2], velocity[1::2]
         known = np.isfinite(va).all(axis=1) & np.isfinite(vb).all(axis=1)
         with np.errstate(invalid="ignore"):

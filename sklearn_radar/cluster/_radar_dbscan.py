@@ -530,14 +530,17 @@ class ScanStream:
         c = {name: column(values, name) for name, values in given.items()}
         return self._label(c)
 
-    def _label(self, c):
+    def _label(self, c, one_scan=None):
+        """Labels of the rows of the read columns ``c``; ``one_scan``: True when the caller checked that they are
+        one scan of one sequence (the online pipeline), None to find out."""
         self._meetings = []
         active, min_points, can_be_core = self.clusterer._point_rules(c)
         n = len(c["x"])
         labels = np.full(n, -1, dtype=np.int64)
         sequence = np.zeros(n) if c["sequence"] is None else c["sequence"]
         heading = np.zeros(n) if c["heading"] is None else c["heading"]
-        one_scan = n > 0 and np.all(sequence == sequence[0]) and np.all(c["t"] == c["t"][0])
+        if one_scan is None:
+            one_scan = n > 0 and np.all(sequence == sequence[0]) and np.all(c["t"] == c["t"][0])
         if one_scan:
             groups = [np.arange(n)]
         else:

@@ -65,6 +65,10 @@ _BLOCK_ELEMENTS = 1 << 20
 
 _EPS = float(np.finfo(np.float64).eps)
 
+#: ``_estimate``'s settings after ``n_groups`` for the defaults of :func:`estimate_velocities`:
+#: min_detections, min_spread (rad), inlier_threshold (m/s), max_trials, random_state.
+_VELOCITY_DEFAULTS = (3, 0.05, 0.25, 60, 0)
+
 
 #: Seeds :func:`numpy.random.default_rng` accepts (an int must be non-negative).
 _SEEDS = [
@@ -211,31 +215,33 @@ def _axial_spread(theta, mask):
 
 
 @numba.njit(cache=True, nogil=True)
-def _fit_block(v_r, cos_t, sin_t, theta, index, pair_i, pair_j, min_detections, min_spread, threshold):
-    """RANSAC over pairs, least squares, one re-selection, final fit, for G groups of n detections.
+def _fit_groups(v_r, cos_t, sin_t, theta, start, size, pair_start, n_pairs, pair_i, pair_j, min_detections,
+                min_spread, threshold):
+    """RANSAC over pairs, least squares, one re-selection, final fit, for each group.
 
-    ``index`` (G, n) gives the rows of each group in ``v_r``, ``cos_t``,
-    ``sin_t`` and ``theta``; ``pair_i``, ``pair_j`` (1 or G, n_pairs) the
-    hypothesis pairs (one row shared by all groups, or one per group).
-    Returns ``vx``, ``vy`` (NaN when unknown) and ``n_inliers``, each of
-    shape (G,).  A compiled loop per group: the numpy form over stacked
-    groups cost about 200 us per group size in the online stage 2.
+    Group g is the rows ``[start[g], start[g] + size[g])`` of ``v_r``,
+    ``cos_t``, ``sin_t`` and ``theta``; its hypotheses are the pairs
+    ``pair_i[k], pair_j[k]`` (indices within the group) for ``k`` in
+    ``[pair_start[g], pair_start[g] + n_pairs[g])``.  Returns ``vx``, ``vy``
+    (NaN when unknown) and ``n_inliers``, each of shape (G,).  A compiled
+    loop: the numpy form over stacked groups of one size cost about 200 us
+    per size in the online stage 2.
     """
-    n_groups, n = index.shape
+    n_groups = len(start)
     vx = np.full(n_groups, np.nan)
     vy = np.full(n_groups, np.nan)
     n_inliers = np.zeros(n_groups, dtype=np.int64)
-    r, c, s, th = np.empty(n), np.empty(n), np.empty(n), np.empty(n)
-    mask = np.zeros(n, dtype=np.bool_)
-    best_mask = np.zeros(n, dtype=np.bool_)
+    largest = 0
     for g in range(n_groups):
-        for m in range(n):
-            row = index[g, m]
-            r[m], c[m], s[m], th[m] = v_r[row], cos_t[row], sin_t[row], theta[row]
-        pairs = 0 if pair_i.shape[0] == 1 else g
+        largest = max(largest, size[g])
+    mask = np.zeros(largest, dtype=np.bool_)
+    best_mask = np.zeros(largest, dtype=np.bool_)
+    for g in range(n_groups):
+        n = size[g]
+        r, c, s = v_r[start[g] : start[g] + n], cos_t[start[g] : start[g] + n], sin_t[start[g] : start[g] + n]
         best_count, best_squared, has_pair = -2, np.inf, False
-        for h in range(pair_i.shape[1]):
-            i, j = pair_i[pairs, h], pair_j[pairs, h]
+        for h in range(pair_start[g], pair_start[g] + n_pairs[g]):
+            i, j = pair_i[h], pair_j[h]
             # Closed-form solution of [[c_i, s_i], [c_j, s_j]] @ (vx, vy) = (r_i, r_j).
             det = c[i] * s[j] - s[i] * c[j]  # = sin(theta_j - theta_i)
             valid = abs(det) >= _MIN_PAIR_SINE
@@ -256,30 +262,32 @@ def _fit_block(v_r, cos_t, sin_t, theta, index, pair_i, pair_j, min_detections, 
             # Most inliers; tie: least squared residual; tie: the first hypothesis.
             if count > best_count or (count == best_count and squared < best_squared):
                 best_count, best_squared = count, squared
-                best_mask[:] = mask
-        fx, fy = _masked_lstsq(c, s, r, best_mask)
+                best_mask[:n] = mask[:n]
+        fx, fy = _masked_lstsq(c, s, r, best_mask[:n])
         n_reselected = 0
         for m in range(n):
             mask[m] = abs(r[m] - (fx * c[m] + fy * s[m])) < threshold
             n_reselected += mask[m]
         if n_reselected >= 2:
-            best_mask[:] = mask
-        fx, fy = _masked_lstsq(c, s, r, best_mask)
+            best_mask[:n] = mask[:n]
+        fx, fy = _masked_lstsq(c, s, r, best_mask[:n])
         count = 0
         for m in range(n):
             count += best_mask[m]
         n_inliers[g] = count if has_pair else 0
-        if has_pair and count >= min_detections and _axial_spread(th, best_mask) >= min_spread:
-            vx[g], vy[g] = fx, fy
+        if has_pair and count >= min_detections:
+            if _axial_spread(theta[start[g] : start[g] + n], best_mask[:n]) >= min_spread:
+                vx[g], vy[g] = fx, fy
     return vx, vy, n_inliers
 
 
 def _estimate(v_r, theta, group_id, n_groups, min_detections, min_spread, threshold, max_trials, random_state):
     """Estimate every group; rows must be finite and sorted by ``group_id`` (0 .. n_groups - 1).
 
-    Groups of equal size share their hypothesis pairs; a shared generator
-    draws them for blocks of groups (as many as ``_BLOCK_ELEMENTS``
-    residuals), so that its stream is consumed as before the compiled fit.
+    Groups of equal size share their hypothesis pairs, unless a shared
+    generator draws them: then it draws them for blocks of groups of one
+    size (as many as ``_BLOCK_ELEMENTS`` residuals), the order in which the
+    stacked numpy form consumed its stream.
     """
     vx = np.full(n_groups, np.nan)
     vy = np.full(n_groups, np.nan)
@@ -288,23 +296,36 @@ def _estimate(v_r, theta, group_id, n_groups, min_detections, min_spread, thresh
     starts = np.concatenate(([0], np.cumsum(sizes)[:-1]))
     v_r, theta = np.ascontiguousarray(v_r, dtype=np.float64), np.ascontiguousarray(theta, dtype=np.float64)
     cos_t, sin_t = np.cos(theta), np.sin(theta)
-    reseed = _reseedable(random_state)
-    shared_rng = None if reseed else np.random.default_rng(random_state)
-    for n in np.unique(sizes[sizes >= min_detections]).tolist():
+    settings = (min_detections, min_spread, threshold)
+    fitted = np.flatnonzero(sizes >= min_detections)
+    if len(fitted) == 0:
+        return vx, vy, n_inliers
+    if _reseedable(random_state):  # the pairs depend on the size only: one table per size, one compiled call
+        distinct, of_group = np.unique(sizes[fitted], return_inverse=True)
+        tables = [_fresh_pairs(n, max_trials, random_state) for n in distinct.tolist()]
+        n_pairs = np.array([pair_i.shape[1] for pair_i, _ in tables], dtype=np.int64)
+        table_start = np.concatenate(([0], np.cumsum(n_pairs)[:-1]))
+        pair_i = np.concatenate([pair_i[0] for pair_i, _ in tables])
+        pair_j = np.concatenate([pair_j[0] for _, pair_j in tables])
+        of_group = of_group.ravel()
+        vx[fitted], vy[fitted], n_inliers[fitted] = _fit_groups(
+            v_r, cos_t, sin_t, theta, starts[fitted], sizes[fitted], table_start[of_group], n_pairs[of_group],
+            pair_i, pair_j, *settings,
+        )
+        return vx, vy, n_inliers
+    shared_rng = np.random.default_rng(random_state)
+    for n in np.unique(sizes[fitted]).tolist():
         members = np.flatnonzero(sizes == n)
-        random = n * (n - 1) // 2 > max_trials
-        n_pairs = max_trials if random else n * (n - 1) // 2
-        if not random or reseed:
-            # Same draw for every group of this size: a generator seeded afresh, as for one group.
-            pair_i, pair_j = _fresh_pairs(n, max_trials, random_state)
+        n_pairs = max_trials if n * (n - 1) // 2 > max_trials else n * (n - 1) // 2
         block = max(1, _BLOCK_ELEMENTS // (n_pairs * n))
         for first in range(0, members.shape[0], block):
             chunk = members[first : first + block]
-            if random and not reseed:
-                pair_i, pair_j = _pairs(n, max_trials, shared_rng, chunk.shape[0])
-            index = starts[chunk][:, None] + np.arange(n)
-            vx[chunk], vy[chunk], n_inliers[chunk] = _fit_block(
-                v_r, cos_t, sin_t, theta, index, pair_i, pair_j, min_detections, min_spread, threshold
+            pair_i, pair_j = _pairs(n, max_trials, shared_rng, chunk.shape[0])
+            rows = pair_i.shape[0]  # 1 (all pairs, shared) or one row per group
+            pair_start = (np.arange(len(chunk)) if rows > 1 else np.zeros(len(chunk), dtype=np.int64)) * n_pairs
+            vx[chunk], vy[chunk], n_inliers[chunk] = _fit_groups(
+                v_r, cos_t, sin_t, theta, starts[chunk], sizes[chunk], pair_start.astype(np.int64),
+                np.full(len(chunk), n_pairs, dtype=np.int64), pair_i.ravel(), pair_j.ravel(), *settings,
             )
     return vx, vy, n_inliers
 

@@ -40,7 +40,7 @@ class FilterWindow:
         self.vr_threshold = filter_.vr_threshold
         self.ratios, self.min_neighbors = filter_._rule()
         self.origin = None
-        self.block = np.zeros((3, 0))  # x, y (m), t relative to the origin (s)
+        self.x, self.y, self.t = np.zeros(0), np.zeros(0), np.zeros(0)  # m, m, s relative to the origin
 
     def keep(self, x, y, t, v_r):
         """Eq. 1 for a new scan (``t``: its times, s); the scan joins the window."""
@@ -49,8 +49,10 @@ class FilterWindow:
         if len(t) == 0:
             return np.zeros(0, dtype=bool)
         relative = t - self.origin
-        first_kept = int(np.searchsorted(self.block[2], relative[0] - self.dt, side="left"))
-        self.block = np.concatenate([self.block[:, first_kept:], np.vstack([x, y, relative])], axis=1)
-        first_new = self.block.shape[1] - len(t)
-        counts = _count_past(self.block[0], self.block[1], self.block[2], first_new, self.d_xy**2, self.dt)
+        first_kept = int(np.searchsorted(self.t, relative[0] - self.dt, side="left"))
+        self.x = np.concatenate([self.x[first_kept:], x])
+        self.y = np.concatenate([self.y[first_kept:], y])
+        self.t = np.concatenate([self.t[first_kept:], relative])
+        first_new = len(self.t) - len(t)
+        counts = _count_past(self.x, self.y, self.t, first_new, self.d_xy**2, self.dt)
         return _doppler_density_keep(v_r, counts, self.vr_threshold, self.ratios, self.min_neighbors)

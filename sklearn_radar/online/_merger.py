@@ -80,15 +80,16 @@ class MergeWindow:
         self.components = None if merger is None else MergeComponents(int(merger.min_samples), self.eps_t2)
         self.clusters = {}
         self.pending = set()  # labels of the clusters not yet decided as B
+        self.absorbed = set()  # labels whose rows stage 1 gave to an older cluster (they grow no more)
         self.rows = _empty(_ROWS)
         self.tracks = _empty(_TRACKS)  # continuation: one entry per (cluster, scan), its centre
         self.gone = []  # the clusters forgotten by the last decide()
 
     def add(self, labels, t, x, y, v_r, los, timestamp_us):
-        """Append a scan's clustered rows (``labels >= 0``) and register the clusters it starts."""
+        """Append a scan's clustered rows (``labels >= 0``), register the clusters it starts; returns its labels."""
         clustered = np.flatnonzero(labels >= 0)
         if len(clustered) == 0:
-            return
+            return []
         label = labels[clustered]
         keys = [x[clustered], y[clustered], v_r[clustered], *((los[clustered],) if self.velocity else ())]
         order = np.lexsort((*keys[::-1], label))  # by label, then the offline keys (one time: the scan's)
@@ -106,7 +107,8 @@ class MergeWindow:
             self.tracks = {name: np.concatenate([self.tracks[name], scan[name]]) for name in _TRACKS}
         now = float(new["t"][0])
         names = ("t", "x", "y", "v_r", *(("los",) if self.velocity else ()))
-        for cluster_label, row in zip(label[first].tolist(), first.tolist(), strict=True):
+        scan_labels = label[first].tolist()
+        for cluster_label, row in zip(scan_labels, first.tolist(), strict=True):
             cluster = self.clusters.get(cluster_label)
             if cluster is not None:
                 cluster.latest = now
@@ -115,16 +117,28 @@ class MergeWindow:
             self.clusters[cluster_label] = _Cluster(key=key, start=now, latest=now, decided=self.merger is None)
             if self.merger is not None:
                 self.pending.add(cluster_label)
+        return scan_labels
 
-    def decide(self, now, growing):
+    def growing(self, label, window_start):
+        """Whether stage-1 cluster ``label`` can still receive detections.
+
+        It can while it has a detection in stage 1's window (which starts at
+        ``window_start``, s; None: the stream ended): its latest detection
+        is there (the rows other clusters gave it when they met are older
+        than the detection that met them, which it got) and it did not give
+        its rows to an older cluster.
+        """
+        return window_start is not None and label not in self.absorbed and self.clusters[label].latest >= window_start
+
+    def decide(self, now, window_start):
         """Decide the pending clusters whose data are complete.
 
         Parameters
         ----------
         now : float
             s, the time of the scan just added.
-        growing : set of int or None
-            Stage-1 ids that can still receive detections; None: none can (end of the stream).
+        window_start : float or None
+            s, the time of the oldest detection in stage 1's window (inf: none); None: the stream ended.
 
         Returns
         -------
@@ -140,8 +154,7 @@ class MergeWindow:
         due = [
             label
             for label in self.pending
-            if growing is None
-            or label not in growing
+            if not self.growing(label, window_start)
             or self.clusters[label].latest > self.clusters[label].start + self.eps_t2
         ]
         pairs = []
@@ -156,7 +169,7 @@ class MergeWindow:
                 if a != b and cluster_a.key < cluster_b.key and cluster_a.latest > threshold
             ]
         accepted = self._accepted(pairs) if pairs else []
-        joins = self.components.update(accepted, self, now, growing)
+        joins = self.components.update(accepted, self, now, window_start)
         self._prune(now)
         return accepted, joins
 
@@ -193,16 +206,17 @@ class MergeWindow:
         ]
         for label in gone:
             del self.clusters[label]
+            self.absorbed.discard(label)
         self.gone = gone
 
-    def is_final(self, label, now, growing):
+    def is_final(self, label, now, window_start):
         """Whether no pair with cluster ``label`` can still be decided (its partner count is final)."""
         cluster = self.clusters.get(label)
         if cluster is None:
             return True  # forgotten: long past every decision
-        if not cluster.decided or (growing is not None and label in growing):
+        if not cluster.decided or self.growing(label, window_start):
             return False
-        if growing is not None and cluster.latest > now - self.eps_t2:
+        if window_start is not None and cluster.latest > now - self.eps_t2:
             return False  # a cluster starting after now could still pair with it
         return not any(
             self.clusters[b].key > cluster.key and cluster.latest > self.clusters[b].start - self.eps_t2
@@ -253,7 +267,7 @@ class MergeComponents:
         """The clusters whose pairs are still remembered (their records must be kept)."""
         return self.partners.keys()
 
-    def update(self, accepted, window, now, growing):
+    def update(self, accepted, window, now, window_start):
         """Register the pairs accepted now; returns the joins that are certain now."""
         if self.min_samples <= 1:
             return list(accepted)
@@ -274,15 +288,15 @@ class MergeComponents:
                 joins.append((a, b))
         for one in newly_core:
             joins += [(one, other) for _, other in self.partners[one] if other in self.core and other != one]
-        joins += self._attach(window, now, growing)
-        self._forget(window, now, growing)
+        joins += self._attach(window, now, window_start)
+        self._forget(window, now, window_start)
         return list(dict.fromkeys(tuple(sorted(pair)) for pair in joins))
 
-    def _attach(self, window, now, growing):
+    def _attach(self, window, now, window_start):
         """Joins of the waiting non-core clusters whose first core partner is certain."""
         joins = []
         for label in sorted(self.waiting):
-            if not window.is_final(label, now, growing):
+            if not window.is_final(label, now, window_start):
                 continue
             decided = False
             for _, other in sorted(self.partners[label]):
@@ -290,7 +304,7 @@ class MergeComponents:
                     joins.append((other, label))
                     decided = True
                     break
-                if not window.is_final(other, now, growing):
+                if not window.is_final(other, now, window_start):
                     break  # it may still become core: wait
             else:
                 decided = True  # no core partner: it stays alone
@@ -298,12 +312,12 @@ class MergeComponents:
                 self.waiting.discard(label)
         return joins
 
-    def _forget(self, window, now, growing):
+    def _forget(self, window, now, window_start):
         """Drop the clusters whose pairs no waiting cluster reads any more."""
         settled = [
             label
             for label in self.partners
-            if label not in self.waiting and window.is_final(label, now, growing)
+            if label not in self.waiting and window.is_final(label, now, window_start)
         ]
         for label in settled:
             if not any(other in self.waiting for _, other in self.partners[label]):

@@ -218,23 +218,23 @@ class OnlinePipeline:
         state = self._sequences.get(sequence)
         if state is None:
             state = self._sequences[sequence] = _Sequence(self._filter_params, self._merger, self._eps_t)
-        _check_order(state, sequence, np.unique(c["sensor_id"]).tolist(), us)
+        _check_order(state, sequence, sorted(set(c["sensor_id"].tolist())), us)
         work = self._frame._working_columns(c)
         x, y, v_r, t, heading = work["x"], work["y"], work["v_r"], work["t"], work["heading"]
         keep = np.ones(n, dtype=bool) if state.filter is None else state.filter.keep(x, y, t, v_r)
         stage1_columns = {"x": x, "y": y, "v_r": v_r, "t": t, "sequence": np.full(n, float(sequence))}
         stage1_columns.update(keep=keep, range_sc=c["range_sc"], heading=heading)
-        labels = self._stage1._label(stage1_columns)
+        labels = self._stage1._label(stage1_columns, one_scan=True)
         los = c["azimuth_sc"] + c["sensor_yaw"] + heading
-        state.merge.add(labels, t, x, y, v_r, los, us)
-        self._ids.add(np.unique(labels[labels >= 0]).tolist(), us)
+        self._ids.add(state.merge.add(labels, t, x, y, v_r, los, us), us)
         aliases = []
         for absorbed, survivor in self._stage1._meetings:
+            state.merge.absorbed.update(absorbed.tolist())
             for a, s in sorted(set(zip(absorbed.tolist(), survivor.tolist(), strict=True))):
                 aliases.append(self._ids.merge(s, a, us, "stage1"))
         window = self._stage1._windows.get(float(sequence))
-        growing = set() if window is None else set(np.unique(window.cluster).tolist())
-        merges, joins = state.merge.decide(float(t[0]), growing)
+        window_start = np.inf if window is None or len(window.points.t) == 0 else float(window.points.t[0])
+        merges, joins = state.merge.decide(float(t[0]), window_start)
         for a, b in joins:
             aliases.append(self._ids.merge(a, b, us, "stage2"))
         result = ScanResult(
@@ -342,10 +342,13 @@ def _read_scan(scan):
         name = SCAN_COLUMNS[next(i for i, length in enumerate(lengths) if length != n)]
         raise ValueError(f"OnlinePipeline.update: column {name!r} has another length than 'range_sc' ({n})")
     block = np.array(columns, dtype=np.float64)  # one conversion and one finiteness test for all columns
-    finite = np.isfinite(block)
-    if not finite.all():
-        bad = SCAN_COLUMNS[int(np.flatnonzero(~finite.all(axis=1))[0])]
-        raise ValueError(f"OnlinePipeline.update: column {bad!r} holds values that are not finite")
+    with np.errstate(over="ignore", invalid="ignore"):
+        total = float(block.sum())  # finite unless a value is not (or the sum of large ones overflows)
+    if not np.isfinite(total):
+        finite = np.isfinite(block).all(axis=1)
+        if not finite.all():
+            bad = SCAN_COLUMNS[int(np.flatnonzero(~finite)[0])]
+            raise ValueError(f"OnlinePipeline.update: column {bad!r} holds values that are not finite")
     c = dict(zip(SCAN_COLUMNS, block, strict=True))
     for name in ("sequence", "sensor_id"):
         values = np.ravel(scan[name]) if name in names else np.zeros(n, dtype=np.int64)
@@ -353,7 +356,7 @@ def _read_scan(scan):
             raise ValueError(f"OnlinePipeline.update: column {name!r} has another length than 'range_sc' ({n})")
         c[name] = values
     for name in ("timestamp", "sequence"):
-        if n and (c[name].min() != c[name].max()):
+        if n and (c[name] != c[name][0]).any():
             raise ValueError(f"OnlinePipeline.update: the rows are not one scan (column {name!r} differs)")
     return c
 
