@@ -90,6 +90,8 @@ class MergeWindow:
         clustered = np.flatnonzero(labels >= 0)
         if len(clustered) == 0:
             return []
+        if self.merger is None:
+            return self._keep_for_objects(labels[clustered], t[0], x, y, v_r, los, clustered, timestamp_us)
         label = labels[clustered]
         keys = [x[clustered], y[clustered], v_r[clustered], *((los[clustered],) if self.velocity else ())]
         order = np.lexsort((*keys[::-1], label))  # by label, then the offline keys (one time: the scan's)
@@ -118,6 +120,22 @@ class MergeWindow:
             if self.merger is not None:
                 self.pending.add(cluster_label)
         return scan_labels
+
+    def _keep_for_objects(self, label, now, x, y, v_r, los, clustered, timestamp_us):
+        """Without stage 2: the rows only serve the object list, in any order; returns the scan's labels."""
+        new = {"label": label, "t": np.full(len(label), now), "x": x[clustered], "y": y[clustered]}
+        new["v_r"], new["los"] = v_r[clustered], los[clustered]
+        new["us"] = np.full(len(label), timestamp_us, dtype=np.int64)
+        self.rows = {name: np.concatenate([self.rows[name], new[name]]) for name in _ROWS}
+        scan_labels = set(label.tolist())
+        now = float(now)
+        for cluster_label in scan_labels:
+            cluster = self.clusters.get(cluster_label)
+            if cluster is None:
+                self.clusters[cluster_label] = _Cluster(key=(now,), start=now, latest=now, decided=True)
+            else:
+                cluster.latest = now
+        return sorted(scan_labels)
 
     def growing(self, label, window_start):
         """Whether stage-1 cluster ``label`` can still receive detections.

@@ -94,6 +94,56 @@ def test_online_equals_offline_causal(difficulty, number, params):
         assert len(merges) > 0  # the comparison covered merges
 
 
+@pytest.mark.parametrize("min_samples", [3, 4])  # 2 is 1: a cluster with a partner is core
+@pytest.mark.parametrize("number", [12, 13], ids=["velocity", "continuation"])
+def test_stage2_min_samples_above_one_equals_offline_causal(number, min_samples):
+    """The DBSCAN over clusters with N_min > 1: the joins, made once certain, give the offline causal clusters.
+
+    Three sequences interleaved scan by scan, four sensors out of phase (the simulator's default).
+    """
+    data = make_scenes(n_sequences=3, duration=6.0, random_state=number, difficulty="realistic").data
+    params = {**TUNED[number], "merge__min_samples": min_samples}
+    online = OnlinePipeline(experiment_pipeline(number, params=params))
+    labels, _, keep, _, joins = replay(online, data)
+    offline_keep, offline_stage1, offline_final = offline_causal(online, data)
+    np.testing.assert_array_equal(keep, offline_keep)
+    assert_same_partition(labels, offline_stage1)
+    assert_same_partition(stage2_resolution(labels, joins), offline_final)
+    # The case is one where N_min matters: the offline clusters differ from those of every accepted pair joined.
+    paper = OnlinePipeline(experiment_pipeline(number, params=TUNED[number]))
+    _, _, _, _, all_pairs = replay(paper, data)
+    assert len(set(stage2_resolution(labels, all_pairs).tolist())) < len(set(offline_final.tolist()))
+
+
+def targets_scan(t_s, ys):
+    """One scan of several targets at the heights ``ys`` (m), each as :func:`target_scan` moving along x at 5 m/s."""
+    parts = [target_scan(t_s, 5.0 * t_s, y=y) for y in ys]
+    return {name: np.concatenate([part[name] for part in parts]) for name in parts[0]}
+
+
+def test_a_non_core_cluster_joins_its_first_core_partner():
+    """min_samples 3: A (y = 10 m) then, 0.3 s later, B (10 m) and C (11.2 m); 0.3 s after them D (12 m).
+
+    A, B, C are partners of each other (within eps_d = 1.5 m): cores.  D continues C only (B's
+    continuation is 2 m away): not core, it joins C's object.  Stage 1 (eps_xy 1 m) keeps them apart.
+    """
+    stage1 = RadarDBSCAN(metric="xy", eps_xy=1.0, min_samples=2, vr_min=0.1)
+    merger = ClusterMerger(stage1=stage1, eps_d=1.5, eps_t2=0.35, min_samples=3, unknown_velocity="accept")
+    online = OnlinePipeline(make_pipeline(FrameTransform(), merger))
+    times = np.round(np.arange(0.0, 3.2, 0.05), 2)
+    heights = {0: [10.0], 1: [10.0, 11.2], 2: [12.0]}
+    phase = np.select([times < 1.0, (times > 1.22) & (times < 2.0), times > 2.22], [0, 1, 2], -1)  # gaps 0.3 s
+    scans = [targets_scan(t, heights[k]) for t, k in zip(times, phase, strict=True) if k >= 0]
+    data = pd.DataFrame({name: np.concatenate([scan[name] for scan in scans]) for name in scans[0]}).assign(sequence=0)
+    offline = online.causal_pipeline().fit_predict(data)
+    labels, _, _, _, joins = replay(online, data)
+    assert_same_partition(stage2_resolution(labels, joins), offline)
+    assert len(np.unique(labels)) == 4 and len(np.unique(offline)) == 1  # four stage-1 clusters, one object
+    work = online.causal_pipeline()[:-1].fit_transform(data)
+    alone = online.causal_pipeline()[-1].set_params(min_samples=5).fit(work)  # no cluster has 4 partners
+    assert len(np.unique(alone.labels_)) == 4  # so the one object above needed the cores and D's join
+
+
 def test_sensors_in_phase_and_scans_sharing_a_time():
     """Several sensors' scans at the same timestamp (in phase) give the offline labels too."""
     data = make_scenes(n_sequences=2, duration=5.0, random_state=5, difficulty="realistic").data.copy()
