@@ -315,7 +315,7 @@ def test_experiment_numbers_come_from_the_papers_metadata():
 
     assert (EXPERT, BEST_STAGE1, DERIVED_FROM_BEST, STAGE2) == (1, 8, (10, 11), (12, 13))
     assert STAGE1 == tuple(range(1, 12)) and get_experiment(EXPERT).method == "Expert Setting"
-    assert ALL_EXPERIMENTS == ("filter", *(str(n) for n in range(1, 14)), "filter-effect", "baselines")
+    assert ALL_EXPERIMENTS == ("filter", *(str(n) for n in range(1, 14)), "filter-effect", "baselines", "tracking")
 
 
 def _brute_force_pq(target, labels, times, groups, frame=0.5):

@@ -42,9 +42,13 @@ PAPER_N_ITER = 100
 FILTER = "filter"
 FILTER_EFFECT = "filter-effect"
 BASELINES = "baselines"
+TRACKING = "tracking"
 
 #: Every step key, in the order they run.
-ALL_EXPERIMENTS = (FILTER, *(str(n) for n in NUMBERS), FILTER_EFFECT, BASELINES)
+ALL_EXPERIMENTS = (FILTER, *(str(n) for n in NUMBERS), FILTER_EFFECT, BASELINES, TRACKING)
+
+#: The settings the tracking step streams online (causal): the expert's, the best stage 1 and both stage-2 modes.
+TRACKED = (EXPERT, BEST_STAGE1, *STAGE2)
 
 #: The paper's chosen filter setting (eta_1 in m/s, d_xy in m): the defaults of DopplerDensityFilter.
 PAPER_FILTER_SETTING = (0.10, 1.4)
@@ -76,4 +80,6 @@ __all__ = [
     "SOURCE_SEARCH",
     "STAGE1",
     "STAGE2",
+    "TRACKED",
+    "TRACKING",
 ]

@@ -42,7 +42,7 @@ from .. import __version__
 from .._executor import connect_executor
 from ..experiments import SKLEARN_BASELINES, get_experiment
 from ..metrics._parts import OBJECTIVES  # what the searches can maximise: "v1", "pq"
-from ._constants import ALL_EXPERIMENTS, BASELINES, FILTER, FILTER_EFFECT, NUMBERS
+from ._constants import ALL_EXPERIMENTS, BASELINES, FILTER, FILTER_EFFECT, NUMBERS, TRACKING
 from ._context import RunContext
 from ._io import (
     RUN_TOOL,
@@ -110,7 +110,7 @@ def parse_experiments(text):
     ----------
     text : str or None
         Comma-separated keys: ``filter``, experiment numbers ``1``-``13``,
-        ranges such as ``2-9``, ``filter-effect`` and ``baselines``.  None
+        ranges such as ``2-9``, ``filter-effect``, ``baselines`` and ``tracking``.  None
         selects every step.
 
     Returns
@@ -128,7 +128,7 @@ def parse_experiments(text):
             if not (low.isdigit() and high.isdigit()) or not first <= int(low) <= int(high) <= last:
                 raise ValueError(
                     f"unknown experiment range {part!r}; experiments are {first}-{last}, "
-                    f"{FILTER}, {FILTER_EFFECT}, {BASELINES}"
+                    f"{FILTER}, {FILTER_EFFECT}, {BASELINES}, {TRACKING}"
                 )
             chosen.update(str(n) for n in range(int(low), int(high) + 1))
         elif part in ALL_EXPERIMENTS:
@@ -199,7 +199,7 @@ def reproduce(
         Candidates evaluated in parallel (-1: all cores; 0 is refused).
     experiments : str, default=None
         Comma-separated keys (``filter``, ``1``-``13``, ranges such as
-        ``2-9``, ``filter-effect``, ``baselines``); None runs all.
+        ``2-9``, ``filter-effect``, ``baselines``, ``tracking``); None runs all.
     full : bool, default=False
         The paper's budget on about a million simulated detections.
     seed : int, default=0
@@ -449,6 +449,8 @@ def _store(results, key, result):
         results.filter_effect = result
     elif key == BASELINES:
         results.baselines = result
+    elif key == TRACKING:
+        results.tracking = result
     else:
         results.experiments[int(key)] = result
 
@@ -564,6 +566,7 @@ def _title(key):
         FILTER: "filter evaluation (Tables I and II)",
         FILTER_EFFECT: "the filter's effect on clustering",
         BASELINES: "scikit-learn baselines (DBSCAN, HDBSCAN per 0.25 s window and per sequence)",
+        TRACKING: "object tracking online (IDF1, ID switches, MOTA of the streamed ids)",
     }[key]
 
 

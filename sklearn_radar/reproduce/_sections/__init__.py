@@ -20,6 +20,7 @@ from . import (
     _stage1,
     _stage2,
     _summary,
+    _tracking,
 )
 from ._base import Section
 
@@ -34,6 +35,7 @@ SECTIONS: tuple[Section, ...] = (
     _filter_effect.SECTION,
     _baselines.SECTION,
     _instance.SECTION,
+    _tracking.SECTION,
     _figures.SECTION,
     _comparison.SECTION,
 )
