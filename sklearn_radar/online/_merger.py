@@ -96,17 +96,20 @@ class MergeWindow:
         keys = [x[clustered], y[clustered], v_r[clustered], *((los[clustered],) if self.velocity else ())]
         order = np.lexsort((*keys[::-1], label))  # by label, then the offline keys (one time: the scan's)
         label = label[order]
-        new = {"label": label, "t": t[clustered][order], "x": keys[0][order], "y": keys[1][order]}
-        new["v_r"], new["los"] = v_r[clustered][order], los[clustered][order]
+        new = {"label": label, "t": t[clustered], "x": keys[0][order], "y": keys[1][order], "v_r": keys[2][order]}
+        new["los"] = keys[3][order] if self.velocity else los[clustered][order]
         new["us"] = np.full(len(label), timestamp_us, dtype=np.int64)
-        self.rows = {name: np.concatenate([self.rows[name], new[name]]) for name in _ROWS}
-        first = np.flatnonzero(np.r_[True, label[1:] != label[:-1]])
+        self.rows = {name: np.concatenate((self.rows[name], new[name])) for name in _ROWS}
+        starts = np.empty(len(label), dtype=bool)  # where a cluster's rows start in the sorted scan
+        starts[0] = True
+        np.not_equal(label[1:], label[:-1], out=starts[1:])
+        first = np.flatnonzero(starts)
         if self.continuation:
-            run = np.cumsum(np.r_[True, label[1:] != label[:-1]]) - 1
+            run = np.cumsum(starts) - 1
             count = np.bincount(run)
             centre = {"x": np.bincount(run, new["x"]) / count, "y": np.bincount(run, new["y"]) / count}
             scan = {"label": label[first], "t": new["t"][first], **centre}
-            self.tracks = {name: np.concatenate([self.tracks[name], scan[name]]) for name in _TRACKS}
+            self.tracks = {name: np.concatenate((self.tracks[name], scan[name])) for name in _TRACKS}
         now = float(new["t"][0])
         names = ("t", "x", "y", "v_r", *(("los",) if self.velocity else ()))
         scan_labels = label[first].tolist()
@@ -365,9 +368,12 @@ def _runs(labels, involved, columns, scans):
     selected = np.flatnonzero((labels[:, None] == involved).any(axis=1))  # a few clusters: no hash table
     order = selected[np.argsort(labels[selected], kind="stable")]
     sorted_labels = labels[order]
-    ids, run_start = np.unique(sorted_labels, return_index=True)
-    run_end = np.r_[run_start[1:], len(order)].astype(np.int64)
-    run_start = run_start.astype(np.int64)
+    starts = np.empty(len(order), dtype=bool)
+    starts[0] = True
+    np.not_equal(sorted_labels[1:], sorted_labels[:-1], out=starts[1:])
+    run_start = np.flatnonzero(starts)
+    ids = sorted_labels[run_start]
+    run_end = np.append(run_start[1:], len(order))
     t, x, y = (np.ascontiguousarray(columns[name][order]) for name in ("t", "x", "y"))
     tracks = dict(scan_t=t, scan_x=x, scan_y=y, scan_start=run_start, scan_end=run_end) if scans else {}
     tracks = {name: tracks.get(name) for name in ("scan_t", "scan_x", "scan_y", "scan_start", "scan_end")}
