@@ -140,6 +140,22 @@ def _remembered_pairs(n, max_trials, seed):
 
 
 @numba.njit(cache=True, nogil=True)
+def _rotated_sums(cos_t, sin_t, v_r, mask, cs, sn):
+    """Over the masked rows, with the columns rotated to p = cs c1 - sn c2, q = sn c1 + cs c2: p.p, q.q, p.q, p.v, q.v."""
+    a = d = e = bp = bq = 0.0
+    for m in range(len(v_r)):
+        if mask[m]:
+            p = cs * cos_t[m] - sn * sin_t[m]
+            q = sn * cos_t[m] + cs * sin_t[m]
+            a += p * p
+            d += q * q
+            e += p * q
+            bp += p * v_r[m]
+            bq += q * v_r[m]
+    return a, d, e, bp, bq
+
+
+@numba.njit(cache=True, nogil=True)
 def _masked_lstsq(cos_t, sin_t, v_r, mask):
     """Least squares on the masked rows of one group: ``v_r ~ vx cos_t + vy sin_t``; returns (vx, vy).
 
@@ -155,17 +171,9 @@ def _masked_lstsq(cos_t, sin_t, v_r, mask):
     k = 0
     for m in range(len(v_r)):
         k += mask[m]
-    # Rotated columns p = cs * c1 - sn * c2 and q = sn * c1 + cs * c2; (cs, sn) the accumulated rotation.
-    cs, sn = 1.0, 0.0
+    cs, sn = 1.0, 0.0  # the accumulated rotation
     for _sweep in range(4):
-        a = d = e = 0.0
-        for m in range(len(v_r)):
-            if mask[m]:
-                p = cs * cos_t[m] - sn * sin_t[m]
-                q = sn * cos_t[m] + cs * sin_t[m]
-                a += p * p
-                d += q * q
-                e += p * q
+        a, d, e, _, _ = _rotated_sums(cos_t, sin_t, v_r, mask, cs, sn)
         if not abs(e) > _EPS * np.sqrt(a * d):  # orthogonal (or a zero column): done
             break
         zeta = (d - a) / (2.0 * e)
@@ -173,15 +181,7 @@ def _masked_lstsq(cos_t, sin_t, v_r, mask):
         c_rot = 1.0 / np.sqrt(1.0 + tan * tan)
         s_rot = c_rot * tan
         cs, sn = cs * c_rot - sn * s_rot, sn * c_rot + cs * s_rot
-    a = d = bp = bq = 0.0
-    for m in range(len(v_r)):
-        if mask[m]:
-            p = cs * cos_t[m] - sn * sin_t[m]
-            q = sn * cos_t[m] + cs * sin_t[m]
-            a += p * p
-            d += q * q
-            bp += p * v_r[m]
-            bq += q * v_r[m]
+    a, d, _, bp, bq = _rotated_sums(cos_t, sin_t, v_r, mask, cs, sn)
     sigma_p, sigma_q = np.sqrt(a), np.sqrt(d)
     cut = _EPS * max(k, 2) * max(sigma_p, sigma_q)
     wp = bp / a if sigma_p > cut else 0.0  # (u_p . b) / sigma_p

@@ -58,6 +58,19 @@ def assert_same_partition(a, b):
     assert len(pairs) == len(set(a[clustered].tolist())) == len(set(b[clustered].tolist()))
 
 
+def assert_online_equals_offline(online, data):
+    """Replay ``data``: keep flags, stage-1 labels and stage-2 clusters equal the offline causal pipeline's.
+
+    Returns the stage-2 joins of the replay.
+    """
+    labels, _, keep, _, joins = replay(online, data)
+    offline_keep, offline_stage1, offline_final = offline_causal(online, data)
+    np.testing.assert_array_equal(keep, offline_keep)
+    assert_same_partition(labels, offline_stage1)
+    assert_same_partition(stage2_resolution(labels, joins), offline_final)
+    return labels, joins, offline_final
+
+
 def offline_causal(online, data):
     """(keep, stage-1 labels, final labels) of the offline causal pipeline."""
     pipeline = online.causal_pipeline()
@@ -84,12 +97,7 @@ TUNED = {  # settings that merge often, so that the comparison sees many decisio
 )
 def test_online_equals_offline_causal(difficulty, number, params):
     data = make_scenes(n_sequences=3, duration=5.0, random_state=number, difficulty=difficulty).data
-    online = OnlinePipeline(experiment_pipeline(number, params=params))
-    labels, _, keep, _, merges = replay(online, data)
-    offline_keep, offline_stage1, offline_final = offline_causal(online, data)
-    np.testing.assert_array_equal(keep, offline_keep)
-    assert_same_partition(labels, offline_stage1)
-    assert_same_partition(stage2_resolution(labels, merges), offline_final)
+    _, merges, _ = assert_online_equals_offline(OnlinePipeline(experiment_pipeline(number, params=params)), data)
     if number in (12, 13) and params is not None:
         assert len(merges) > 0  # the comparison covered merges
 
@@ -103,12 +111,7 @@ def test_stage2_min_samples_above_one_equals_offline_causal(number, min_samples)
     """
     data = make_scenes(n_sequences=3, duration=6.0, random_state=number, difficulty="realistic").data
     params = {**TUNED[number], "merge__min_samples": min_samples}
-    online = OnlinePipeline(experiment_pipeline(number, params=params))
-    labels, _, keep, _, joins = replay(online, data)
-    offline_keep, offline_stage1, offline_final = offline_causal(online, data)
-    np.testing.assert_array_equal(keep, offline_keep)
-    assert_same_partition(labels, offline_stage1)
-    assert_same_partition(stage2_resolution(labels, joins), offline_final)
+    labels, _, offline_final = assert_online_equals_offline(OnlinePipeline(experiment_pipeline(number, params=params)), data)
     # The case is one where N_min matters: the offline clusters differ from those of every accepted pair joined.
     paper = OnlinePipeline(experiment_pipeline(number, params=TUNED[number]))
     _, _, _, _, all_pairs = replay(paper, data)
@@ -149,12 +152,7 @@ def test_sensors_in_phase_and_scans_sharing_a_time():
     data = make_scenes(n_sequences=2, duration=5.0, random_state=5, difficulty="realistic").data.copy()
     data["timestamp"] = data["timestamp"] // 40_000 * 40_000  # 40 ms grid: sensors share scan times
     assert data.groupby(["sequence", "timestamp"])["sensor_id"].nunique().max() > 1
-    online = OnlinePipeline(experiment_pipeline(13, params=TUNED[13]))
-    labels, _, keep, _, merges = replay(online, data)
-    offline_keep, offline_stage1, offline_final = offline_causal(online, data)
-    np.testing.assert_array_equal(keep, offline_keep)
-    assert_same_partition(labels, offline_stage1)
-    assert_same_partition(stage2_resolution(labels, merges), offline_final)
+    assert_online_equals_offline(OnlinePipeline(experiment_pipeline(13, params=TUNED[13])), data)
 
 
 def test_ids_never_reused_and_the_older_survives():
