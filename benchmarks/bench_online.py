@@ -160,8 +160,8 @@ def main():
             if args.repeat > 1:
                 p50, p99 = ([f["cpu_us"][k] for f in runs] for k in (0, 1))
                 print(
-                    f"#{number:<2} {KINDS[objects]:12}  spread of {args.repeat} runs: cpu p50 {min(p50):.0f}-{max(p50):.0f} us, "
-                    f"p99 {min(p99):.0f}-{max(p99):.0f} us"
+                    f"#{number:<2} {KINDS[objects]:12}  spread of {args.repeat} runs: "
+                    f"cpu p50 {min(p50):.0f}-{max(p50):.0f} us, p99 {min(p99):.0f}-{max(p99):.0f} us"
                 )
 
 

@@ -22,7 +22,17 @@ def tracked(tiny_folder, tmp_path_factory):
     out = tmp_path_factory.mktemp("tracking") / "out"
     with contextlib.redirect_stdout(io.StringIO()):
         code = main(
-            ["reproduce", "--data", str(tiny_folder), "--out", str(out), "--n-iter", "2", "--experiments", "1,13,tracking"]
+            [
+                "reproduce",
+                "--data",
+                str(tiny_folder),
+                "--out",
+                str(out),
+                "--n-iter",
+                "2",
+                "--experiments",
+                "1,13,tracking",
+            ]
         )
     assert code == 0
     return out
@@ -34,12 +44,15 @@ def test_the_step_streams_every_tracked_setting(tracked):
     tracking = results["tracking"]
     assert list(tracking) == ["1", "8", "12", "13"]
     sources = {key: entry["setting_source"] for key, entry in tracking.items()}
-    assert sources == {"1": "tuned #1", "8": "paper's #8", "12": "paper's #12", "13": "tuned #13"}
+    assert sources == {"1": "fixed #1", "8": "paper's #8", "12": "paper's #12", "13": "tuned #13"}
     for entry in tracking.values():
         for scores in (entry["reported"], entry["final"]):
             assert 0.0 <= scores["idf1"] <= 1.0 and scores["mota"] <= 1.0
             assert scores["n_matches"] + scores["misses"] == scores["n_objects"] > 0
-    assert tracking["13"]["params"] == {**results["experiments"]["13"]["stage1_params"], **results["experiments"]["13"]["params"]}
+    assert tracking["13"]["params"] == {
+        **results["experiments"]["13"]["stage1_params"],
+        **results["experiments"]["13"]["params"],
+    }
 
 
 def test_the_scores_are_those_of_the_whole_test_half(tracked, tiny_folder):

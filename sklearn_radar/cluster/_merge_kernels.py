@@ -625,7 +625,9 @@ def _velocity_frame_rows(frames, order):
 
 def velocity_frame_rows(frames, order):
     """(rows, group) of the frames: the detection rows (``order`` of :class:`ClusterRuns`) and each row's frame."""
-    return _velocity_frame_rows(np.ascontiguousarray(frames, dtype=np.int64), np.ascontiguousarray(order, dtype=np.int64))
+    return _velocity_frame_rows(
+        np.ascontiguousarray(frames, dtype=np.int64), np.ascontiguousarray(order, dtype=np.int64)
+    )
 
 
 @numba.njit(cache=True, nogil=True)
@@ -649,6 +651,9 @@ def velocity_agreement(vx, vy, eps_phi, eps_v, accept_unknown):
     merges when ``accept_unknown``.
     """
     return _velocity_agreement(
-        np.ascontiguousarray(vx, dtype=np.float64), np.ascontiguousarray(vy, dtype=np.float64),
-        float(eps_phi), float(eps_v), bool(accept_unknown),
+        np.ascontiguousarray(vx, dtype=np.float64),
+        np.ascontiguousarray(vy, dtype=np.float64),
+        float(eps_phi),
+        float(eps_v),
+        bool(accept_unknown),
     )

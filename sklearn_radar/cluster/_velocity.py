@@ -141,7 +141,7 @@ def _remembered_pairs(n, max_trials, seed):
 
 @numba.njit(cache=True, nogil=True)
 def _rotated_sums(cos_t, sin_t, v_r, mask, cs, sn):
-    """Over the masked rows, with the columns rotated to p = cs c1 - sn c2, q = sn c1 + cs c2: p.p, q.q, p.q, p.v, q.v."""
+    """Sums over the masked rows, columns rotated to p = cs c1 - sn c2, q = sn c1 + cs c2: p.p, q.q, p.q, p.v, q.v."""
     a = d = e = bp = bq = 0.0
     for m in range(len(v_r)):
         if mask[m]:
@@ -215,8 +215,9 @@ def _axial_spread(theta, mask):
 
 
 @numba.njit(cache=True, nogil=True)
-def _fit_groups(v_r, cos_t, sin_t, theta, start, size, pair_start, n_pairs, pair_i, pair_j, min_detections,
-                min_spread, threshold):
+def _fit_groups(
+    v_r, cos_t, sin_t, theta, start, size, pair_start, n_pairs, pair_i, pair_j, min_detections, min_spread, threshold
+):
     """RANSAC over pairs, least squares, one re-selection, final fit, for each group.
 
     Group g is the rows ``[start[g], start[g] + size[g])`` of ``v_r``,
@@ -309,8 +310,17 @@ def _estimate(v_r, theta, group_id, n_groups, min_detections, min_spread, thresh
         pair_j = np.concatenate([pair_j[0] for _, pair_j in tables])
         of_group = of_group.ravel()
         vx[fitted], vy[fitted], n_inliers[fitted] = _fit_groups(
-            v_r, cos_t, sin_t, theta, starts[fitted], sizes[fitted], table_start[of_group], n_pairs[of_group],
-            pair_i, pair_j, *settings,
+            v_r,
+            cos_t,
+            sin_t,
+            theta,
+            starts[fitted],
+            sizes[fitted],
+            table_start[of_group],
+            n_pairs[of_group],
+            pair_i,
+            pair_j,
+            *settings,
         )
         return vx, vy, n_inliers
     shared_rng = np.random.default_rng(random_state)
@@ -324,8 +334,17 @@ def _estimate(v_r, theta, group_id, n_groups, min_detections, min_spread, thresh
             rows = pair_i.shape[0]  # 1 (all pairs, shared) or one row per group
             pair_start = (np.arange(len(chunk)) if rows > 1 else np.zeros(len(chunk), dtype=np.int64)) * n_pairs
             vx[chunk], vy[chunk], n_inliers[chunk] = _fit_groups(
-                v_r, cos_t, sin_t, theta, starts[chunk], sizes[chunk], pair_start.astype(np.int64),
-                np.full(len(chunk), n_pairs, dtype=np.int64), pair_i.ravel(), pair_j.ravel(), *settings,
+                v_r,
+                cos_t,
+                sin_t,
+                theta,
+                starts[chunk],
+                sizes[chunk],
+                pair_start.astype(np.int64),
+                np.full(len(chunk), n_pairs, dtype=np.int64),
+                pair_i.ravel(),
+                pair_j.ravel(),
+                *settings,
             )
     return vx, vy, n_inliers
 

@@ -220,11 +220,7 @@ class MergeWindow:
             self.tracks = _since(self.tracks, oldest - self.tracks_back)
         threshold = oldest - max(self.rows_back, self.tracks_back if self.continuation else 0.0)
         held = set() if self.components is None else self.components.members
-        gone = [
-            label
-            for label, c in self.clusters.items()
-            if c.decided and c.latest < threshold and label not in held
-        ]
+        gone = [label for label, c in self.clusters.items() if c.decided and c.latest < threshold and label not in held]
         for label in gone:
             del self.clusters[label]
             self.absorbed.discard(label)
@@ -336,9 +332,7 @@ class MergeComponents:
     def _forget(self, window, now, window_start):
         """Drop the clusters whose pairs no waiting cluster reads any more."""
         settled = [
-            label
-            for label in self.partners
-            if label not in self.waiting and window.is_final(label, now, window_start)
+            label for label in self.partners if label not in self.waiting and window.is_final(label, now, window_start)
         ]
         for label in settled:
             if not any(other in self.waiting for _, other in self.partners[label]):
@@ -377,5 +371,6 @@ def _runs(labels, involved, columns, scans):
     t, x, y = (np.ascontiguousarray(columns[name][order]) for name in ("t", "x", "y"))
     tracks = dict(scan_t=t, scan_x=x, scan_y=y, scan_start=run_start, scan_end=run_end) if scans else {}
     tracks = {name: tracks.get(name) for name in ("scan_t", "scan_x", "scan_y", "scan_start", "scan_end")}
-    return ClusterRuns(ids=ids, order=order, run_start=run_start, run_end=run_end, t=t, x=x, y=y, **tracks,
-                       by_start=None)
+    return ClusterRuns(
+        ids=ids, order=order, run_start=run_start, run_end=run_end, t=t, x=x, y=y, **tracks, by_start=None
+    )

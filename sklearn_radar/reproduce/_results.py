@@ -957,7 +957,7 @@ class TrackingResult(_JsonRecord):
         The experiment whose setting streams.
     method : str
     setting_source : str
-        ``"tuned #13"`` (the run's setting) or ``"paper's #13"`` (the experiment did not run).
+        ``"tuned #13"`` or ``"fixed #1"`` (the run's setting), ``"paper's #13"`` (the experiment did not run).
     params : dict
         The setting, as pipeline parameters (stage 1's included for stage 2).
     reported : TrackingScores

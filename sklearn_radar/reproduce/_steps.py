@@ -554,7 +554,9 @@ def run_tracking(env, key, needed):
         parts = env.sequences.map(track_sequence, env.test, pipeline, executor=env.executor)
         found[number] = combine_tracking(number, params, source, parts)
         final = found[number].final
-        lines.append(f"    #{number} ({source}): IDF1 {final.idf1:.3f}, ID switches {final.id_switches}, MOTA {final.mota:.3f}")
+        lines.append(
+            f"    #{number} ({source}): IDF1 {final.idf1:.3f}, ID switches {final.id_switches}, MOTA {final.mota:.3f}"
+        )
     return Outcome(found, "\n".join(lines))
 
 

@@ -31,12 +31,19 @@ _COUNTS = ("id_switches", "misses", "false_positives", "n_objects", "n_matches",
 
 
 def tracked_setting(number, result):
-    """(pipeline, params, source) of experiment ``number``: the run's setting (``result``) or, if None, the paper's."""
+    """(pipeline, params, source) of experiment ``number``: the run's setting (``result``) or, if None, the paper's.
+
+    ``source`` says which: ``"tuned #13"`` or ``"fixed #1"`` (the run's), ``"paper's #13"``.
+    """
     if result is None:
         return experiment_pipeline(number), paper_params(number), f"paper's #{number}"
     setting = {"experiment": number, "params": result.params, "stage1_params": result.stage1_params}
     params = {**(result.stage1_params or {}), **result.params}
-    return setting_pipeline(setting, "results"), params, f"tuned #{number}"
+    return (
+        setting_pipeline(setting, "results"),
+        params,
+        f"{'tuned' if get_experiment(number).tuned else 'fixed'} #{number}",
+    )
 
 
 def streamable(pipeline):
@@ -68,8 +75,14 @@ def combine_tracking(number, params, source, parts):
         total = {count: sum(part[name][count] for part in parts) for count in _COUNTS}
         hypotheses = total["false_positives"] + total["n_matches"]
         figures = _scores(
-            total["n_objects"], hypotheses, total["n_matches"], total["id_switches"], total["idtp"],
-            total["idfn"], total["idfp"], total["n_frames"],
+            total["n_objects"],
+            hypotheses,
+            total["n_matches"],
+            total["id_switches"],
+            total["idtp"],
+            total["idfn"],
+            total["idfp"],
+            total["n_frames"],
         )
         return TrackingScores(frame_s=TRACKING_FRAME_S, **{name: figures[name] for name in ("mota", "idf1")}, **total)
 

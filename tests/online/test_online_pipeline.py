@@ -111,7 +111,9 @@ def test_stage2_min_samples_above_one_equals_offline_causal(number, min_samples)
     """
     data = make_scenes(n_sequences=3, duration=6.0, random_state=number, difficulty="realistic").data
     params = {**TUNED[number], "merge__min_samples": min_samples}
-    labels, _, offline_final = assert_online_equals_offline(OnlinePipeline(experiment_pipeline(number, params=params)), data)
+    labels, _, offline_final = assert_online_equals_offline(
+        OnlinePipeline(experiment_pipeline(number, params=params)), data
+    )
     # The case is one where N_min matters: the offline clusters differ from those of every accepted pair joined.
     paper = OnlinePipeline(experiment_pipeline(number, params=TUNED[number]))
     _, _, _, _, all_pairs = replay(paper, data)
@@ -274,7 +276,11 @@ def test_the_windows_keep_a_bounded_span_of_time():
     # rows of eps_t (the object list) and the scan centres of eps_t2 + 4 eps_t (the continuation's five last
     # scans), each + 0.05 s: bounds that do not grow with the recording.
     pending = eps_t2 + eps_t + 0.1
-    bounds = {"rows": eps_t + 0.05 + pending, "tracks": eps_t2 + 4 * eps_t + 0.05 + pending, "stage 1": eps_t + 0.05}  # stage 1 prunes at scans with active rows
+    bounds = {
+        "rows": eps_t + 0.05 + pending,
+        "tracks": eps_t2 + 4 * eps_t + 0.05 + pending,
+        "stage 1": eps_t + 0.05,
+    }  # stage 1 prunes at scans with active rows
     columns = {name: data[name].to_numpy() for name in data.columns if name not in ("uuid", "track_id")}
     spans = {name: [] for name in bounds}
     for rows in scans_in_time_order(data):
