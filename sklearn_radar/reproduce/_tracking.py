@@ -15,7 +15,6 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._cluster_command import setting_pipeline
 from ..experiments import experiment_pipeline, get_experiment, paper_params
 from ..metrics import tracking_scores
 from ..metrics._tracking import _scores
@@ -37,6 +36,8 @@ def tracked_setting(number, result):
     """
     if result is None:
         return experiment_pipeline(number), paper_params(number), f"paper's #{number}"
+    from .._cluster_command import setting_pipeline  # here: the cluster command imports the reproduce package
+
     setting = {"experiment": number, "params": result.params, "stage1_params": result.stage1_params}
     params = {**(result.stage1_params or {}), **result.params}
     return (
