@@ -81,9 +81,10 @@ class MergeWindow:
         self.clusters = {}
         self.pending = set()  # labels of the clusters not yet decided as B
         self.absorbed = set()  # labels whose rows stage 1 gave to an older cluster (they grow no more)
-        self.rows = _empty(_ROWS)
-        self.tracks = _empty(_TRACKS)  # continuation: one entry per (cluster, scan), its centre
+        self.rows = _Columns(_ROWS)
+        self.tracks = _Columns(_TRACKS)  # continuation: one entry per (cluster, scan), its centre
         self.gone = []  # the clusters forgotten by the last decide()
+        self._swept = -np.inf  # s, the threshold of the last sweep of the clusters
 
     def add(self, labels, t, x, y, v_r, los, timestamp_us):
         """Append a scan's clustered rows (``labels >= 0``), register the clusters it starts; returns its labels."""
@@ -99,7 +100,7 @@ class MergeWindow:
         new = {"label": label, "t": t[clustered], "x": keys[0][order], "y": keys[1][order], "v_r": keys[2][order]}
         new["los"] = keys[3][order] if self.velocity else los[clustered][order]
         new["us"] = np.full(len(label), timestamp_us, dtype=np.int64)
-        self.rows = {name: np.concatenate((self.rows[name], new[name])) for name in _ROWS}
+        self.rows.append(new)
         starts = np.empty(len(label), dtype=bool)  # where a cluster's rows start in the sorted scan
         starts[0] = True
         np.not_equal(label[1:], label[:-1], out=starts[1:])
@@ -109,7 +110,7 @@ class MergeWindow:
             count = np.bincount(run)
             centre = {"x": np.bincount(run, new["x"]) / count, "y": np.bincount(run, new["y"]) / count}
             scan = {"label": label[first], "t": new["t"][first], **centre}
-            self.tracks = {name: np.concatenate((self.tracks[name], scan[name])) for name in _TRACKS}
+            self.tracks.append(scan)
         now = float(new["t"][0])
         names = ("t", "x", "y", "v_r", *(("los",) if self.velocity else ()))
         scan_labels = label[first].tolist()
@@ -129,7 +130,7 @@ class MergeWindow:
         new = {"label": label, "t": np.full(len(label), now), "x": x[clustered], "y": y[clustered]}
         new["v_r"], new["los"] = v_r[clustered], los[clustered]
         new["us"] = np.full(len(label), timestamp_us, dtype=np.int64)
-        self.rows = {name: np.concatenate([self.rows[name], new[name]]) for name in _ROWS}
+        self.rows.append(new)
         scan_labels = set(label.tolist())
         now = float(now)
         for cluster_label in scan_labels:
@@ -215,10 +216,14 @@ class MergeWindow:
     def _prune(self, now):
         """Forget the data and clusters no pending or future decision (or the object list) reads."""
         oldest = min([now, *(self.clusters[label].start for label in self.pending)])
-        self.rows = _since(self.rows, oldest - self.rows_back)
+        self.rows.drop_before(oldest - self.rows_back)
         if self.continuation:
-            self.tracks = _since(self.tracks, oldest - self.tracks_back)
+            self.tracks.drop_before(oldest - self.tracks_back)
         threshold = oldest - max(self.rows_back, self.tracks_back if self.continuation else 0.0)
+        self.gone = []
+        if threshold < self._swept + _MARGIN_S:  # the clusters are swept every 0.05 s: a loop over all of them
+            return
+        self._swept = threshold
         held = set() if self.components is None else self.components.members
         gone = [label for label, c in self.clusters.items() if c.decided and c.latest < threshold and label not in held]
         for label in gone:
@@ -243,7 +248,7 @@ class MergeWindow:
     def recent(self, since):
         """The retained rows at or after ``since`` (s)."""
         first = int(np.searchsorted(self.rows["t"], since, side="left"))
-        return {name: values[first:] for name, values in self.rows.items()}
+        return {name: self.rows[name][first:] for name in _ROWS}
 
 
 class MergeComponents:
@@ -340,15 +345,51 @@ class MergeComponents:
                 self.core.discard(label)
 
 
-def _empty(names):
-    """Empty columns: int64 for labels and times in us, float64 otherwise."""
-    return {name: np.zeros(0, dtype=np.int64 if name in ("label", "us") else np.float64) for name in names}
+class _Columns:
+    """Time-sorted columns (``t`` among them) in buffers with room for more entries.
+
+    ``columns[name]`` is a view of the live entries ``[lo, hi)``: appending
+    writes at ``hi``, dropping old entries moves ``lo``, and the live span
+    moves to the front (of a buffer twice its size when needed) only when
+    the buffer is full, so a scan does not copy the whole window.
+    """
+
+    def __init__(self, names, capacity=1024):
+        self.names = names
+        self._buffers = {name: np.zeros(capacity, dtype=_dtype(name)) for name in names}
+        self.lo = self.hi = 0
+
+    def __getitem__(self, name):
+        return self._buffers[name][self.lo : self.hi]
+
+    def __len__(self):
+        return self.hi - self.lo
+
+    def append(self, new):
+        """Add entries (a dict of equal-length arrays, times not before the last ones)."""
+        n = len(new["t"])
+        capacity = len(self._buffers["t"])
+        if self.hi + n > capacity:
+            live = self.hi - self.lo
+            if live + n > capacity // 2:
+                capacity = 2 * (live + n)
+            for name, buffer in self._buffers.items():
+                moved = np.zeros(capacity, dtype=buffer.dtype)
+                moved[:live] = buffer[self.lo : self.hi]
+                self._buffers[name] = moved
+            self.lo, self.hi = 0, live
+        for name in self.names:
+            self._buffers[name][self.hi : self.hi + n] = new[name]
+        self.hi += n
+
+    def drop_before(self, threshold):
+        """Forget the entries before ``threshold`` (s)."""
+        self.lo += int(np.searchsorted(self["t"], threshold, side="left"))
 
 
-def _since(columns, threshold):
-    """The time-sorted columns from the first entry at or after ``threshold`` (s)."""
-    first = int(np.searchsorted(columns["t"], threshold, side="left"))
-    return {name: values[first:] for name, values in columns.items()} if first else columns
+def _dtype(name):
+    """int64 for labels and times in us, float64 otherwise."""
+    return np.int64 if name in ("label", "us") else np.float64
 
 
 def _runs(labels, involved, columns, scans):

@@ -335,13 +335,19 @@ def _read_scan(scan):
     missing = [name for name in SCAN_COLUMNS if name not in names]
     if missing:
         raise ValueError(f"OnlinePipeline.update: the scan lacks the column(s) {missing}")
-    columns = [np.ravel(scan[name]) for name in SCAN_COLUMNS]
-    n = len(columns[0])
-    lengths = [len(values) for values in columns]
-    if min(lengths) != n or max(lengths) != n:
-        name = SCAN_COLUMNS[next(i for i, length in enumerate(lengths) if length != n)]
-        raise ValueError(f"OnlinePipeline.update: column {name!r} has another length than 'range_sc' ({n})")
-    block = np.array(columns, dtype=np.float64)  # one conversion and one finiteness test for all columns
+    try:  # the columns as given: one conversion (and one finiteness test below) for all
+        block = np.array([scan[name] for name in SCAN_COLUMNS], dtype=np.float64)
+    except (ValueError, TypeError):
+        block = None
+    if block is None or block.ndim != 2:  # not 1-D columns of one length: flatten, and name a bad one
+        columns = [np.ravel(scan[name]) for name in SCAN_COLUMNS]
+        n = len(columns[0])
+        lengths = [len(values) for values in columns]
+        if min(lengths) != n or max(lengths) != n:
+            name = SCAN_COLUMNS[next(i for i, length in enumerate(lengths) if length != n)]
+            raise ValueError(f"OnlinePipeline.update: column {name!r} has another length than 'range_sc' ({n})")
+        block = np.array(columns, dtype=np.float64)
+    n = block.shape[1]
     with np.errstate(over="ignore", invalid="ignore"):
         total = float(block.sum())  # finite unless a value is not (or the sum of large ones overflows)
     if not np.isfinite(total):
