@@ -92,7 +92,7 @@ def current_rss_mb():
         return int(statm.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
 
 
-def run(number, minutes, objects):
+def run(number, minutes, objects, one_minute=False):
     """Child process: stream ``minutes`` minutes with experiment ``number``; print the figures as JSON.
 
     ``objects`` 2 times stage 1 alone (ScanStream) on the same scans instead.
@@ -104,8 +104,13 @@ def run(number, minutes, objects):
     online = OnlinePipeline(experiment_pipeline(number))
     wall, cpu, after = [], [], {}
     recorded = 0.0
+    simulated = minute_of_data(0) if one_minute else None
     for k in range(minutes):
-        data = minute_of_data(k)
+        if one_minute:  # the same detections each minute, shifted: the simulator's memory stays out of the figures
+            data = simulated.copy()
+            data["timestamp"] += k * 60_000_000
+        else:
+            data = minute_of_data(k)
         if objects == 2:
             stage1_alone(online, data, wall, cpu)
             recorded += (data["timestamp"].max() - data["timestamp"].min()) * 1e-6
@@ -145,16 +150,19 @@ def main():
     parser.add_argument("--experiments", type=int, nargs="+", default=[1, 8, 12, 13])
     parser.add_argument("--kinds", type=int, nargs="+", default=[2, 0, 1], help="2: stage 1 alone, 0: all, 1: +objects")
     parser.add_argument("--repeat", type=int, default=1, help="runs of each setting and kind")
+    parser.add_argument(
+        "--one-minute", action="store_true", help="simulate one minute, replay it shifted (RSS of the stream alone)"
+    )
     parser.add_argument("--child", nargs=3, type=int, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
         number, minutes, objects = args.child
-        run(number, minutes, objects)
+        run(number, minutes, objects, args.one_minute)
         return
     print(f"OnlinePipeline, realistic preset, 4 sensors, {args.minutes} min of recording per setting")
     for number in args.experiments:
         for objects in args.kinds:  # stage 1 alone, the four stages, the four stages with the object list
-            runs = [child_figures(number, args.minutes, objects) for _ in range(args.repeat)]
+            runs = [child_figures(number, args.minutes, objects, args.one_minute) for _ in range(args.repeat)]
             for f in runs:
                 print_figures(number, objects, args.minutes, f)
             if args.repeat > 1:
@@ -165,9 +173,10 @@ def main():
                 )
 
 
-def child_figures(number, minutes, objects):
+def child_figures(number, minutes, objects, one_minute=False):
     """The figures of one child process (see :func:`run`)."""
     child = [sys.executable, __file__, "--child", str(number), str(minutes), str(objects)]
+    child += ["--one-minute"] if one_minute else []
     out = subprocess.run(child, capture_output=True, text=True, check=True).stdout
     return json.loads(out.strip().splitlines()[-1])
 
