@@ -25,12 +25,15 @@ RANSAC over pairs of detections (each pair gives an exact 2x2 solution); the
 inliers of the best hypothesis are then fitted by least squares, the inliers
 re-selected once with the refined velocity, and fitted again.
 
-Implementation.  Everything is vectorised with numpy: over the pairs (the
-2x2 systems are solved in closed form and a hypotheses x detections residual
-matrix is formed) and, in :func:`estimate_velocities`, over all clusters of
-the same size at once.  The least-squares fits are those of
-:func:`numpy.linalg.lstsq` (SVD, ``rcond=None`` cut-off) evaluated for a
-stack of systems, with the non-inlier rows zeroed.
+Implementation.  The hypothesis pairs are drawn with numpy (per group size,
+as before); the fit of every group is one compiled loop (numba): the 2x2
+systems solved in closed form, the residuals of each hypothesis, and the
+least squares of :func:`numpy.linalg.lstsq` (the SVD's minimum-norm
+solution with its ``rcond=None`` cut-off) computed for the two columns by
+one-sided Jacobi rotations, which give the singular values to the same
+accuracy.  The numpy form over stacked groups of one size, which it
+replaces, cost about 200 us per group size: most of an online stage-2
+decision of Eq. 6.
 
 Conditioning.  The component of the velocity along the mean line of sight
 is measured directly; the lateral component is inferred from how ``v_r``
