@@ -136,6 +136,32 @@ def _fresh_pairs(n, max_trials, random_state):
     return _pairs(n, max_trials, np.random.default_rng(random_state), 1)
 
 
+def _pair_table(sizes, max_trials, random_state):
+    """The pairs of every group size in ``sizes`` (a sorted tuple), one after the other.
+
+    Returns ``(pair_i, pair_j, where)``: flat int64 arrays and, per size,
+    (first position, number of pairs) in them.  Remembered for an int seed.
+    """
+    if isinstance(random_state, Integral) and not isinstance(random_state, bool):
+        return _remembered_table(sizes, max_trials, int(random_state))
+    return _table(sizes, max_trials, random_state)
+
+
+@functools.lru_cache(maxsize=512)  # a table holds at most 60 pairs per size: below 1 kB per size
+def _remembered_table(sizes, max_trials, seed):
+    return _table(sizes, max_trials, seed)
+
+
+def _table(sizes, max_trials, random_state):
+    tables = [_fresh_pairs(n, max_trials, random_state) for n in sizes]
+    counts = [pair_i.shape[1] for pair_i, _ in tables]
+    firsts = np.concatenate(([0], np.cumsum(counts)[:-1])).tolist()
+    where = {n: (first, count) for n, first, count in zip(sizes, firsts, counts, strict=True)}
+    pair_i = np.concatenate([pair_i[0] for pair_i, _ in tables]).astype(np.int64)
+    pair_j = np.concatenate([pair_j[0] for _, pair_j in tables]).astype(np.int64)
+    return pair_i, pair_j, where
+
+
 @functools.lru_cache(maxsize=1024)
 def _remembered_pairs(n, max_trials, seed):
     """:func:`_pairs` with a generator seeded with ``seed``; the arrays are shared: never written to."""
@@ -305,13 +331,9 @@ def _estimate(v_r, theta, group_id, n_groups, min_detections, min_spread, thresh
     if len(fitted) == 0:
         return vx, vy, n_inliers
     if _reseedable(random_state):  # the pairs depend on the size only: one table per size, one compiled call
-        distinct, of_group = np.unique(sizes[fitted], return_inverse=True)
-        tables = [_fresh_pairs(n, max_trials, random_state) for n in distinct.tolist()]
-        n_pairs = np.array([pair_i.shape[1] for pair_i, _ in tables], dtype=np.int64)
-        table_start = np.concatenate(([0], np.cumsum(n_pairs)[:-1]))
-        pair_i = np.concatenate([pair_i[0] for pair_i, _ in tables])
-        pair_j = np.concatenate([pair_j[0] for _, pair_j in tables])
-        of_group = of_group.ravel()
+        fitted_sizes = sizes[fitted].tolist()  # a few groups: Python is cheaper than np.unique here
+        pair_i, pair_j, where = _pair_table(tuple(sorted(set(fitted_sizes))), max_trials, random_state)
+        table_start, n_pairs = np.array([where[n] for n in fitted_sizes], dtype=np.int64).T
         vx[fitted], vy[fitted], n_inliers[fitted] = _fit_groups(
             v_r,
             cos_t,
@@ -319,8 +341,8 @@ def _estimate(v_r, theta, group_id, n_groups, min_detections, min_spread, thresh
             theta,
             starts[fitted],
             sizes[fitted],
-            table_start[of_group],
-            n_pairs[of_group],
+            np.ascontiguousarray(table_start),
+            np.ascontiguousarray(n_pairs),
             pair_i,
             pair_j,
             *settings,
