@@ -6,7 +6,6 @@ import numba
 import numpy as np
 
 
-
 @numba.njit(cache=True, nogil=True)
 def _keep_new(x, y, t, v_r, first_new, radius2, before, speed_limits, min_neighbors):
     """Eq. 1 for the points ``[first_new, n)`` (one scan, one time), counted among the points before them.
@@ -70,4 +69,6 @@ class FilterWindow:
         first_new = len(self.t) - len(t)
         v_r = np.ascontiguousarray(v_r, dtype=np.float64)
         radius2 = self.d_xy**2
-        return _keep_new(self.x, self.y, self.t, v_r, first_new, radius2, self.dt, self.speed_limits, self.min_neighbors)
+        return _keep_new(
+            self.x, self.y, self.t, v_r, first_new, radius2, self.dt, self.speed_limits, self.min_neighbors
+        )
