@@ -54,7 +54,7 @@ def retained_rows(online):
     rows = sum(window.points.t.shape[0] for window in online._stage1._windows.values())
     for state in online._sequences.values():
         rows += state.merge.rows["t"].shape[0] + state.merge.tracks["t"].shape[0]
-        rows += 0 if state.filter is None else state.filter.t.shape[0]
+        rows += 0 if state.filter is None else len(state.filter.window)
     return rows, len(online._ids.root)
 
 

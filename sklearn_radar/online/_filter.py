@@ -5,6 +5,8 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from ._merger import TimeColumns
+
 
 @numba.njit(cache=True, nogil=True)
 def _keep_new(x, y, t, v_r, first_new, radius2, before, speed_limits, min_neighbors):
@@ -53,7 +55,7 @@ class FilterWindow:
         self.speed_limits = np.array([self.vr_threshold / ratio for ratio in ratios], dtype=np.float64)
         self.min_neighbors = np.ascontiguousarray(min_neighbors, dtype=np.int64)
         self.origin = None
-        self.x, self.y, self.t = np.zeros(0), np.zeros(0), np.zeros(0)  # m, m, s relative to the origin
+        self.window = TimeColumns(("t", "x", "y"))  # s relative to the origin, m, m
 
     def keep(self, x, y, t, v_r):
         """Eq. 1 for a new scan (``t``: its times, s); the scan joins the window."""
@@ -62,13 +64,12 @@ class FilterWindow:
         if len(t) == 0:
             return np.zeros(0, dtype=bool)
         relative = t - self.origin
-        first_kept = int(np.searchsorted(self.t, relative[0] - self.dt, side="left"))
-        self.x = np.concatenate([self.x[first_kept:], x])
-        self.y = np.concatenate([self.y[first_kept:], y])
-        self.t = np.concatenate([self.t[first_kept:], relative])
-        first_new = len(self.t) - len(t)
+        self.window.drop_before(relative[0] - self.dt)
+        self.window.append({"t": relative, "x": x, "y": y})
+        w = self.window
+        first_new = len(w) - len(t)
         v_r = np.ascontiguousarray(v_r, dtype=np.float64)
         radius2 = self.d_xy**2
         return _keep_new(
-            self.x, self.y, self.t, v_r, first_new, radius2, self.dt, self.speed_limits, self.min_neighbors
+            w["x"], w["y"], w["t"], v_r, first_new, radius2, self.dt, self.speed_limits, self.min_neighbors
         )

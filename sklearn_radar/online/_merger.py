@@ -81,8 +81,8 @@ class MergeWindow:
         self.clusters = {}
         self.pending = set()  # labels of the clusters not yet decided as B
         self.absorbed = set()  # labels whose rows stage 1 gave to an older cluster (they grow no more)
-        self.rows = _Columns(_ROWS)
-        self.tracks = _Columns(_TRACKS)  # continuation: one entry per (cluster, scan), its centre
+        self.rows = TimeColumns(_ROWS)
+        self.tracks = TimeColumns(_TRACKS)  # continuation: one entry per (cluster, scan), its centre
         self.gone = []  # the clusters forgotten by the last decide()
         self._swept = -np.inf  # s, the threshold of the last sweep of the clusters
 
@@ -345,7 +345,7 @@ class MergeComponents:
                 self.core.discard(label)
 
 
-class _Columns:
+class TimeColumns:
     """Time-sorted columns (``t`` among them) in buffers with room for more entries.
 
     ``columns[name]`` is a view of the live entries ``[lo, hi)``: appending
