@@ -253,7 +253,8 @@ def _fit_groups(
     ``cos_t``, ``sin_t`` and ``theta``; its hypotheses are the pairs
     ``pair_i[k], pair_j[k]`` (indices within the group) for ``k`` in
     ``[pair_start[g], pair_start[g] + n_pairs[g])``.  Returns ``vx``, ``vy``
-    (NaN when unknown) and ``n_inliers``, each of shape (G,).  A compiled
+    (NaN when unknown) and ``n_inliers``, each of shape (G,); a group of
+    fewer than ``min_detections`` rows is unknown with 0 inliers.  A compiled
     loop: the numpy form over stacked groups of one size cost about 200 us
     per size in the online stage 2.
     """
@@ -268,6 +269,8 @@ def _fit_groups(
     best_mask = np.zeros(largest, dtype=np.bool_)
     for g in range(n_groups):
         n = size[g]
+        if n < min_detections:  # too few detections: unknown, no inlier
+            continue
         r, c, s = v_r[start[g] : start[g] + n], cos_t[start[g] : start[g] + n], sin_t[start[g] : start[g] + n]
         best_count, best_squared, has_pair = -2, np.inf, False
         for h in range(pair_start[g], pair_start[g] + n_pairs[g]):
@@ -319,35 +322,35 @@ def _estimate(v_r, theta, group_id, n_groups, min_detections, min_spread, thresh
     size (as many as ``_BLOCK_ELEMENTS`` residuals), the order in which the
     stacked numpy form consumed its stream.
     """
-    vx = np.full(n_groups, np.nan)
-    vy = np.full(n_groups, np.nan)
-    n_inliers = np.zeros(n_groups, dtype=np.int64)
     sizes = np.bincount(group_id, minlength=n_groups)
-    starts = np.concatenate(([0], np.cumsum(sizes)[:-1]))
+    starts = np.cumsum(sizes) - sizes
     v_r, theta = np.ascontiguousarray(v_r, dtype=np.float64), np.ascontiguousarray(theta, dtype=np.float64)
     cos_t, sin_t = np.cos(theta), np.sin(theta)
     settings = (min_detections, min_spread, threshold)
-    fitted = np.flatnonzero(sizes >= min_detections)
-    if len(fitted) == 0:
-        return vx, vy, n_inliers
-    if _reseedable(random_state):  # the pairs depend on the size only: one table per size, one compiled call
-        fitted_sizes = sizes[fitted].tolist()  # a few groups: Python is cheaper than np.unique here
-        pair_i, pair_j, where = _pair_table(tuple(sorted(set(fitted_sizes))), max_trials, random_state)
-        table_start, n_pairs = np.array([where[n] for n in fitted_sizes], dtype=np.int64).T
-        vx[fitted], vy[fitted], n_inliers[fitted] = _fit_groups(
+    if _reseedable(random_state):  # the pairs depend on the size only: one table for all sizes, one compiled call
+        size_list = sizes.tolist()  # a few groups: Python is cheaper than np.unique here
+        fitted_sizes = tuple(sorted({n for n in size_list if n >= min_detections}))
+        if not fitted_sizes:
+            return np.full(n_groups, np.nan), np.full(n_groups, np.nan), np.zeros(n_groups, dtype=np.int64)
+        pair_i, pair_j, where = _pair_table(fitted_sizes, max_trials, random_state)
+        table = np.array([where.get(n, (0, 0)) for n in size_list], dtype=np.int64).reshape(-1, 2)
+        return _fit_groups(
             v_r,
             cos_t,
             sin_t,
             theta,
-            starts[fitted],
-            sizes[fitted],
-            np.ascontiguousarray(table_start),
-            np.ascontiguousarray(n_pairs),
+            starts,
+            sizes,
+            np.ascontiguousarray(table[:, 0]),
+            np.ascontiguousarray(table[:, 1]),
             pair_i,
             pair_j,
             *settings,
         )
-        return vx, vy, n_inliers
+    vx = np.full(n_groups, np.nan)
+    vy = np.full(n_groups, np.nan)
+    n_inliers = np.zeros(n_groups, dtype=np.int64)
+    fitted = np.flatnonzero(sizes >= min_detections)
     shared_rng = np.random.default_rng(random_state)
     for n in np.unique(sizes[fitted]).tolist():
         members = np.flatnonzero(sizes == n)
