@@ -1,6 +1,6 @@
 """Benchmark of the whole framework online: per-scan latency of OnlinePipeline, real-time factor, flat memory.
 
-Run: ``python benchmarks/bench_online.py [--minutes 10] [--experiments 1 13 12]``.
+Run: ``python benchmarks/bench_online.py [--minutes 10] [--experiments 1 8 12 13] [--repeat 3]``.
 
 The recording is simulated a minute at a time (realistic preset, the
 RadarScenes rates: four unsynchronised sensors with a 60 ms cycle, a scan
@@ -20,7 +20,9 @@ Printed per setting:
 * peak RSS (``ru_maxrss``) and the rows the windows retain after the first
   and after the last minute: flat memory means equal figures.
 
-Each setting runs in a child process of its own, so its peak RSS is its own.
+Each setting runs in a child process of its own, so its peak RSS is its own;
+``--repeat`` runs each child several times and prints the spread (min-max)
+of its p50 and p99, since a shared machine's load moves the figures.
 """
 
 import argparse
@@ -51,7 +53,8 @@ def retained_rows(online):
     """Rows held by the windows of the stream (filter, stage 1, stage 2) and the ids remembered."""
     rows = sum(window.points.t.shape[0] for window in online._stage1._windows.values())
     for state in online._sequences.values():
-        rows += state.merge.rows["t"].shape[0] + (0 if state.filter is None else state.filter.block.shape[1])
+        rows += state.merge.rows["t"].shape[0] + state.merge.tracks["t"].shape[0]
+        rows += 0 if state.filter is None else len(state.filter.window)
     return rows, len(online._ids.root)
 
 
@@ -89,7 +92,7 @@ def current_rss_mb():
         return int(statm.read().split()[1]) * os.sysconf("SC_PAGE_SIZE") / 2**20
 
 
-def run(number, minutes, objects):
+def run(number, minutes, objects, one_minute=False):
     """Child process: stream ``minutes`` minutes with experiment ``number``; print the figures as JSON.
 
     ``objects`` 2 times stage 1 alone (ScanStream) on the same scans instead.
@@ -101,8 +104,13 @@ def run(number, minutes, objects):
     online = OnlinePipeline(experiment_pipeline(number))
     wall, cpu, after = [], [], {}
     recorded = 0.0
+    simulated = minute_of_data(0) if one_minute else None
     for k in range(minutes):
-        data = minute_of_data(k)
+        if one_minute:  # the same detections each minute, shifted: the simulator's memory stays out of the figures
+            data = simulated.copy()
+            data["timestamp"] += k * 60_000_000
+        else:
+            data = minute_of_data(k)
         if objects == 2:
             stage1_alone(online, data, wall, cpu)
             recorded += (data["timestamp"].max() - data["timestamp"].min()) * 1e-6
@@ -139,38 +147,56 @@ def run(number, minutes, objects):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--minutes", type=int, default=10)
-    parser.add_argument("--experiments", type=int, nargs="+", default=[1, 13, 12])
+    parser.add_argument("--experiments", type=int, nargs="+", default=[1, 8, 12, 13])
     parser.add_argument("--kinds", type=int, nargs="+", default=[2, 0, 1], help="2: stage 1 alone, 0: all, 1: +objects")
+    parser.add_argument("--repeat", type=int, default=1, help="runs of each setting and kind")
+    parser.add_argument(
+        "--one-minute", action="store_true", help="simulate one minute, replay it shifted (RSS of the stream alone)"
+    )
     parser.add_argument("--child", nargs=3, type=int, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
         number, minutes, objects = args.child
-        run(number, minutes, objects)
+        run(number, minutes, objects, args.one_minute)
         return
     print(f"OnlinePipeline, realistic preset, 4 sensors, {args.minutes} min of recording per setting")
     for number in args.experiments:
         for objects in args.kinds:  # stage 1 alone, the four stages, the four stages with the object list
-            child = [sys.executable, __file__, "--child", str(number), str(args.minutes), str(objects)]
-            out = subprocess.run(child, capture_output=True, text=True, check=True).stdout
-            f = json.loads(out.strip().splitlines()[-1])
-            unknown = {
-                "rss_mb": float("nan"),
-                "rss_now_mb": float("nan"),
-                "rows": 0,
-                "ids": 0,
-            }  # stage 1 alone: not measured
-            first = f["after_minutes"].get("1", unknown)
-            last = f["after_minutes"].get(str(args.minutes), unknown)
-            print(
-                f"#{number:<2} {KINDS[objects]:12}  "
-                f"scans {f['n_scans']}  "
-                f"wall p50/p99/max {f['wall_us'][0]:.0f}/{f['wall_us'][1]:.0f}/{f['wall_us'][2]:.0f} us  "
-                f"cpu p50/p99/max {f['cpu_us'][0]:.0f}/{f['cpu_us'][1]:.0f}/{f['cpu_us'][2]:.0f} us  "
-                f"real-time factor {f['real_time_factor_wall']:.0f} (cpu {f['real_time_factor_cpu']:.0f})  "
-                f"peak RSS {first['rss_mb']:.0f} -> {last['rss_mb']:.0f} MB, "
-                f"RSS now {first['rss_now_mb']:.0f} -> {last['rss_now_mb']:.0f} MB, "
-                f"rows kept {first['rows']} -> {last['rows']}, ids {first['ids']} -> {last['ids']}"
-            )
+            runs = [child_figures(number, args.minutes, objects, args.one_minute) for _ in range(args.repeat)]
+            for f in runs:
+                print_figures(number, objects, args.minutes, f)
+            if args.repeat > 1:
+                p50, p99 = ([f["cpu_us"][k] for f in runs] for k in (0, 1))
+                print(
+                    f"#{number:<2} {KINDS[objects]:12}  spread of {args.repeat} runs: "
+                    f"cpu p50 {min(p50):.0f}-{max(p50):.0f} us, p99 {min(p99):.0f}-{max(p99):.0f} us"
+                )
+
+
+def child_figures(number, minutes, objects, one_minute=False):
+    """The figures of one child process (see :func:`run`)."""
+    child = [sys.executable, __file__, "--child", str(number), str(minutes), str(objects)]
+    child += ["--one-minute"] if one_minute else []
+    out = subprocess.run(child, capture_output=True, text=True, check=True).stdout
+    return json.loads(out.strip().splitlines()[-1])
+
+
+def print_figures(number, objects, minutes, f):
+    """One line of figures: latency, real-time factor, memory after the first and the last minute."""
+    unknown = {"rss_mb": float("nan"), "rss_now_mb": float("nan"), "rows": 0, "ids": 0}  # stage 1 alone: not measured
+    first = f["after_minutes"].get("1", unknown)
+    last = f["after_minutes"].get(str(minutes), unknown)
+    print(
+        f"#{number:<2} {KINDS[objects]:12}  "
+        f"scans {f['n_scans']}  "
+        f"wall p50/p99/max {f['wall_us'][0]:.0f}/{f['wall_us'][1]:.0f}/{f['wall_us'][2]:.0f} us  "
+        f"cpu p50/p99/max {f['cpu_us'][0]:.0f}/{f['cpu_us'][1]:.0f}/{f['cpu_us'][2]:.0f} us  "
+        f"real-time factor {f['real_time_factor_wall']:.0f} (cpu {f['real_time_factor_cpu']:.0f})  "
+        f"peak RSS {first['rss_mb']:.0f} -> {last['rss_mb']:.0f} MB, "
+        f"RSS now {first['rss_now_mb']:.0f} -> {last['rss_now_mb']:.0f} MB, "
+        f"rows kept {first['rows']} -> {last['rows']}, ids {first['ids']} -> {last['ids']}",
+        flush=True,
+    )
 
 
 if __name__ == "__main__":

@@ -57,18 +57,18 @@ columns = {
 
 labels = np.full(len(data), -1)
 object_ids = np.full(len(data), -1)
-aliases, merges, latency, n_objects = [], [], [], []
+aliases, joins, latency, n_objects = [], [], [], []
 for rows in scans:
     start = time.perf_counter()
     result = online.update({name: values[rows] for name, values in columns.items()})
     latency.append(time.perf_counter() - start)
     labels[rows], object_ids[rows] = result.labels, result.object_ids
     aliases += result.aliases
-    merges += result.merges
+    joins += result.joins  # the stage-2 joins (the accepted pairs, with ClusterMerger's min_samples 1)
     n_objects.append(len(result.objects))
 end = online.finish()
 aliases += end.aliases
-merges += end.merges
+joins += end.joins
 latency = (
     np.array(latency[1:]) * 1e3
 )  # ms; the first call, which loads the kernels, is left out
@@ -91,13 +91,13 @@ print(result.objects.to_frame().round(2).to_string(index=False))
 # Same result as the offline causal pipeline
 # ------------------------------------------
 # Ids differ in value, but the partitions are the same: stage 1 detection
-# for detection, and the stage-1 clusters joined by the stage-2 merges.
+# for detection, and the stage-1 clusters joined by stage 2.
 causal = online.causal_pipeline()
 offline = causal.fit_predict(data)
 offline_stage1 = causal[-1].stage1_labels_
-# The merged clusters are the connected components of the graph whose edges are the merges.
+# The merged clusters are the connected components of the graph whose edges are the joins.
 n_labels = labels.max() + 1
-edges = np.array(merges, dtype=np.int64).reshape(-1, 2)
+edges = np.array(joins, dtype=np.int64).reshape(-1, 2)
 graph = coo_matrix(
     (np.ones(len(edges)), (edges[:, 0], edges[:, 1])), shape=(n_labels, n_labels)
 )

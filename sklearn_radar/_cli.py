@@ -136,7 +136,8 @@ def _parser():
         reproduce, "--n-jobs", _n_jobs, help="candidates evaluated in parallel (default: one at a time; -1: all cores)"
     )
     reproduce.add_argument(
-        "--experiments", help="comma-separated: filter, 1-13 (ranges like 2-9), objects, filter-effect, baselines"
+        "--experiments",
+        help="comma-separated: filter, 1-13 (ranges like 2-9), objects, filter-effect, baselines, tracking",
     )
     reproduce.add_argument(
         "--full", action="store_true", help="the paper's budget (100 iterations, 30 random) on ~1M detections"

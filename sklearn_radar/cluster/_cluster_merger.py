@@ -19,10 +19,12 @@ from ._merge_kernels import (
     cluster_runs,
     continuation_edges,
     merge_components,
+    velocity_agreement,
+    velocity_frame_rows,
     velocity_frames,
 )
 from ._radar_dbscan import RadarDBSCAN, _gate_static_clusters
-from ._velocity import _estimate_velocities
+from ._velocity import _VELOCITY_DEFAULTS, _estimate, _estimate_velocities
 
 
 def _stage1_labels(stage1, columns):
@@ -243,20 +245,13 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
         if len(frames) == 0:
             return merge
         # Rows of A's frame (group 2i) and of B's (group 2i + 1), in time order, for every kept pair i.
-        first = np.c_[frames[:, 1], frames[:, 3]].ravel()
-        length = np.c_[frames[:, 2] - frames[:, 1], frames[:, 4] - frames[:, 3]].ravel()
-        group = np.repeat(np.arange(len(first)), length)
-        position = np.arange(len(group)) - np.repeat(np.cumsum(length) - length, length) + np.repeat(first, length)
-        rows = runs.order[position]
-        vx, vy, _, groups = _estimate_velocities(v_r[rows], los[rows], group)
-        velocity = np.full((len(first), 2), np.nan)
-        velocity[groups.astype(np.int64)] = np.c_[vx, vy]
-        va, vb = velocity[0::2], velocity[1::2]
-        known = np.isfinite(va).all(axis=1) & np.isfinite(vb).all(axis=1)
-        with np.errstate(invalid="ignore"):
-            dphi = np.abs(
-                (np.arctan2(va[:, 1], va[:, 0]) - np.arctan2(vb[:, 1], vb[:, 0]) + np.pi) % (2 * np.pi) - np.pi
-            )
-            agree = (dphi < self.eps_phi) & (np.abs(np.hypot(*va.T) - np.hypot(*vb.T)) < self.eps_v)
-        merge[frames[:, 0]] = np.where(known, agree, self.unknown_velocity == "accept")
+        rows, group = velocity_frame_rows(frames, runs.order)
+        frame_v_r, frame_los = v_r[rows], los[rows]
+        if np.isfinite(frame_v_r.sum() + frame_los.sum()):  # groups 0, 1, ... sorted, none empty: no regrouping
+            vx, vy, _ = _estimate(frame_v_r, frame_los, group, 2 * len(frames), *_VELOCITY_DEFAULTS)
+        else:  # non-finite rows are left out, as estimate_velocities leaves them out
+            known_x, known_y, _, groups = _estimate_velocities(frame_v_r, frame_los, group)
+            vx, vy = np.full(2 * len(frames), np.nan), np.full(2 * len(frames), np.nan)
+            vx[groups.astype(np.int64)], vy[groups.astype(np.int64)] = known_x, known_y
+        merge[frames[:, 0]] = velocity_agreement(vx, vy, self.eps_phi, self.eps_v, self.unknown_velocity == "accept")
         return merge

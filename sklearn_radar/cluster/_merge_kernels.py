@@ -604,3 +604,56 @@ def merge_components(n_clusters, edges, min_samples):
     """
     edges = np.asarray(edges, dtype=np.int64).reshape(-1, 2)
     return _merge_components(int(n_clusters), edges, int(min_samples))
+
+
+@numba.njit(cache=True, nogil=True)
+def _velocity_frame_rows(frames, order):
+    """Rows of every frame of :func:`velocity_frames`: A's of pair i as group 2i, B's as group 2i + 1, in time order."""
+    total = 0
+    for k in range(len(frames)):
+        total += (frames[k, 2] - frames[k, 1]) + (frames[k, 4] - frames[k, 3])
+    rows = np.empty(total, dtype=np.int64)
+    group = np.empty(total, dtype=np.int64)
+    m = 0
+    for k in range(len(frames)):
+        for side in range(2):
+            for position in range(frames[k, 1 + 2 * side], frames[k, 2 + 2 * side]):
+                rows[m], group[m] = order[position], 2 * k + side
+                m += 1
+    return rows, group
+
+
+def velocity_frame_rows(frames, order):
+    """(rows, group) of the frames: the detection rows (``order`` of :class:`ClusterRuns`) and each row's frame."""
+    return _velocity_frame_rows(
+        np.ascontiguousarray(frames, dtype=np.int64), np.ascontiguousarray(order, dtype=np.int64)
+    )
+
+
+@numba.njit(cache=True, nogil=True)
+def _velocity_agreement(vx, vy, eps_phi, eps_v, accept_unknown):
+    merge = np.empty(len(vx) // 2, dtype=np.bool_)
+    for k in range(len(merge)):
+        xa, ya, xb, yb = vx[2 * k], vy[2 * k], vx[2 * k + 1], vy[2 * k + 1]
+        if not (np.isfinite(xa) and np.isfinite(ya) and np.isfinite(xb) and np.isfinite(yb)):
+            merge[k] = accept_unknown
+            continue
+        dphi = abs(np.remainder(np.arctan2(ya, xa) - np.arctan2(yb, xb) + np.pi, 2 * np.pi) - np.pi)
+        merge[k] = dphi < eps_phi and abs(np.hypot(xa, ya) - np.hypot(xb, yb)) < eps_v
+    return merge
+
+
+def velocity_agreement(vx, vy, eps_phi, eps_v, accept_unknown):
+    """Eq. 6's velocity test per frame pair (A's velocity at 2i, B's at 2i + 1, m/s; NaN unknown).
+
+    True when the directions differ by less than ``eps_phi`` (rad) and the
+    speeds by less than ``eps_v`` (m/s); a pair with an unknown velocity
+    merges when ``accept_unknown``.
+    """
+    return _velocity_agreement(
+        np.ascontiguousarray(vx, dtype=np.float64),
+        np.ascontiguousarray(vy, dtype=np.float64),
+        float(eps_phi),
+        float(eps_v),
+        bool(accept_unknown),
+    )

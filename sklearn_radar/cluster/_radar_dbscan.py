@@ -530,22 +530,24 @@ class ScanStream:
         c = {name: column(values, name) for name, values in given.items()}
         return self._label(c)
 
-    def _label(self, c):
+    def _label(self, c, one_scan=None):
+        """Labels of the rows of the read columns ``c``; ``one_scan``: True when the caller checked that they are
+        one scan of one sequence (the online pipeline), None to find out."""
         self._meetings = []
         active, min_points, can_be_core = self.clusterer._point_rules(c)
         n = len(c["x"])
         labels = np.full(n, -1, dtype=np.int64)
         sequence = np.zeros(n) if c["sequence"] is None else c["sequence"]
         heading = np.zeros(n) if c["heading"] is None else c["heading"]
-        one_scan = n > 0 and np.all(sequence == sequence[0]) and np.all(c["t"] == c["t"][0])
+        if one_scan is None:
+            one_scan = n > 0 and np.all(sequence == sequence[0]) and np.all(c["t"] == c["t"][0])
         if one_scan:
-            groups = [np.arange(n)]
+            groups = [np.flatnonzero(active)]  # the active rows only
         else:
             order = np.lexsort((c["t"], sequence))
             cut = np.flatnonzero((np.diff(sequence[order]) != 0) | (np.diff(c["t"][order]) != 0)) + 1
-            groups = np.split(order, cut)
+            groups = [scan[active[scan]] for scan in np.split(order, cut)]
         for scan in groups:
-            scan = scan[active[scan]]
             if len(scan) == 0:
                 continue
             key = float(sequence[scan[0]])
@@ -577,32 +579,79 @@ class ScanStream:
 class _Window:
     """The detections of one sequence within the last eps_t, for the stream.
 
-    The float columns live in one (7, n) block, the six rows of :class:`Points` (x, y in m, v in m/s,
-    t in s, cos and sin of the heading) then N_min, so that a scan costs one concatenation for them;
-    ``points`` and ``min_points`` are views of its rows.
+    The columns live in buffers with room for more scans: the float columns
+    in one (7, capacity) block, the six rows of :class:`Points` (x, y in m,
+    v in m/s, t in s, cos and sin of the heading) then N_min, and the flags
+    and ids beside it.  The window is the span ``[lo, hi)``: a scan drops
+    the old detections by moving ``lo`` and writes its rows at ``hi``; the
+    live span is moved to the front only when the buffer is full (and the
+    buffer doubled when the span needs it), so that a scan costs a few row
+    writes instead of concatenations of the whole window.  ``points``,
+    ``min_points``, ``can_be_core``, ``core`` and ``cluster`` are
+    contiguous views of the span (the kernel writes ``core`` and
+    ``cluster`` in place).
     """
 
-    def __init__(self):
-        self._set_block(np.zeros((7, 0)))
-        self.can_be_core = np.zeros(0, dtype=bool)
-        self.core = np.zeros(0, dtype=bool)
-        self.cluster = np.zeros(0, dtype=np.int64)
+    def __init__(self, capacity=1024):
+        self._block = np.zeros((7, capacity))
+        self._can_be_core = np.zeros(capacity, dtype=bool)
+        self._core = np.zeros(capacity, dtype=bool)
+        self._cluster = np.full(capacity, -1, dtype=np.int64)
+        self.lo = self.hi = 0
         self.first_new = 0
         self.last_time = -np.inf
+        self._set_views()
 
-    def _set_block(self, block):
-        self._block = block
-        self.points = Points(*block[:6])
-        self.min_points = block[6]
+    def _set_views(self):
+        lo, hi = self.lo, self.hi
+        self.points = Points(*(self._block[row, lo:hi] for row in range(6)))
+        self.min_points = self._block[6, lo:hi]
+        self.can_be_core = self._can_be_core[lo:hi]
+        self.core = self._core[lo:hi]
+        self.cluster = self._cluster[lo:hi]
+
+    def _make_room(self, first_kept, n_new):
+        """Move the kept span ``[first_kept, hi)`` to the front (in a larger buffer if ``n_new`` rows do not fit)."""
+        live = self.hi - first_kept
+        capacity = self._block.shape[1]
+        if live + n_new > capacity // 2:  # keep the moves rare: at most every capacity / 2 rows
+            capacity = 2 * (live + n_new)
+        block, can_be_core = np.zeros((7, capacity)), np.zeros(capacity, dtype=bool)
+        core, cluster = np.zeros(capacity, dtype=bool), np.full(capacity, -1, dtype=np.int64)
+        block[:, :live] = self._block[:, first_kept : self.hi]
+        can_be_core[:live] = self._can_be_core[first_kept : self.hi]
+        core[:live] = self._core[first_kept : self.hi]
+        cluster[:live] = self._cluster[first_kept : self.hi]
+        self._block, self._can_be_core, self._core, self._cluster = block, can_be_core, core, cluster
+        self.lo, self.hi = 0, live
 
     def append(self, c, scan, heading, min_points, can_be_core, eps_t):
         """Drop what is older than ``eps_t`` (s) before the scan, then add the scan."""
         now = c["t"][scan[0]]
-        first_kept = int(np.searchsorted(self.points.t, now - eps_t, side="left"))  # the window is time-sorted
-        new = points_of(x=c["x"][scan], y=c["y"][scan], v=c["v_r"][scan], t=c["t"][scan], heading=heading[scan])
-        self._set_block(np.concatenate([self._block[:, first_kept:], np.vstack([*new, min_points[scan]])], axis=1))
-        self.can_be_core = np.concatenate([self.can_be_core[first_kept:], can_be_core[scan]])
-        self.core = np.concatenate([self.core[first_kept:], np.zeros(len(scan), dtype=bool)])
-        self.cluster = np.concatenate([self.cluster[first_kept:], np.full(len(scan), -1, dtype=np.int64)])
-        self.first_new = len(self.points.t) - len(scan)
+        first_kept = self.lo + int(np.searchsorted(self.points.t, now - eps_t, side="left"))  # time-sorted
+        n_new = len(scan)
+        if self.hi + n_new > self._block.shape[1]:
+            self._make_room(first_kept, n_new)
+        else:
+            self.lo = first_kept
+        start, stop = self.hi, self.hi + n_new
+        block = self._block
+        block[0, start:stop] = c["x"][scan]
+        block[1, start:stop] = c["y"][scan]
+        block[2, start:stop] = c["v_r"][scan]
+        block[3, start:stop] = c["t"][scan]
+        scan_heading = heading[scan]
+        if scan_heading.any():  # as points_of: no trigonometry for a heading of 0
+            block[4, start:stop] = np.cos(scan_heading)
+            block[5, start:stop] = np.sin(scan_heading)
+        else:
+            block[4, start:stop] = 1.0
+            block[5, start:stop] = 0.0
+        block[6, start:stop] = min_points[scan]
+        self._can_be_core[start:stop] = can_be_core[scan]
+        self._core[start:stop] = False
+        self._cluster[start:stop] = -1
+        self.hi = stop
+        self.first_new = stop - n_new - self.lo
+        self._set_views()
         self.last_time = now

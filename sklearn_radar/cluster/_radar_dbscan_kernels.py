@@ -120,8 +120,14 @@ def _spatial_neighbor(i, j, points, crit):
             )
             < eps_xy
         )
+    # Eqs. 4 and 5 first reject |dx| >= eps, which decides as the full test would (dx^2 alone rounds to at
+    # least eps^2, and adding non-negative terms does not round below it) and spares most pairs the rest.
     if crit.metric == XY:
+        if abs(dx) >= eps_xy:
+            return False
         return dx * dx + dy * dy < eps_xy * eps_xy and abs(dv) < eps_vr
+    if abs(dx) >= crit.eps_xyv:
+        return False
     return dx * dx + dy * dy + dv * dv / (crit.vr_scale * crit.vr_scale) < crit.eps_xyv * crit.eps_xyv
 
 

@@ -41,6 +41,10 @@ class ScanResult:
     merges : list of (int, int)
         The stage-2 pairs (A, B) accepted at this scan, as stage-1 labels: the offline ``ClusterMerger``'s
         ``merges_``, decided here.
+    joins : list of (int, int)
+        The pairs of stage-1 labels that stage 2 made one object at this scan: ``merges`` when
+        ``min_samples`` is 1; with a larger one the joins of the DBSCAN over clusters (core partners, a
+        non-core cluster with its first core partner), each as soon as it is certain.
     """
 
     labels: np.ndarray
@@ -49,6 +53,7 @@ class ScanResult:
     objects: ObjectList
     aliases: list
     merges: list
+    joins: list
 
 
 class _Sequence:
@@ -78,7 +83,10 @@ class OnlinePipeline:
     * stage 1 is :class:`~sklearn_radar.cluster.ScanStream` (the last ``eps_t``);
     * stage 2 decides a pair (A, B) at ``tau = min(end of B, s_B + eps_t2)``
       from the detections at or before tau, as soon as they have all arrived
-      (at the latest ``eps_t`` after B's last detection).
+      (at the latest ``eps_t`` after B's last detection); with ClusterMerger's
+      ``min_samples`` above 1 a join of the DBSCAN over clusters is made as
+      soon as it is certain (:attr:`ScanResult.joins`), which for a non-core
+      cluster can be later: when the partner counts it depends on are final.
 
     The stage-1 labels equal the causal pipeline's detection for detection,
     and the object ids resolved through the stage-2 aliases give its merged
@@ -105,10 +113,8 @@ class OnlinePipeline:
     ----------
     pipeline : sklearn.pipeline.Pipeline
         The offline pipeline; read once, at construction.  Stage 1's
-        ``eps_t`` must be set (the window), ``cluster_vr_min`` of both stages
-        None (the gate judges whole clusters) and ClusterMerger's
-        ``min_samples`` 1 (the paper's; a larger one makes a merge depend on
-        later pairs): a ValueError otherwise.
+        ``eps_t`` must be set (the window) and ``cluster_vr_min`` of both
+        stages None (the gate judges whole clusters): a ValueError otherwise.
 
     Examples
     --------
@@ -207,29 +213,29 @@ class OnlinePipeline:
         c = _read_scan(scan)
         n = len(c["timestamp"])
         if n == 0:
-            return _empty_result([], [])
+            return _empty_result([], [], [])
         sequence, us = int(c["sequence"][0]), int(c["timestamp"][0])
         state = self._sequences.get(sequence)
         if state is None:
             state = self._sequences[sequence] = _Sequence(self._filter_params, self._merger, self._eps_t)
-        _check_order(state, sequence, np.unique(c["sensor_id"]).tolist(), us)
+        _check_order(state, sequence, sorted(set(c["sensor_id"].tolist())), us)
         work = self._frame._working_columns(c)
         x, y, v_r, t, heading = work["x"], work["y"], work["v_r"], work["t"], work["heading"]
         keep = np.ones(n, dtype=bool) if state.filter is None else state.filter.keep(x, y, t, v_r)
         stage1_columns = {"x": x, "y": y, "v_r": v_r, "t": t, "sequence": np.full(n, float(sequence))}
         stage1_columns.update(keep=keep, range_sc=c["range_sc"], heading=heading)
-        labels = self._stage1._label(stage1_columns)
+        labels = self._stage1._label(stage1_columns, one_scan=True)
         los = c["azimuth_sc"] + c["sensor_yaw"] + heading
-        state.merge.add(labels, t, x, y, v_r, los, us)
-        self._ids.add(np.unique(labels[labels >= 0]).tolist(), us)
+        self._ids.add(state.merge.add(labels, t, x, y, v_r, los, us), us)
         aliases = []
         for absorbed, survivor in self._stage1._meetings:
+            state.merge.absorbed.update(absorbed.tolist())
             for a, s in sorted(set(zip(absorbed.tolist(), survivor.tolist(), strict=True))):
                 aliases.append(self._ids.merge(s, a, us, "stage1"))
         window = self._stage1._windows.get(float(sequence))
-        growing = set() if window is None else set(np.unique(window.cluster).tolist())
-        merges = state.merge.decide(float(t[0]), growing)
-        for a, b in merges:
+        window_start = np.inf if window is None or len(window.points.t) == 0 else float(window.points.t[0])
+        merges, joins = state.merge.decide(float(t[0]), window_start)
+        for a, b in joins:
             aliases.append(self._ids.merge(a, b, us, "stage2"))
         result = ScanResult(
             labels=labels,
@@ -240,6 +246,7 @@ class OnlinePipeline:
             else empty_object_list(),
             aliases=[alias for alias in aliases if alias is not None],
             merges=merges,
+            joins=joins,
         )
         self._ids.forget(state.merge.gone)
         return result
@@ -253,12 +260,13 @@ class OnlinePipeline:
             Without detections; its ``aliases`` and ``merges`` are those decided now, the aliases stamped
             with the last time of their sequence.
         """
-        aliases, merges = [], []
+        aliases, merges, joins = [], [], []
         for state in self._sequences.values():
-            decided = state.merge.decide(np.inf, None)
+            decided, joined = state.merge.decide(np.inf, None)
             merges += decided
-            aliases += [self._ids.merge(a, b, state.last_us, "stage2") for a, b in decided]
-        return _empty_result([alias for alias in aliases if alias is not None], merges)
+            joins += joined
+            aliases += [self._ids.merge(a, b, state.last_us, "stage2") for a, b in joined]
+        return _empty_result([alias for alias in aliases if alias is not None], merges, joins)
 
     def _objects(self, state, sequence, now_us, now, labels, aliases):
         """The scan's object list: the objects it updated (detected or merged) get new figures."""
@@ -279,10 +287,10 @@ class OnlinePipeline:
         return state.objects.listed(sequence, now_us, oldest_us, self._ids.first_us)
 
 
-def _empty_result(aliases, merges):
+def _empty_result(aliases, merges, joins):
     """A ScanResult without detections."""
     none = np.zeros(0, dtype=np.int64)
-    return ScanResult(none, none, np.zeros(0, dtype=bool), empty_object_list(), aliases, merges)
+    return ScanResult(none, none, np.zeros(0, dtype=bool), empty_object_list(), aliases, merges, joins)
 
 
 def _stages(pipeline):
@@ -316,11 +324,6 @@ def _stages(pipeline):
     if merger is not None:
         if merger.cluster_vr_min is not None:
             raise ValueError("OnlinePipeline: ClusterMerger's cluster_vr_min judges whole clusters; set it to None")
-        if merger.min_samples != 1:
-            raise ValueError(
-                f"OnlinePipeline: ClusterMerger's min_samples must be 1 (a merge would depend on later pairs), "
-                f"got {merger.min_samples}"
-            )
     return frame, filter_, stage1, merger
 
 
@@ -332,17 +335,26 @@ def _read_scan(scan):
     missing = [name for name in SCAN_COLUMNS if name not in names]
     if missing:
         raise ValueError(f"OnlinePipeline.update: the scan lacks the column(s) {missing}")
-    columns = [np.ravel(scan[name]) for name in SCAN_COLUMNS]
-    n = len(columns[0])
-    lengths = [len(values) for values in columns]
-    if min(lengths) != n or max(lengths) != n:
-        name = SCAN_COLUMNS[next(i for i, length in enumerate(lengths) if length != n)]
-        raise ValueError(f"OnlinePipeline.update: column {name!r} has another length than 'range_sc' ({n})")
-    block = np.array(columns, dtype=np.float64)  # one conversion and one finiteness test for all columns
-    finite = np.isfinite(block)
-    if not finite.all():
-        bad = SCAN_COLUMNS[int(np.flatnonzero(~finite.all(axis=1))[0])]
-        raise ValueError(f"OnlinePipeline.update: column {bad!r} holds values that are not finite")
+    try:  # the columns as given: one conversion (and one finiteness test below) for all
+        block = np.array([scan[name] for name in SCAN_COLUMNS], dtype=np.float64)
+    except (ValueError, TypeError):
+        block = None
+    if block is None or block.ndim != 2:  # not 1-D columns of one length: flatten, and name a bad one
+        columns = [np.ravel(scan[name]) for name in SCAN_COLUMNS]
+        n = len(columns[0])
+        lengths = [len(values) for values in columns]
+        if min(lengths) != n or max(lengths) != n:
+            name = SCAN_COLUMNS[next(i for i, length in enumerate(lengths) if length != n)]
+            raise ValueError(f"OnlinePipeline.update: column {name!r} has another length than 'range_sc' ({n})")
+        block = np.array(columns, dtype=np.float64)
+    n = block.shape[1]
+    with np.errstate(over="ignore", invalid="ignore"):
+        total = float(block.sum())  # finite unless a value is not (or the sum of large ones overflows)
+    if not np.isfinite(total):
+        finite = np.isfinite(block).all(axis=1)
+        if not finite.all():
+            bad = SCAN_COLUMNS[int(np.flatnonzero(~finite)[0])]
+            raise ValueError(f"OnlinePipeline.update: column {bad!r} holds values that are not finite")
     c = dict(zip(SCAN_COLUMNS, block, strict=True))
     for name in ("sequence", "sensor_id"):
         values = np.ravel(scan[name]) if name in names else np.zeros(n, dtype=np.int64)
@@ -350,7 +362,7 @@ def _read_scan(scan):
             raise ValueError(f"OnlinePipeline.update: column {name!r} has another length than 'range_sc' ({n})")
         c[name] = values
     for name in ("timestamp", "sequence"):
-        if n and (c[name].min() != c[name].max()):
+        if n and (c[name] != c[name][0]).any():
             raise ValueError(f"OnlinePipeline.update: the rows are not one scan (column {name!r} differs)")
     return c
 

@@ -55,7 +55,8 @@ def replay(online, data, objects=False):
     Returns
     -------
     replayed : dict
-        ``labels`` (stage 1), ``object_ids`` (final: every alias resolved to its surviving id), ``keep``,
+        ``labels`` (stage 1), ``reported`` (the object ids as given at each scan), ``object_ids`` (final:
+        every alias resolved to its surviving id), ``keep``,
         ``latency`` and ``cpu`` (wall and thread CPU time per scan, s), ``aliases`` and ``objects`` (a
         DataFrame, or None).
     """
@@ -81,6 +82,7 @@ def replay(online, data, objects=False):
     table = pd.concat(frames, ignore_index=True) if frames else None
     return {
         "labels": labels,
+        "reported": reported,
         "object_ids": final,
         "keep": keep,
         "latency": np.array(latency),

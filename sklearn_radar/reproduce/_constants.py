@@ -44,9 +44,13 @@ FILTER_EFFECT = "filter-effect"
 BASELINES = "baselines"
 #: Beyond the paper: the framework's stages set up for objects (``experiments.object_pipeline``).
 OBJECTS = OBJECT_EXPERIMENT
+TRACKING = "tracking"
 
 #: Every step key, in the order they run.
-ALL_EXPERIMENTS = (FILTER, *(str(n) for n in NUMBERS), OBJECTS, FILTER_EFFECT, BASELINES)
+ALL_EXPERIMENTS = (FILTER, *(str(n) for n in NUMBERS), OBJECTS, FILTER_EFFECT, BASELINES, TRACKING)
+
+#: The settings the tracking step streams online (causal): the expert's, the best stage 1 and both stage-2 modes.
+TRACKED = (EXPERT, BEST_STAGE1, *STAGE2)
 
 #: The paper's chosen filter setting (eta_1 in m/s, d_xy in m): the defaults of DopplerDensityFilter.
 PAPER_FILTER_SETTING = (0.10, 1.4)
@@ -79,4 +83,6 @@ __all__ = [
     "SOURCE_SEARCH",
     "STAGE1",
     "STAGE2",
+    "TRACKED",
+    "TRACKING",
 ]

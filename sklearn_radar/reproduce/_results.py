@@ -1001,6 +1001,71 @@ class FilterEffectResult(_JsonRecord):
     paper: FilterEffectFigures = PAPER_FILTER_EFFECT
 
 
+# ----------------------------------------------------------------------------- object tracking online
+
+
+@dataclass(**_RECORD)
+class TrackingScores(_JsonRecord):
+    """How well object ids follow the moving road users over time (:func:`~sklearn_radar.metrics.tracking_scores`).
+
+    Summed over the test sequences (a track never crosses sequences, so the
+    identity assignment, and every count, is the sum of the sequences').
+
+    Attributes
+    ----------
+    frame_s : float
+        Frame length, s.
+    mota, idf1 : float
+        From the summed counts; NaN without ground-truth objects.
+    id_switches, misses, false_positives, n_objects, n_matches, idtp, idfp, idfn, n_frames : int
+    """
+
+    frame_s: float
+    mota: float
+    idf1: float
+    id_switches: int
+    misses: int
+    false_positives: int
+    n_objects: int
+    n_matches: int
+    idtp: int
+    idfp: int
+    idfn: int
+    n_frames: int
+
+
+@dataclass(**_RECORD)
+class TrackingResult(_JsonRecord):
+    """One setting streamed through :class:`~sklearn_radar.online.OnlinePipeline` on the test half (``tracking``).
+
+    Attributes
+    ----------
+    number : int
+        The experiment whose setting streams.
+    method : str
+    setting_source : str
+        ``"tuned #13"`` or ``"fixed #1"`` (the run's setting), ``"paper's #13"`` (the experiment did not run).
+    params : dict
+        The setting, as pipeline parameters (stage 1's included for stage 2).
+    reported : TrackingScores
+        The ids as given with each detection when its scan was labelled.
+    final : TrackingScores
+        The ids after every alias (stage-1 meetings, stage-2 merges) resolved to the surviving one.
+    n_scans : int
+    n_aliases : int
+        Merges reported as aliases, summed over the test sequences.
+    """
+
+    number: int
+    method: str
+    setting_source: str
+    params: dict[str, Any]
+    reported: TrackingScores
+    final: TrackingScores
+    n_scans: int
+    n_aliases: int
+
+
 # ----------------------------------------------------------------------------- the whole run
 
 
@@ -1038,6 +1103,9 @@ class RunResults(_JsonRecord):
         By clusterer name.
     objects : ObjectExperimentResult or None, default=None
         The object experiment, when it ran.
+    tracking : dict of int to TrackingResult or None, default=None
+        The online pipeline's object ids scored over time, by experiment number; None when it did not run
+        (and in results of older versions).
     figures : FigureRecord, default=FigureRecord()
         Figures drawn; written to ``results.json`` only on request.
     """
@@ -1049,6 +1117,7 @@ class RunResults(_JsonRecord):
     filter_effect: FilterEffectResult | None = None
     baselines: dict[str, BaselineResult] | None = None
     objects: ObjectExperimentResult | None = None
+    tracking: dict[int, TrackingResult] | None = None
     figures: FigureRecord = field(default_factory=FigureRecord, metadata=_NOT_WRITTEN)
 
     def v1_test(self):
@@ -1073,7 +1142,7 @@ class RunResults(_JsonRecord):
         -------
         document : dict
             ``meta``, ``statistics`` (when measured), ``experiments`` (keyed by the number as a string), then
-            ``filter``, ``filter_effect``, ``baselines`` and ``objects`` where they ran.
+            ``filter``, ``filter_effect``, ``baselines``, ``objects`` and ``tracking`` where they ran.
         """
         document = _to_json(self)
         if figures:
@@ -1167,6 +1236,8 @@ __all__ = [
     "RunMeta",
     "RunResults",
     "SearchRecord",
+    "TrackingResult",
+    "TrackingScores",
     "repeated_scores",
     "time_savings_percent",
 ]

@@ -42,7 +42,7 @@ from .. import __version__
 from .._executor import connect_executor
 from ..experiments import SKLEARN_BASELINES, get_experiment
 from ..metrics._parts import OBJECTIVES  # what the searches can maximise: "v1", "pq"
-from ._constants import ALL_EXPERIMENTS, BASELINES, FILTER, FILTER_EFFECT, NUMBERS, OBJECTS
+from ._constants import ALL_EXPERIMENTS, BASELINES, FILTER, FILTER_EFFECT, NUMBERS, OBJECTS, TRACKING
 from ._context import RunContext
 from ._io import (
     RUN_TOOL,
@@ -111,7 +111,7 @@ def parse_experiments(text):
     ----------
     text : str or None
         Comma-separated keys: ``filter``, experiment numbers ``1``-``13``,
-        ranges such as ``2-9``, ``filter-effect`` and ``baselines``.  None
+        ranges such as ``2-9``, ``filter-effect``, ``baselines`` and ``tracking``.  None
         selects every step.
 
     Returns
@@ -129,7 +129,7 @@ def parse_experiments(text):
             if not (low.isdigit() and high.isdigit()) or not first <= int(low) <= int(high) <= last:
                 raise ValueError(
                     f"unknown experiment range {part!r}; experiments are {first}-{last}, "
-                    f"{FILTER}, {FILTER_EFFECT}, {BASELINES}"
+                    f"{FILTER}, {FILTER_EFFECT}, {BASELINES}, {TRACKING}"
                 )
             chosen.update(str(n) for n in range(int(low), int(high) + 1))
         elif part in ALL_EXPERIMENTS:
@@ -200,7 +200,7 @@ def reproduce(
         Candidates evaluated in parallel (-1: all cores; 0 is refused).
     experiments : str, default=None
         Comma-separated keys (``filter``, ``1``-``13``, ranges such as
-        ``2-9``, ``filter-effect``, ``baselines``); None runs all.
+        ``2-9``, ``filter-effect``, ``baselines``, ``tracking``); None runs all.
     full : bool, default=False
         The paper's budget on about a million simulated detections.
     seed : int, default=0
@@ -459,6 +459,8 @@ def _store(results, key, result):
         results.baselines = result
     elif key == OBJECTS:
         results.objects = result
+    elif key == TRACKING:
+        results.tracking = result
     else:
         results.experiments[int(key)] = result
 
@@ -576,6 +578,7 @@ def _title(key):
         BASELINES: "scikit-learn baselines (DBSCAN, HDBSCAN per 0.25 s window and per sequence; DBSCAN over a "
         "sliding past window)",
         OBJECTS: "the object experiment (the framework's stages tuned for PQ)",
+        TRACKING: "object tracking online (IDF1, ID switches, MOTA of the streamed ids)",
     }[key]
 
 

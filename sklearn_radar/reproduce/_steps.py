@@ -74,6 +74,8 @@ from ._constants import (
     SOURCE_PAPER,
     SOURCE_SEARCH,
     STAGE2,
+    TRACKED,
+    TRACKING,
 )
 from ._progress import SCORING
 from ._results import (
@@ -96,6 +98,7 @@ from ._results import (
     SearchRecord,
     time_savings_percent,
 )
+from ._tracking import combine_tracking, streamable, track_sequence, tracked_setting
 
 #: Length of the frames of the object-level scores, s (Scheiner et al. 2021 evaluate 500 ms).
 FRAME_S = 0.5
@@ -631,6 +634,27 @@ def _mean_sd(values):
     return f"{values[0]:.3f}" if len(values) == 1 else f"{values.mean():.3f} +- {values.std(ddof=1):.3f}"
 
 
+# ----------------------------------------------------------------------------- object tracking online
+
+
+def run_tracking(env, key, needed):
+    """The settings of :data:`TRACKED` streamed online on the test half; their ids' IDF1, ID switches and MOTA."""
+    found, lines = {}, []
+    for number in TRACKED:
+        pipeline, params, source = tracked_setting(number, needed.get(str(number)))
+        refused = streamable(pipeline)
+        if refused is not None:
+            lines.append(f"    #{number} ({source}) does not stream: {refused}")
+            continue
+        parts = env.sequences.map(track_sequence, env.test, pipeline, executor=env.executor)
+        found[number] = combine_tracking(number, params, source, parts)
+        final = found[number].final
+        lines.append(
+            f"    #{number} ({source}): IDF1 {final.idf1:.3f}, ID switches {final.id_switches}, MOTA {final.mota:.3f}"
+        )
+    return Outcome(found, "\n".join(lines))
+
+
 # ----------------------------------------------------------------------------- scoring and searching
 
 
@@ -832,13 +856,15 @@ def _experiment_step(number):
 
 #: Every step by key, in run order: its function, the steps whose results it reads, its kind of work.
 #: #10 and #11 (#8's setting transferred), stage 2 (#12, #13: merging #8's clusters) and the filter's effect (at
-#: #8's setting) need #8; every other step needs none (the object experiment tunes its own stage 1).
+#: #8's setting) need #8; the tracking step the settings it streams (#1, #8, #12, #13); every other step needs
+#: none (the object experiment tunes its own stage 1).
 STEPS = {
     FILTER: Step(run_filter, kind=FILTER),
     **{key: _experiment_step(int(key)) for key in ALL_EXPERIMENTS if key.isdigit()},
     OBJECTS: Step(run_objects, kind="stage 2"),
     FILTER_EFFECT: Step(run_filter_effect, (str(BEST_STAGE1),), kind=FILTER_EFFECT),
     BASELINES: Step(run_baselines, kind=BASELINES),
+    TRACKING: Step(run_tracking, tuple(str(number) for number in TRACKED)),
 }
 
 

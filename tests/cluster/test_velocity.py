@@ -554,3 +554,14 @@ def test_deterministic_with_random_pairs():
     b = estimate_velocities(v_r, theta, group)
     for x, y in zip(a, b, strict=True):
         np.testing.assert_array_equal(x, y)
+
+
+def test_the_internal_defaults_are_the_public_ones():
+    """ClusterMerger calls the estimate's kernel with _VELOCITY_DEFAULTS: they must be estimate_velocities' defaults."""
+    import inspect
+
+    from sklearn_radar.cluster._velocity import _VELOCITY_DEFAULTS
+
+    signature = inspect.signature(estimate_velocities)
+    names = ("min_detections", "min_spread", "inlier_threshold", "max_trials", "random_state")
+    assert tuple(signature.parameters[name].default for name in names) == _VELOCITY_DEFAULTS

@@ -30,9 +30,9 @@ def replay(online, data):
         result = online.update({name: values[rows] for name, values in columns.items()}, objects=False)
         labels[rows], object_ids[rows], keep[rows] = result.labels, result.object_ids, result.keep
         aliases += result.aliases
-        merges += result.merges
+        merges += result.joins
     end = online.finish()
-    return labels, object_ids, keep, aliases + end.aliases, merges + end.merges
+    return labels, object_ids, keep, aliases + end.aliases, merges + end.joins
 
 
 def stage2_resolution(labels, merges):
@@ -56,6 +56,19 @@ def assert_same_partition(a, b):
     clustered = a >= 0
     pairs = set(zip(a[clustered].tolist(), b[clustered].tolist(), strict=True))
     assert len(pairs) == len(set(a[clustered].tolist())) == len(set(b[clustered].tolist()))
+
+
+def assert_online_equals_offline(online, data):
+    """Replay ``data``: keep flags, stage-1 labels and stage-2 clusters equal the offline causal pipeline's.
+
+    Returns the stage-2 joins of the replay.
+    """
+    labels, _, keep, _, joins = replay(online, data)
+    offline_keep, offline_stage1, offline_final = offline_causal(online, data)
+    np.testing.assert_array_equal(keep, offline_keep)
+    assert_same_partition(labels, offline_stage1)
+    assert_same_partition(stage2_resolution(labels, joins), offline_final)
+    return labels, joins, offline_final
 
 
 def offline_causal(online, data):
@@ -84,14 +97,56 @@ TUNED = {  # settings that merge often, so that the comparison sees many decisio
 )
 def test_online_equals_offline_causal(difficulty, number, params):
     data = make_scenes(n_sequences=3, duration=5.0, random_state=number, difficulty=difficulty).data
-    online = OnlinePipeline(experiment_pipeline(number, params=params))
-    labels, _, keep, _, merges = replay(online, data)
-    offline_keep, offline_stage1, offline_final = offline_causal(online, data)
-    np.testing.assert_array_equal(keep, offline_keep)
-    assert_same_partition(labels, offline_stage1)
-    assert_same_partition(stage2_resolution(labels, merges), offline_final)
+    _, merges, _ = assert_online_equals_offline(OnlinePipeline(experiment_pipeline(number, params=params)), data)
     if number in (12, 13) and params is not None:
         assert len(merges) > 0  # the comparison covered merges
+
+
+@pytest.mark.parametrize("min_samples", [3, 4])  # 2 is 1: a cluster with a partner is core
+@pytest.mark.parametrize("number", [12, 13], ids=["velocity", "continuation"])
+def test_stage2_min_samples_above_one_equals_offline_causal(number, min_samples):
+    """The DBSCAN over clusters with N_min > 1: the joins, made once certain, give the offline causal clusters.
+
+    Three sequences interleaved scan by scan, four sensors out of phase (the simulator's default).
+    """
+    data = make_scenes(n_sequences=3, duration=6.0, random_state=number, difficulty="realistic").data
+    params = {**TUNED[number], "merge__min_samples": min_samples}
+    labels, _, offline_final = assert_online_equals_offline(
+        OnlinePipeline(experiment_pipeline(number, params=params)), data
+    )
+    # The case is one where N_min matters: the offline clusters differ from those of every accepted pair joined.
+    paper = OnlinePipeline(experiment_pipeline(number, params=TUNED[number]))
+    _, _, _, _, all_pairs = replay(paper, data)
+    assert len(set(stage2_resolution(labels, all_pairs).tolist())) < len(set(offline_final.tolist()))
+
+
+def targets_scan(t_s, ys):
+    """One scan of several targets at the heights ``ys`` (m), each as :func:`target_scan` moving along x at 5 m/s."""
+    parts = [target_scan(t_s, 5.0 * t_s, y=y) for y in ys]
+    return {name: np.concatenate([part[name] for part in parts]) for name in parts[0]}
+
+
+def test_a_non_core_cluster_joins_its_first_core_partner():
+    """min_samples 3: A (y = 10 m) then, 0.3 s later, B (10 m) and C (11.2 m); 0.3 s after them D (12 m).
+
+    A, B, C are partners of each other (within eps_d = 1.5 m): cores.  D continues C only (B's
+    continuation is 2 m away): not core, it joins C's object.  Stage 1 (eps_xy 1 m) keeps them apart.
+    """
+    stage1 = RadarDBSCAN(metric="xy", eps_xy=1.0, min_samples=2, vr_min=0.1)
+    merger = ClusterMerger(stage1=stage1, eps_d=1.5, eps_t2=0.35, min_samples=3, unknown_velocity="accept")
+    online = OnlinePipeline(make_pipeline(FrameTransform(), merger))
+    times = np.round(np.arange(0.0, 3.2, 0.05), 2)
+    heights = {0: [10.0], 1: [10.0, 11.2], 2: [12.0]}
+    phase = np.select([times < 1.0, (times > 1.22) & (times < 2.0), times > 2.22], [0, 1, 2], -1)  # gaps 0.3 s
+    scans = [targets_scan(t, heights[k]) for t, k in zip(times, phase, strict=True) if k >= 0]
+    data = pd.DataFrame({name: np.concatenate([scan[name] for scan in scans]) for name in scans[0]}).assign(sequence=0)
+    offline = online.causal_pipeline().fit_predict(data)
+    labels, _, _, _, joins = replay(online, data)
+    assert_same_partition(stage2_resolution(labels, joins), offline)
+    assert len(np.unique(labels)) == 4 and len(np.unique(offline)) == 1  # four stage-1 clusters, one object
+    work = online.causal_pipeline()[:-1].fit_transform(data)
+    alone = online.causal_pipeline()[-1].set_params(min_samples=5).fit(work)  # no cluster has 4 partners
+    assert len(np.unique(alone.labels_)) == 4  # so the one object above needed the cores and D's join
 
 
 def test_sensors_in_phase_and_scans_sharing_a_time():
@@ -99,12 +154,7 @@ def test_sensors_in_phase_and_scans_sharing_a_time():
     data = make_scenes(n_sequences=2, duration=5.0, random_state=5, difficulty="realistic").data.copy()
     data["timestamp"] = data["timestamp"] // 40_000 * 40_000  # 40 ms grid: sensors share scan times
     assert data.groupby(["sequence", "timestamp"])["sensor_id"].nunique().max() > 1
-    online = OnlinePipeline(experiment_pipeline(13, params=TUNED[13]))
-    labels, _, keep, _, merges = replay(online, data)
-    offline_keep, offline_stage1, offline_final = offline_causal(online, data)
-    np.testing.assert_array_equal(keep, offline_keep)
-    assert_same_partition(labels, offline_stage1)
-    assert_same_partition(stage2_resolution(labels, merges), offline_final)
+    assert_online_equals_offline(OnlinePipeline(experiment_pipeline(13, params=TUNED[13])), data)
 
 
 def test_ids_never_reused_and_the_older_survives():
@@ -146,7 +196,6 @@ def test_a_scan_older_than_its_sensor_raises():
     [
         (make_pipeline(FrameTransform(), RadarDBSCAN(eps_t=None)), "eps_t"),
         (make_pipeline(FrameTransform(), RadarDBSCAN(cluster_vr_min=0.2)), "cluster_vr_min"),
-        (make_pipeline(FrameTransform(), ClusterMerger(min_samples=2)), "min_samples"),
         (make_pipeline(FrameTransform(), ClusterMerger(cluster_vr_min=0.2)), "cluster_vr_min"),
         (make_pipeline(DopplerDensityFilter(), RadarDBSCAN()), "FrameTransform"),
     ],
@@ -222,19 +271,30 @@ def test_the_windows_keep_a_bounded_span_of_time():
     """Memory stays flat: no window keeps detections older than its span, however long the stream runs."""
     data = make_scenes(n_sequences=1, duration=12.0, random_state=7, difficulty="realistic").data
     online = OnlinePipeline(experiment_pipeline(13))
-    merger = online._merger
-    eps_t, eps_t2 = 0.25, float(merger.eps_t2)
-    # Stage 2 keeps max(eps_t2, 4 eps_t) + 0.05 s before the oldest undecided cluster, which is at most
-    # eps_t2 + eps_t (+ one scan gap) old: a bound that does not grow with the recording.
-    bound = max(eps_t2, 4 * eps_t) + 0.05 + eps_t2 + eps_t + 0.1
+    eps_t, eps_t2 = 0.25, float(online._merger.eps_t2)
+    # The oldest undecided cluster is at most eps_t2 + eps_t (+ one scan gap) old; before it, stage 2 keeps the
+    # rows of eps_t (the object list) and the scan centres of eps_t2 + 4 eps_t (the continuation's five last
+    # scans), each + 0.05 s: bounds that do not grow with the recording.
+    pending = eps_t2 + eps_t + 0.1
+    bounds = {
+        "rows": eps_t + 0.05 + pending,
+        "tracks": eps_t2 + 4 * eps_t + 0.05 + pending,
+        "stage 1": eps_t + 0.05,
+    }  # stage 1 prunes at scans with active rows
     columns = {name: data[name].to_numpy() for name in data.columns if name not in ("uuid", "track_id")}
-    spans = []
+    spans = {name: [] for name in bounds}
     for rows in scans_in_time_order(data):
         online.update({name: values[rows] for name, values in columns.items()}, objects=False)
         now = columns["timestamp"][rows[0]] * 1e-6
         state = online._sequences[int(columns["sequence"][rows[0]])]
-        kept = [state.merge.rows["t"], online._stage1._windows[float(columns["sequence"][rows[0]])].points.t]
-        spans.append(max(now - times.min() for times in kept if len(times)))
+        kept = {
+            "rows": state.merge.rows["t"],
+            "tracks": state.merge.tracks["t"],
+            "stage 1": online._stage1._windows[float(columns["sequence"][rows[0]])].points.t,
+        }
+        for name, times in kept.items():
+            spans[name].append(now - times.min() if len(times) else 0.0)
         assert len(online._ids.root) <= len(state.merge.clusters) + len(online._stage1._windows)
-    assert max(spans) <= bound
-    assert max(spans) > 0.5 * bound  # the check sees windows that do fill
+    for name, bound in bounds.items():
+        assert max(spans[name]) <= bound + 1e-9, name
+        assert max(spans[name]) > 0.5 * bound, name  # the check sees windows that do fill

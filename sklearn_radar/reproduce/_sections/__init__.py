@@ -21,6 +21,7 @@ from . import (
     _stage1,
     _stage2,
     _summary,
+    _tracking,
 )
 from ._base import Section
 
@@ -36,6 +37,7 @@ SECTIONS: tuple[Section, ...] = (
     _baselines.SECTION,
     _instance.SECTION,
     _objects.SECTION,
+    _tracking.SECTION,
     _figures.SECTION,
     _comparison.SECTION,
 )
