@@ -64,7 +64,7 @@ for rows in scans:
     latency.append(time.perf_counter() - start)
     labels[rows], object_ids[rows] = result.labels, result.object_ids
     aliases += result.aliases
-    joins += result.joins  # the stage-2 joins (the accepted pairs, with ClusterMerger's min_samples 1)
+    joins += result.joins  # stage-2 joins (the accepted pairs at min_samples 1)
     n_objects.append(len(result.objects))
 end = online.finish()
 aliases += end.aliases

@@ -66,6 +66,8 @@ PARAM_VALIDATION_FUNCTION_LIST = [
     "sklearn_radar.experiments.paper_experiments",
     "sklearn_radar.experiments.paper_params",
     "sklearn_radar.experiments.search_space",
+    "sklearn_radar.experiments.object_pipeline",
+    "sklearn_radar.experiments.object_search_space",
     "sklearn_radar.metrics.background_share",
     "sklearn_radar.metrics.instance_coverage",
     "sklearn_radar.metrics.instance_scores",

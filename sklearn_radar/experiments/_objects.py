@@ -119,19 +119,19 @@ def object_pipeline(stage=2, *, params=None, stage1_params=None, causal=False, m
 def object_search_space(stage):
     """The object experiment's search space of ``stage`` (skopt dimensions, keys of :func:`object_pipeline`).
 
-    ======================  ============  ========  ===========  =====
-    key                     range         unit      prior        stage
-    ======================  ============  ========  ===========  =====
-    ``filter__vr_threshold``  [0, 1.5]    m/s       uniform      1
-    ``cluster__eps_xyv``    [0.2, 3.0]    m         uniform      1
-    ``cluster__vr_scale``   [0.3, 20]     m/s       log-uniform  1
-    ``cluster__min_samples`` {2, ..., 8}  points    integer      1
-    ``merge__eps_d``        [0.2, 3.0]    m         uniform      2
-    ``merge__eps_phi``      [0.05, 1.5]   rad       uniform      2
-    ``merge__eps_v``        [0.2, 6.0]    m/s       uniform      2
-    ``merge__eps_t2``       [0.1, 1.0]    s         uniform      2
-    ``merge__min_samples``  {1, 2, 3}     clusters  integer      2
-    ======================  ============  ========  ===========  =====
+    ==========================  ============  ========  ===========  =====
+    key                         range         unit      prior        stage
+    ==========================  ============  ========  ===========  =====
+    ``filter__vr_threshold``    [0, 1.5]      m/s       uniform      1
+    ``cluster__eps_xyv``        [0.2, 3.0]    m         uniform      1
+    ``cluster__vr_scale``       [0.3, 20]     m/s       log-uniform  1
+    ``cluster__min_samples``    {2, ..., 8}   points    integer      1
+    ``merge__eps_d``            [0.2, 3.0]    m         uniform      2
+    ``merge__eps_phi``          [0.05, 1.5]   rad       uniform      2
+    ``merge__eps_v``            [0.2, 6.0]    m/s       uniform      2
+    ``merge__eps_t2``           [0.1, 1.0]    s         uniform      2
+    ``merge__min_samples``      {1, 2, 3}     clusters  integer      2
+    ==========================  ============  ========  ===========  =====
 
     The ranges are #8's and #12's (:func:`search_space`), so the experiment gets no wider freedom than the
     paper's; the gate's range is ``vr_min``'s.
