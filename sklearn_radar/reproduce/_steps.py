@@ -434,7 +434,12 @@ def _repeat_records(env, found, defaults=None):
 
 def _spread(found, score="pq"):
     """``"71.55 %"`` / ``"0.412"`` for one repeat, mean and sd over several (``"71.20 +- 0.35 %"``)."""
-    values = np.array([f.test.v1 if score == "v1" else f.test.instance.pq for f in found])
+    return _mean_sd([f.test.v1 if score == "v1" else f.test.instance.pq for f in found], score)
+
+
+def _mean_sd(values, score="pq"):
+    """Scores of the repeats as :func:`_spread` says them: V1 in percent with 2 decimals, PQ with 3."""
+    values = np.asarray(values, dtype=np.float64)
     scale, unit, digits = (100, " %", 2) if score == "v1" else (1, "", 3)
     text = f"{scale * values.mean():.{digits}f}"
     if len(values) > 1:
@@ -627,11 +632,6 @@ class _ObjectRepeat:
             causal_instance_test=causal.instance,
         )
         return _ObjectSearched(record, stage1_search, search)
-
-
-def _mean_sd(values):
-    values = np.asarray(values, dtype=np.float64)
-    return f"{values[0]:.3f}" if len(values) == 1 else f"{values.mean():.3f} +- {values.std(ddof=1):.3f}"
 
 
 # ----------------------------------------------------------------------------- object tracking online
