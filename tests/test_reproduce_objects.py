@@ -68,7 +68,7 @@ def test_report_section_gives_offline_and_causal_scores(objects_report):
     assert "## Beyond the paper: the framework set up for objects" in report
     results = json.loads((objects_report / "results.json").read_text())
     pq = [r["instance_test"]["pq"] for r in results["objects"]["repeats"]]
-    assert f"| object experiment | past and future | {np.mean(pq):.3f} +- {np.std(pq, ddof=1):.3f} |" in report
+    assert f"| object experiment | past and future | {np.mean(pq):.3f} \u00b1 {np.std(pq, ddof=1):.3f} |" in report
     assert "| object experiment, causal | the past |" in report
     assert "The baselines did not run" in report
 
@@ -78,7 +78,7 @@ def test_verdict_needs_repeats_and_a_difference_beyond_two_standard_errors():
     assert "cannot tell" in verdict([0.60], [0.50], "B")
     # Paired differences 0.10, 0.12, 0.08: mean 0.10, sd 0.02, se 0.0115; 0.10 > 2 x 0.0115.
     said = verdict([0.60, 0.62, 0.58], [0.50, 0.50, 0.50], "B")
-    assert said.startswith("PQ +0.100 +- 0.012") and said.endswith("higher.")
+    assert said.startswith("PQ +0.100 \u00b1 0.012") and said.endswith("higher.")
     # Differences +0.05, -0.03, +0.01: mean 0.01, se 0.023: within the noise.
     assert "cannot tell (within the noise)" in verdict([0.55, 0.47, 0.51], [0.50, 0.50, 0.50], "B")
     assert verdict([0.40, 0.41], [0.50, 0.50], "B").endswith("lower.")

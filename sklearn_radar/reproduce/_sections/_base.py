@@ -100,8 +100,12 @@ def score_cell(result, score="v1"):
     text : str
         ``"-"`` without the score.
     """
-    values = repeated_scores(result, score)
-    if not values:
+    return values_cell(repeated_scores(result, score), score)
+
+
+def values_cell(values, score="v1"):
+    """Scores of the repeats as :func:`score_cell` writes them: one value, or mean \u00b1 sd; ``"-"`` for none."""
+    if len(values) == 0:
         return "-"
     scale, unit, digits = (100, " %", 2) if score == "v1" else (1, "", 3)
     if len(values) == 1:

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._results import RunResults, repeated_scores
-from ._base import Section, format_params
+from ._base import Section, format_params, values_cell
 from ._comparison import DOES_NOT_HOLD, HOLDS, N_STANDARD_ERRORS, paired_verdict
 
 #: Baselines that decide from the past only, set beside the object experiment's causal run.
@@ -34,16 +34,14 @@ def markdown(results: RunResults) -> list[str]:
         "",
         "| setting | decides from | PQ (test) | V1 (test) |",
         "|---|---|---|---|",
-        f"| object experiment | past and future | {_cell(offline_pq)} | {kept.v1_test:.3f} |",
+        _row("object experiment", "past and future", offline_pq, kept.v1_test),
     ]
     offline, causal = _best_baselines(results)
     if offline is not None:
-        name, result = offline
-        lines.append(f"| {name} | past and future | {_cell(repeated_scores(result, 'pq'))} | {result.v1_test:.3f} |")
-    lines.append(f"| object experiment, causal | the past | {_cell(causal_pq)} | {kept.causal_v1_test:.3f} |")
+        lines.append(_row(offline[0], "past and future", repeated_scores(offline[1], "pq"), offline[1].v1_test))
+    lines.append(_row("object experiment, causal", "the past", causal_pq, kept.causal_v1_test))
     if causal is not None:
-        name, result = causal
-        lines.append(f"| {name} | the past | {_cell(repeated_scores(result, 'pq'))} | {result.v1_test:.3f} |")
+        lines.append(_row(causal[0], "the past", repeated_scores(causal[1], "pq"), causal[1].v1_test))
     lines.append("")
     for mode, ours, baseline in (("Offline", offline_pq, offline), ("Causally", causal_pq, causal)):
         if baseline is not None:
@@ -69,7 +67,7 @@ def verdict(ours, theirs, name):
         )
     words = {HOLDS: "higher", DOES_NOT_HOLD: "lower"}.get(said, "cannot tell (within the noise)")
     return (
-        f"PQ {mean:+.3f} +- {se:.3f} (mean paired difference +- standard error, {n} repeats; it counts beyond "
+        f"PQ {mean:+.3f} \u00b1 {se:.3f} (mean paired difference \u00b1 standard error, {n} repeats; it counts beyond "
         f"{N_STANDARD_ERRORS:g} standard errors) against {name}: {words}."
     )
 
@@ -85,12 +83,12 @@ def glance_line(results: RunResults):
     }
     parts = []
     for (mode, pq), baseline in zip(ours.items(), _best_baselines(results), strict=True):
-        part = f"{_cell(pq)} {mode}"
+        part = f"{values_cell(pq, 'pq')} {mode}"
         if baseline is not None:
             theirs = repeated_scores(baseline[1], "pq")
             n = min(len(pq), len(theirs))
             said = paired_verdict(np.subtract(pq[:n], theirs[:n]))[0]
-            part += f" against {_cell(theirs)} for {baseline[0]} (higher: {said})"
+            part += f" against {values_cell(theirs, 'pq')} for {baseline[0]} (higher: {said})"
         parts.append(part)
     return f"the framework set up for objects, tuned for PQ: test PQ {'; '.join(parts)}; its section has the details."
 
@@ -105,9 +103,8 @@ def _best_baselines(results: RunResults):
     return best[False], best[True]
 
 
-def _cell(values):
-    values = np.asarray(values, dtype=np.float64)
-    return f"{values[0]:.3f}" if len(values) == 1 else f"{values.mean():.3f} +- {values.std(ddof=1):.3f}"
+def _row(name, decides_from, pq, v1):
+    return f"| {name} | {decides_from} | {values_cell(pq, 'pq')} | {v1:.3f} |"
 
 
 SECTION = Section("objects", markdown)
