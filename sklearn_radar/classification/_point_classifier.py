@@ -47,8 +47,8 @@ class PointClassifier(BaseEstimator):
     class into connected components: two such detections are connected
     when they lie within ``eps_xy`` in x-y and ``eps_t`` in time (the
     components of a DBSCAN in x, y and t with one point per core, as
-    :class:`~sklearn_radar.RadarDBSCAN` with ``metric="xy"``, an unbounded
-    Doppler threshold, ``min_samples=1`` and ``vr_min=-inf`` computes them).
+    :class:`~sklearn_radar.RadarDBSCAN` with ``metric="xy"``, no Doppler
+    limit, ``min_samples=1`` and ``vr_min=-inf`` computes them).
     Detections with ``keep = 0`` (removed by
     :class:`~sklearn_radar.DopplerDensityFilter`) are background and take no
     part in training.
@@ -227,8 +227,9 @@ class PointClassifier(BaseEstimator):
         points = pd.DataFrame(
             {"x": c["x"][found], "y": c["y"][found], "v_r": c["v_r"][found], "t": c["t"][found], "sequence": pseudo}
         )
+        no_doppler_limit = np.finfo(np.float64).max  # eps_vr must be finite; no Doppler difference reaches it
         components = RadarDBSCAN(
-            metric="xy", eps_xy=self.eps_xy, eps_vr=np.inf, eps_t=self.eps_t, min_samples=1, vr_min=-np.inf
+            metric="xy", eps_xy=self.eps_xy, eps_vr=no_doppler_limit, eps_t=self.eps_t, min_samples=1, vr_min=-np.inf
         )
         with config_context(check_plausibility=False):  # X was checked; a subset of one class is no radar scan
             instance[found] = components.fit(points).labels_
