@@ -1,7 +1,7 @@
 """Benchmark of the classifier stage against stage 1: does classifying the clusters cost more than finding them?
 
 Run: ``python benchmarks/bench_classifier.py [--n-sequences 8] [--duration 30] [--repeat 7] [--profile]
-[--accuracy]``.
+[--accuracy] [--signatures]``.
 
 Data: the realistic simulator preset, ``--n-sequences`` sequences of ``--duration`` s for training and as
 many others (the next seed) for testing, through experiment #8's frame transform and Doppler-density
@@ -21,7 +21,10 @@ and the ratios to stage 1.  The issue's goal: the classifier stage (features + p
 ``--profile`` prints cProfile's top entries of the classifier stage.  ``--accuracy`` measures what cheaper
 settings of the default HistGradientBoostingClassifier cost in macro-F1 (3 seeds; segment-level F1 on the
 matched targets and point-wise F1 against every detection's class, both over the five road-user classes)
-and in prediction time: the measurement behind the default ``max_iter=30``.
+and in prediction time: the measurement behind the default ``max_iter=30``.  ``--signatures`` prints what
+the simulated classes hold: per class, the median and quartiles of the main features of the annotated road
+users themselves (each object's detections per 0.5 s frame, i.e. perfect clustering), and the macro-F1 of the
+default classifier trained on such segments of one seed and tested on another's (both presets).
 """
 
 import argparse
@@ -169,6 +172,43 @@ def accuracy(args):
     print("(mean ± standard deviation over 3 seeds; #8's clusters; 0.5 s segments)")
 
 
+def signatures(args):
+    """Per-class features of the annotated road users (perfect clustering) and how well they separate."""
+    import pandas as pd
+    from sklearn.metrics import f1_score
+
+    from sklearn_radar import FrameTransform
+    from sklearn_radar.classification import ROAD_USER_CLASSES, cluster_features, road_user_class
+    from sklearn_radar.classification._wrapped import default_classifier
+    from sklearn_radar.datasets import make_scenes
+
+    def true_segments(seed, difficulty):
+        scenes = make_scenes(n_sequences=args.n_sequences, duration=args.duration, random_state=seed,
+                             difficulty=difficulty)  # fmt: skip
+        X = FrameTransform().fit_transform(scenes.data)
+        y = road_user_class(scenes.data["label_id"])
+        table, rows = cluster_features(X, scenes.target, frame_length=0.5, return_rows=True)
+        classes = np.full(len(table), -9)
+        classes[rows[rows >= 0]] = y[rows >= 0]
+        return table.iloc[:, 3:], classes
+
+    features = ["n_detections", "extent_along", "extent_across", "vr_std", "speed_residual", "rcs_mean", "n_sensors"]
+    for difficulty in ("realistic", "easy"):
+        train, train_classes = true_segments(args.seed + 3, difficulty)
+        test, test_classes = true_segments(args.seed + 4, difficulty)
+        grouped = train.groupby(pd.Series(train_classes).map(ROAD_USER_CLASSES))[features]
+        median, low, high = grouped.median(), grouped.quantile(0.25), grouped.quantile(0.75)
+        print(f"\n{difficulty} preset, annotated road users per 0.5 s frame: median [quartiles]")
+        print(
+            (
+                median.round(2).astype(str) + " [" + low.round(2).astype(str) + ", " + high.round(2).astype(str) + "]"
+            ).T.to_string()
+        )
+        predicted = default_classifier().fit(train, train_classes).predict(test)
+        f1 = f1_score(test_classes, predicted, labels=list(ROAD_USER_CLASSES), average=None)
+        print(f"default classifier on these segments, another seed: F1 {np.round(f1, 3)}, macro {f1.mean():.3f}")
+
+
 COLUMNS = ("x", "y", "v_r", "t", "sequence", "heading", "range_sc", "azimuth_sc", "sensor_yaw", "rcs", "sensor_id")
 
 
@@ -180,10 +220,13 @@ def main():
     parser.add_argument("--repeat", type=int, default=7)
     parser.add_argument("--profile", action="store_true")
     parser.add_argument("--accuracy", action="store_true", help="also measure cheaper classifier settings")
+    parser.add_argument("--signatures", action="store_true", help="also print what the simulated classes hold")
     args = parser.parse_args()
     timing(args)
     if args.accuracy:
         accuracy(args)
+    if args.signatures:
+        signatures(args)
 
 
 if __name__ == "__main__":

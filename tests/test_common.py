@@ -149,6 +149,8 @@ CHECKS = _strict(
             SlidingDBSCAN(),
             SlidingDBSCAN(vr_min=-np.inf),
             _SEARCH,
+            # A plain array holds no instance ids (the default instance_column="track_id" needs the DataFrame):
+            # the checks' arrays use the class segments of each frame as the instances, as documented.
             ClusterClassifier(RadarDBSCAN(metric="xy", vr_min=-np.inf), instance_column=None),
             PointClassifier(),
         ],

@@ -128,6 +128,7 @@ class ClusterClassifier(BaseEstimator):
 
     Examples
     --------
+    >>> import numpy as np
     >>> from sklearn.pipeline import make_pipeline
     >>> from sklearn_radar import DopplerDensityFilter, FrameTransform, RadarDBSCAN
     >>> from sklearn_radar.classification import ClusterClassifier, road_user_class

@@ -19,7 +19,7 @@ from ._classes import BACKGROUND, IGNORED
 #: (600 trees for 6 classes) cost as much as stage 1 alone.  Measured (``benchmarks/bench_classifier.py
 #: --accuracy``: 3 seeds, #8's clusters of 8 simulated sequences x 30 s for training and 8 others for testing),
 #: 30 iterations give the same macro-F1 as 100 within the spread over seeds: point-wise 0.572 +- 0.018 against
-#: 0.569 +- 0.013, per segment 0.785 +- 0.015 against 0.785 +- 0.006, at 18 ms instead of 62 ms per prediction.
+#: 0.569 +- 0.013, per segment 0.785 +- 0.015 against 0.785 +- 0.006, at 17 ms instead of 58 ms per prediction.
 DEFAULT_CLASSIFIER_PARAMS = {"max_iter": 30, "random_state": 0}
 
 
