@@ -44,6 +44,7 @@ _LAZY = {
     "FrameTransform": ".preprocessing",
 }
 _SUBPACKAGES = {
+    "classification",
     "cluster",
     "datasets",
     "evaluation",

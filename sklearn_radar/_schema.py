@@ -295,6 +295,27 @@ MERGER_READS = ColumnsRead(
 #: The scikit-learn baselines per time window.
 WINDOWED_READS = ColumnsRead(required=_WORK, optional=("sequence", "keep"), layout=WORK_LAYOUT)
 
+#: Working detections with the two measurements the road-user classifiers read besides the working layout:
+#: ``rcs`` (dBsm) and ``sensor_id``.  Both are measurements without a neutral value: features that need an
+#: absent one are left out, never made up.
+CLASSIFIER_LAYOUT = ArrayLayout(
+    name="classifier detection array",
+    columns=(*WORK_LAYOUT.columns, "rcs", "sensor_id"),
+    neutral=dict(WORK_LAYOUT.neutral),
+)
+#: The cluster features (:func:`~sklearn_radar.classification.cluster_features`) and ClusterClassifier.
+CLUSTER_FEATURE_READS = ColumnsRead(
+    required=_WORK,
+    optional=("sequence", "keep", "range_sc", "heading", "azimuth_sc", "sensor_yaw", "rcs", "sensor_id"),
+    layout=CLASSIFIER_LAYOUT,
+)
+#: PointClassifier: per-detection features.
+POINT_FEATURE_READS = ColumnsRead(
+    required=_WORK,
+    optional=("sequence", "keep", "range_sc", "azimuth_sc", "sensor_yaw", "rcs"),
+    layout=CLASSIFIER_LAYOUT,
+)
+
 
 # --------------------------------------------------------------------------
 # Physical plausibility: the one place where the bounds live

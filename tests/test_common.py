@@ -6,6 +6,7 @@ from sklearn.utils.estimator_checks import parametrize_with_checks
 
 from sklearn_radar import ClusterMerger, DopplerDensityFilter, FrameTransform, RadarDBSCAN, config_context
 from sklearn_radar._skopt import Real
+from sklearn_radar.classification import ClusterClassifier, PointClassifier
 from sklearn_radar.cluster import SequenceDBSCAN, SequenceHDBSCAN, SlidingDBSCAN, WindowedDBSCAN, WindowedHDBSCAN
 from sklearn_radar.model_selection import SequenceSearchCV
 
@@ -148,6 +149,10 @@ CHECKS = _strict(
             SlidingDBSCAN(),
             SlidingDBSCAN(vr_min=-np.inf),
             _SEARCH,
+            # A plain array holds no instance ids (the default instance_column="track_id" needs the DataFrame):
+            # the checks' arrays use the class segments of each frame as the instances, as documented.
+            ClusterClassifier(RadarDBSCAN(metric="xy", vr_min=-np.inf), instance_column=None),
+            PointClassifier(),
         ],
         expected_failed_checks=_expected_failed_checks,
     )

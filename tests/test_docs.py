@@ -45,6 +45,7 @@ PUBLIC_MODULES = (
     "sklearn_radar.datasets",
     "sklearn_radar.preprocessing",
     "sklearn_radar.cluster",
+    "sklearn_radar.classification",
     "sklearn_radar.metrics",
     "sklearn_radar.evaluation",
     "sklearn_radar.model_selection",

@@ -28,6 +28,7 @@ from sklearn.base import BaseEstimator
 
 #: Subpackages first: an object exported twice is named after the most specific package.
 PACKAGES = [
+    "sklearn_radar.classification",
     "sklearn_radar.cluster",
     "sklearn_radar.datasets",
     "sklearn_radar.evaluation",
@@ -178,6 +179,14 @@ def _fit_sequence_search(klass):
     return search.fit(raw, target, raw["sequence"])
 
 
+def _fit_classifier(klass):
+    """A road-user classifier on the FrameTransform output, with the classes of its label_id."""
+    from sklearn_radar.classification import road_user_class
+
+    raw, work = _detections()
+    return klass().fit(work, road_user_class(raw["label_id"]))
+
+
 #: How each estimator class of the public API is fitted: on the raw table or on FrameTransform's output.
 FIT = {
     "sklearn_radar.preprocessing.FrameTransform": lambda klass: klass().fit(_detections()[0]),
@@ -189,6 +198,8 @@ FIT = {
     "sklearn_radar.cluster.SequenceDBSCAN": lambda klass: klass().fit(_detections()[1]),
     "sklearn_radar.cluster.SequenceHDBSCAN": lambda klass: klass().fit(_detections()[1]),
     "sklearn_radar.cluster.SlidingDBSCAN": lambda klass: klass().fit(_detections()[1]),
+    "sklearn_radar.classification.ClusterClassifier": _fit_classifier,
+    "sklearn_radar.classification.PointClassifier": _fit_classifier,
     "sklearn_radar.model_selection.ProgressBayesSearchCV": _fit_progress_bayes_search,
     "sklearn_radar.model_selection.SequenceSearchCV": _fit_sequence_search,
 }

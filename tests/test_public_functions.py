@@ -28,6 +28,7 @@ from sklearn.utils._param_validation import (
 
 PACKAGES = [
     "sklearn_radar",
+    "sklearn_radar.classification",
     "sklearn_radar.cluster",
     "sklearn_radar.datasets",
     "sklearn_radar.evaluation",
@@ -45,6 +46,8 @@ PARAM_VALIDATION_FUNCTION_LIST = [
     "sklearn_radar.get_config",
     "sklearn_radar.instance_target",
     "sklearn_radar.set_config",
+    "sklearn_radar.classification.cluster_features",
+    "sklearn_radar.classification.road_user_class",
     "sklearn_radar.cluster.estimate_velocities",
     "sklearn_radar.cluster.estimate_velocity",
     "sklearn_radar.cluster.min_points_at_range",

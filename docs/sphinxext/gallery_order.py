@@ -16,6 +16,7 @@ ORDER = (
     "plot_tuning.py",
     "plot_sequence_search.py",
     "plot_streaming.py",
+    "plot_classification.py",
     "plot_radarscenes_io.py",
 )
 

@@ -581,3 +581,37 @@ def _estimate_velocities(
         random_state,
     )
     return vx, vy, n_inliers, unique_groups
+
+
+def _velocities_and_residuals(v_r, theta, group_id, n_groups):
+    """Velocity and RMS Doppler residual of every group, at the defaults of :func:`estimate_velocities`.
+
+    The batched estimate of :func:`_estimate` (one compiled call for all
+    groups), then, vectorised over all rows, the root mean square over each
+    group's detections (outliers included) of ``v_r - (vx cos(theta) + vy
+    sin(theta))``: how far the Doppler of the group departs from one rigid
+    translation (the micro-Doppler of limbs and wheels, multipath, mixed
+    objects), m/s.
+
+    Parameters
+    ----------
+    v_r, theta : ndarray of float64, shape (n,)
+        Compensated radial velocity (m/s) and line-of-sight direction (rad) of
+        each row; finite, rows sorted by ``group_id``.
+    group_id : ndarray of int64, shape (n,)
+        Group of each row, 0 .. n_groups - 1, sorted ascending.
+    n_groups : int
+
+    Returns
+    -------
+    vx, vy, residual : ndarray of float64, shape (n_groups,)
+        Velocity (m/s) and residual (m/s) of each group; all three NaN where
+        the velocity is unknown.
+    """
+    vx, vy, _ = _estimate(v_r, theta, group_id, n_groups, *_VELOCITY_DEFAULTS)
+    predicted = vx[group_id] * np.cos(theta) + vy[group_id] * np.sin(theta)
+    squared = np.bincount(group_id, weights=(v_r - predicted) ** 2, minlength=n_groups)
+    counts = np.bincount(group_id, minlength=n_groups)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        residual = np.sqrt(squared / counts)
+    return vx, vy, residual

@@ -565,3 +565,24 @@ def test_the_internal_defaults_are_the_public_ones():
     signature = inspect.signature(estimate_velocities)
     names = ("min_detections", "min_spread", "inlier_threshold", "max_trials", "random_state")
     assert tuple(signature.parameters[name].default for name in names) == _VELOCITY_DEFAULTS
+
+
+def test_velocities_and_residuals_equal_the_per_group_estimate_and_a_loop():
+    # The batched form the cluster features use: per group, estimate_velocity's result and the RMS residual of
+    # all the group's detections against it.
+    from sklearn_radar.cluster._velocity import _velocities_and_residuals
+
+    rng = np.random.default_rng(5)
+    sizes = rng.integers(1, 30, 40)
+    group = np.repeat(np.arange(len(sizes)), sizes)
+    theta = rng.uniform(-1.5, 1.5, len(group))
+    velocity = rng.normal(0, 5, (len(sizes), 2))
+    v_r = _radial(velocity[group].T, theta) + rng.normal(0, 0.1, len(group)) + (rng.random(len(group)) < 0.2) * 3.0
+    vx, vy, residual = _velocities_and_residuals(v_r, theta, group, len(sizes))
+    for g in range(len(sizes)):
+        mine = group == g
+        ex, ey, _ = estimate_velocity(v_r[mine], theta[mine])
+        np.testing.assert_allclose([vx[g], vy[g]], [ex, ey], rtol=1e-12, atol=1e-12)
+        expected = np.sqrt(np.mean((v_r[mine] - (ex * np.cos(theta[mine]) + ey * np.sin(theta[mine]))) ** 2))
+        np.testing.assert_allclose(residual[g], expected, rtol=1e-12, atol=1e-12)
+    assert np.isnan(vx).any() and np.isfinite(vx).any()  # groups too small for an estimate, and others

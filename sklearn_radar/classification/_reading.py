@@ -1,0 +1,102 @@
+"""Reading the detections of the clusters only: the classifier stage touches few rows of a large table.
+
+:func:`~sklearn_radar._validation.read_columns` converts and checks every
+row of every column an estimator reads.  ClusterClassifier's features depend
+on the clustered detections only (a tenth to a fifth of a filtered table),
+and on the time and sequence of all detections (the frames start at each
+sequence's first detection).  Converting and checking all rows of its twelve
+columns took a sixth of its prediction time (measured in
+``benchmarks/bench_classifier.py --profile``), so it validates X as
+``read_columns`` does (names or width, a numeric array, no empty input),
+then reads ``t`` and ``sequence`` for all rows and the other columns only
+at the rows it uses, each checked as ``read_columns`` checks it: numeric,
+finite, physically plausible.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pandas as pd
+from sklearn.utils.validation import validate_data
+
+from .._schema import ColumnsRead
+from .._validation import _array_columns, _refuse_other_frames, _sensor_of, _validate_array, check_plausible
+
+
+def validated_input(estimator, X, reads, *, reset):
+    """X validated as :func:`~sklearn_radar._validation.read_columns` validates it, without reading its columns.
+
+    Parameters
+    ----------
+    estimator : estimator
+        Receives ``n_features_in_`` (and ``feature_names_in_``).
+    X : DataFrame or array-like
+    reads : ColumnsRead
+    reset : bool
+        True in ``fit``.
+
+    Returns
+    -------
+    X : DataFrame or ndarray of float64
+    """
+    name = type(estimator).__name__
+    if isinstance(X, pd.DataFrame):
+        validate_data(estimator, X, skip_check_array=True, reset=reset)
+        if len(X) == 0:
+            raise ValueError(f"{name}: X has 0 rows; at least 1 is required")
+        missing = [column for column in reads.required if column not in X.columns]
+        if missing:
+            raise ValueError(f"{name}: X is missing the column(s) {missing}")
+        return X
+    _refuse_other_frames(X, reads.layout, name)
+    return _validate_array(estimator, X, reads.layout, reset=reset)
+
+
+def time_columns(estimator, X, reads):
+    """``t`` (s) and ``sequence`` (None when absent) of every row, checked (the scan spacing per sensor too)."""
+    every = ColumnsRead(required=("t",), optional=("sequence",), layout=reads.layout)
+    return columns_at(estimator, X, every, None)
+
+
+def columns_at(estimator, X, reads, rows, *, skip=()):
+    """The columns of ``reads`` (float64; None when absent) at ``rows`` (None: all), checked.
+
+    Parameters
+    ----------
+    estimator : estimator
+        Named in the error messages.
+    X : DataFrame or ndarray
+        Validated by :func:`validated_input`.
+    reads : ColumnsRead
+    rows : ndarray of int or None
+    skip : tuple of str, default=()
+        Columns not to read (None in the result).
+
+    Returns
+    -------
+    columns : dict of str to ndarray or None
+    """
+    name = type(estimator).__name__
+    names = [column for column in reads.names if column not in skip]
+    if isinstance(X, pd.DataFrame):
+        columns = {}
+        for column in names:
+            if column not in X.columns:
+                columns[column] = None
+                continue
+            values = X[column].to_numpy()
+            values = values if rows is None else values[rows]
+            if values.dtype.kind not in "biuf":
+                raise ValueError(f"{name}: column {column!r} must be numeric, got dtype {X[column].dtype}")
+            values = values.astype(np.float64)
+            if not np.all(np.isfinite(values)):
+                raise ValueError(f"{name}: column {column!r} contains NaN or infinity")
+            columns[column] = values
+        check_plausible(columns, name, sensor=_sensor_of(X) if rows is None else None)
+        return columns
+    every = _array_columns(X, reads, name)  # validated: float64 and finite
+    columns = {
+        column: every[column] if every[column] is None or rows is None else every[column][rows] for column in names
+    }
+    check_plausible(columns, name, layout=reads.layout, n_columns=X.shape[1])
+    return columns

@@ -1,0 +1,237 @@
+"""ClusterClassifier: what it is fitted on, what it predicts per detection, and the framework's pipeline around it."""
+
+import warnings
+
+import numpy as np
+import pandas as pd
+import pytest
+from sklearn.base import BaseEstimator, ClassifierMixin, ClusterMixin
+from sklearn.dummy import DummyClassifier
+from sklearn.ensemble import HistGradientBoostingClassifier
+from sklearn.metrics import f1_score
+from sklearn.model_selection import GroupKFold, cross_validate
+from sklearn.pipeline import make_pipeline
+
+from sklearn_radar import ClusterMerger, DopplerDensityFilter, FrameTransform, RadarDBSCAN
+from sklearn_radar.classification import ClusterClassifier, cluster_features, road_user_class
+from sklearn_radar.datasets import make_scenes
+
+ROAD_USERS = [0, 1, 2, 3, 4]
+
+
+class Given(ClusterMixin, BaseEstimator):
+    """A clusterer that returns the labels it is given (the clusters are then known to the test)."""
+
+    def __init__(self, labels=None):
+        self.labels = labels
+
+    def fit(self, X, y=None):
+        self.labels_ = np.asarray(self.labels)
+        return self
+
+
+class Recording(ClassifierMixin, BaseEstimator):
+    """Remembers what it is fitted on; predicts car (0.8) for segments of >= 3 detections, else background (0.9)."""
+
+    def fit(self, X, y):
+        self.X_, self.y_ = X.copy(), np.asarray(y)
+        self.classes_ = np.array([-1, 0])
+        return self
+
+    def predict_proba(self, X):
+        car = X["n_detections"].to_numpy() >= 3
+        return np.where(car[:, None], [0.2, 0.8], [0.9, 0.1])
+
+
+class AllCars(Recording):
+    """Every segment is a car."""
+
+    def predict_proba(self, X):
+        return np.tile([0.0, 1.0], (len(X), 1))
+
+
+def _detections():
+    """Two sequences by hand: a car (3 detections, then 2 in the next 0.5 s frame), a pedestrian, background."""
+    return pd.DataFrame(
+        {
+            "x": [0.0, 0.5, 1.0, 0.2, 0.7, 20.0, 20.3, 40.0, 41.0, 0.0, 0.4, 9.0],
+            "y": [0.0, 0.1, 0.0, 0.0, 0.1, 5.0, 5.1, -3.0, -3.0, 0.0, 0.0, 9.0],
+            "v_r": [5.0, 5.1, 4.9, 5.0, 5.2, 1.0, 1.4, 0.0, 0.0, -1.0, -1.2, 0.0],
+            "t": [0.0, 0.1, 0.2, 0.6, 0.7, 0.1, 0.2, 0.0, 0.3, 0.0, 0.1, 0.2],
+            "sequence": [1, 1, 1, 1, 1, 1, 1, 1, 1, 2, 2, 2],
+            "rcs": [5.0, 8.0, 2.0, 4.0, 6.0, -8.0, -9.0, 10.0, 12.0, -7.0, -6.0, 0.0],
+            "track_id": ["car", "car", "car", "car", "car", "ped", "ped", "", "", "ped", "ped", ""],
+            "label_id": [0, 0, 0, 0, 0, 7, 7, 11, 11, 7, 7, 11],
+        }
+    )
+
+
+#: Clusters of _detections(): the car's first frame (0), its second frame with a wall detection (1), the
+#: pedestrian of sequence 1 (2), a wall (3), the pedestrian of sequence 2 (4) and noise.
+LABELS = np.array([0, 0, 0, 1, 1, 2, 2, 3, 3, 4, 4, -1])
+
+
+def test_fitted_on_the_features_and_the_iou_targets_of_the_segments():
+    X = _detections()
+    model = ClusterClassifier(Given(LABELS), Recording(), frame_length=0.5).fit(X, road_user_class(X["label_id"]))
+    expected = cluster_features(X, LABELS, frame_length=0.5)
+    recorded = model.classifier_
+    np.testing.assert_array_equal(recorded.X_.to_numpy(), expected.iloc[:, 3:].to_numpy(dtype=float))
+    assert list(recorded.X_.columns) == list(expected.columns[3:]) == list(model.feature_names_)
+    # Segments in (sequence, cluster, frame) order: car frame 0, car frame 1, pedestrian, wall, pedestrian.
+    assert expected[["sequence", "cluster", "frame"]].to_numpy().tolist() == [
+        [1, 0, 0], [1, 1, 1], [1, 2, 0], [1, 3, 0], [2, 4, 0]
+    ]  # fmt: skip
+    assert recorded.y_.tolist() == [0, 0, 3, -1, 3]
+    assert model.classes_.tolist() == [-1, 0]
+
+
+def test_whole_clusters_without_frames():
+    # frame_length=None: the car's two clusters each hold part of the car (3 and 2 of 5): only the first matches.
+    X = _detections()
+    model = ClusterClassifier(Given(LABELS), Recording(), frame_length=None).fit(X, road_user_class(X["label_id"]))
+    assert model.classifier_.y_.tolist() == [0, -1, 3, -1, 3]
+
+
+def test_ignored_instances_are_left_out_of_training():
+    X = _detections().assign(label_id=lambda d: d["label_id"].replace({7: 9}))  # the pedestrians become ANIMALs
+    model = ClusterClassifier(Given(LABELS), Recording()).fit(X, road_user_class(X["label_id"]))
+    assert model.classifier_.y_.tolist() == [0, 0, -1]  # the two ANIMAL segments are gone
+
+
+def test_without_instance_ids_the_class_segments_are_the_instances():
+    # One object per class and frame here, so the "stuff" rule gives the same targets as the track ids.
+    X = _detections()
+    y = road_user_class(X["label_id"])
+    by_track = ClusterClassifier(Given(LABELS), Recording()).fit(X, y)
+    by_class = ClusterClassifier(Given(LABELS), Recording(), instance_column=None).fit(X.drop(columns="track_id"), y)
+    assert by_class.classifier_.y_.tolist() == by_track.classifier_.y_.tolist()
+
+
+def test_every_detection_gets_its_segments_class_instance_and_confidence():
+    X = _detections()
+    model = ClusterClassifier(Given(LABELS), Recording()).fit(X, road_user_class(X["label_id"]))
+    result = model.predict_instances(X)
+    # Segments of >= 3 detections are cars (0.8): the car's first frame only; the rest background (0.9), noise 1.
+    assert result["class"].tolist() == [0, 0, 0] + [-1] * 9
+    assert result["instance"].tolist() == [0, 0, 0] + [-1] * 9
+    np.testing.assert_allclose(result["confidence"], [0.8] * 3 + [0.9] * 8 + [1.0])
+    np.testing.assert_array_equal(model.predict(X), result["class"])
+    proba = model.predict_proba(X)
+    np.testing.assert_allclose(proba[0], [0.2, 0.8])
+    np.testing.assert_allclose(proba[-1], [1.0, 0.0])  # noise: background
+    assert result.index.equals(X.index)
+
+
+def test_one_cluster_is_one_instance_over_its_frames_and_instances_do_not_span_sequences():
+    X = _detections()
+    labels = np.array([0, 0, 0, 0, 0, 2, 2, 3, 3, 2, 2, -1])  # label 2 in both sequences; the car one cluster
+    model = ClusterClassifier(Given(labels), AllCars()).fit(X, road_user_class(X["label_id"]))
+    assert model.predict_instances(X)["instance"].tolist() == [0, 0, 0, 0, 0, 1, 1, 2, 2, 3, 3, -1]
+
+
+@pytest.fixture(scope="module")
+def scenes():
+    train = make_scenes(n_sequences=4, duration=10.0, random_state=11)
+    test = make_scenes(n_sequences=2, duration=10.0, random_state=12)
+    return train, test
+
+
+def _pipeline(clusterer=None, **params):
+    stage1 = RadarDBSCAN(metric="xyv", eps_xyv=1.04, vr_scale=1.03, min_samples=3, vr_min=0.5)
+    return make_pipeline(FrameTransform(), DopplerDensityFilter(), ClusterClassifier(clusterer or stage1, **params))
+
+
+def test_learns_road_users_on_held_out_sequences(scenes):
+    train, test = scenes
+    model = _pipeline().fit(train.data, road_user_class(train.data["label_id"]))
+    y = road_user_class(test.data["label_id"])
+    predicted = model.predict(test.data)
+    assert predicted.shape == y.shape
+    # Far better than the best constant guess (background everywhere: macro-F1 0 over the road users).
+    present = np.unique(y[y >= 0])
+    assert len(present) >= 3
+    assert f1_score(y, predicted, labels=present, average="macro") > 0.3
+    # Most predicted road-user detections are road users of that class.
+    objects = predicted >= 0
+    assert np.mean(predicted[objects] == y[objects]) > 0.6
+
+
+def test_prediction_reads_no_ground_truth(scenes):
+    train, test = scenes
+    model = _pipeline().fit(train.data, road_user_class(train.data["label_id"]))
+    with_truth = model[:-1].transform(test.data)
+    # The truth erased, the columns kept (scikit-learn checks that predict sees the columns of fit).
+    without = with_truth.assign(label_id=11, track_id="", uuid="")
+    pd.testing.assert_frame_equal(model[-1].predict_instances(with_truth), model[-1].predict_instances(without))
+
+
+def test_predictions_agree_with_each_other(scenes):
+    train, test = scenes
+    model = _pipeline().fit(train.data, road_user_class(train.data["label_id"]))
+    Xt = model[:-1].transform(test.data)
+    result = model[-1].predict_instances(Xt)
+    proba = model[-1].predict_proba(Xt)
+    np.testing.assert_allclose(proba.sum(axis=1), 1.0)
+    np.testing.assert_array_equal(model[-1].classes_[np.argmax(proba, axis=1)], result["class"])
+    np.testing.assert_allclose(result["confidence"], proba.max(axis=1))
+    assert ((result["instance"] == -1) == (result["class"] == -1)).all()
+    # An instance is one cluster of one sequence: one sequence per instance.
+    per_instance = pd.DataFrame({"instance": result["instance"], "sequence": Xt["sequence"]})[result["instance"] >= 0]
+    assert (per_instance.groupby("instance")["sequence"].nunique() == 1).all()
+    assert sorted(per_instance["instance"].unique()) == list(range(per_instance["instance"].nunique()))
+
+
+def test_after_the_cluster_merger_and_in_grouped_cross_validation(scenes):
+    train, _ = scenes
+    merger = ClusterMerger(stage1=RadarDBSCAN(metric="xyv", eps_xyv=1.04, vr_scale=1.03, min_samples=3, vr_min=0.5))
+    model = _pipeline(merger)
+    y = road_user_class(train.data["label_id"])
+    scores = cross_validate(model, train.data, y, groups=train.groups, cv=GroupKFold(2), scoring="f1_macro")
+    assert scores["test_score"].shape == (2,) and np.all(np.isfinite(scores["test_score"]))
+    assert np.all(scores["test_score"] > 0.1)  # 6 classes, 5 of them road users: chance is far below
+
+
+def test_the_given_estimators_are_cloned(scenes):
+    train, _ = scenes
+    stage1, classifier = RadarDBSCAN(vr_min=0.5), HistGradientBoostingClassifier(max_iter=5)
+    _pipeline(stage1, classifier=classifier).fit(train.data, road_user_class(train.data["label_id"]))
+    assert not hasattr(stage1, "labels_") and not hasattr(classifier, "n_iter_")
+
+
+def test_a_single_training_class_warns_and_predicts_it():
+    X = _detections()
+    y = np.full(len(X), -1)  # no road user at all
+    with pytest.warns(UserWarning, match="one class only"):
+        model = ClusterClassifier(Given(LABELS)).fit(X, y)
+    assert isinstance(model.classifier_, DummyClassifier)
+    assert (model.predict(X) == -1).all()
+
+
+def test_features_missing_at_prediction_raise():
+    X = _detections()
+    model = ClusterClassifier(Given(LABELS), Recording()).fit(X, road_user_class(X["label_id"]))
+    with pytest.raises(ValueError, match="rcs"):
+        model.predict(X.drop(columns="rcs"))
+
+
+@pytest.mark.parametrize(
+    ("change", "match"),
+    [
+        (lambda X, y: (X.drop(columns="track_id"), y), "no instance column 'track_id'"),
+        (lambda X, y: (X.drop(columns="track_id").to_numpy(dtype=float), y), "plain array holds no instance ids"),
+        (lambda X, y: (X, y[:-1]), "y has 11 values for 12 detections"),
+        (lambda X, y: (X, y - 2), "class code -3"),
+        (lambda X, y: (X, np.array(["car"] * len(y))), "Unknown label type"),
+        (lambda X, y: (X, None), "requires y"),
+    ],
+)
+def test_bad_targets_name_the_problem(change, match):
+    X = _detections()
+    X, y = change(X.drop(columns="label_id"), road_user_class(_detections()["label_id"]))
+    if not isinstance(X, pd.DataFrame):
+        X = X[:, [0, 1, 2, 3]]  # x, y, v_r, t: the first columns of the classifier layout
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", UserWarning)
+        with pytest.raises(ValueError, match=match):
+            ClusterClassifier(Given(LABELS), Recording()).fit(X, y)

@@ -1,0 +1,128 @@
+"""PointClassifier: per-detection features and classes, and instances as connected components (slow reference)."""
+
+import numpy as np
+import pandas as pd
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from sklearn.base import BaseEstimator, ClassifierMixin
+from sklearn.metrics import f1_score
+from sklearn.pipeline import make_pipeline
+
+from sklearn_radar import FrameTransform
+from sklearn_radar._labels import rank_by_first_appearance
+from sklearn_radar.classification import POINT_FEATURES, PointClassifier, road_user_class
+from sklearn_radar.datasets import make_scenes
+
+
+class MovingIsPedestrian(ClassifierMixin, BaseEstimator):
+    """Remembers what it is fitted on; pedestrian (3) with probability 0.5 + |v_r| / 10 (at most 1) if |v_r| > 0.5."""
+
+    def fit(self, X, y):
+        self.X_, self.y_ = X.copy(), np.asarray(y)
+        self.classes_ = np.array([-1, 3])
+        return self
+
+    def predict_proba(self, X):
+        speed = np.abs(X["v_r"].to_numpy())
+        p = np.where(speed > 0.5, np.minimum(0.5 + speed / 10, 1.0), 0.0)
+        return np.c_[1 - p, p]
+
+
+def _components(X, classes, eps_xy, eps_t):
+    """Connected components of the detections of each (sequence, class) other than -1, from all pairs."""
+    n = len(X)
+    x, y, t, s = (X[name].to_numpy() for name in ("x", "y", "t", "sequence"))
+    i, j = np.triu_indices(n, 1)
+    edge = (
+        (classes[i] == classes[j])
+        & (classes[i] != -1)
+        & (s[i] == s[j])
+        & (np.hypot(x[i] - x[j], y[i] - y[j]) < eps_xy)
+        & (np.abs(t[i] - t[j]) <= eps_t)
+    )
+    graph = coo_matrix((np.ones(edge.sum()), (i[edge], j[edge])), shape=(n, n))
+    _, component = connected_components(graph, directed=False)
+    found = classes != -1
+    result = np.full(n, -1)
+    result[found] = rank_by_first_appearance(component[found])
+    return result
+
+
+@settings(max_examples=80, deadline=None)
+@given(n=st.integers(2, 40), seed=st.integers(0, 2**31 - 1), eps_xy=st.floats(0.3, 3.0), eps_t=st.floats(0.0, 0.5))
+def test_instances_are_the_connected_components_of_each_class(n, seed, eps_xy, eps_t):
+    rng = np.random.default_rng(seed)
+    X = pd.DataFrame(
+        {
+            "x": rng.uniform(0, 6, n),
+            "y": rng.uniform(0, 6, n),
+            "v_r": rng.choice([0.0, 1.0, 3.0], n),
+            "t": rng.uniform(0, 1, n).round(2),
+            "sequence": rng.integers(1, 3, n),
+        }
+    )
+    y = np.where(np.arange(n) % 2 == 0, -1, 3)  # two classes (the rule classifier ignores them)
+    model = PointClassifier(MovingIsPedestrian(), eps_xy=eps_xy, eps_t=eps_t).fit(X, y)
+    result = model.predict_instances(X)
+    expected_class = np.where(np.abs(X["v_r"]) > 0.5, 3, -1)
+    np.testing.assert_array_equal(result["class"], expected_class)
+    np.testing.assert_array_equal(result["instance"], _components(X, expected_class, eps_xy, eps_t))
+    # The confidence of an instance: the mean probability of its class over its detections.
+    p = np.minimum(0.5 + np.abs(X["v_r"].to_numpy()) / 10, 1.0)
+    for instance in np.unique(result["instance"][result["instance"] >= 0]):
+        mine = (result["instance"] == instance).to_numpy()
+        np.testing.assert_allclose(result["confidence"][mine], p[mine].mean())
+    np.testing.assert_allclose(result["confidence"][expected_class == -1], 1.0)
+
+
+def test_trained_on_the_kept_detections_of_known_classes():
+    X = pd.DataFrame(
+        {
+            "x": [0.0, 1.0, 2.0, 3.0],
+            "y": 0.0,
+            "v_r": [2.0, 0.0, 1.0, 3.0],
+            "t": 0.0,
+            "keep": [1, 1, 0, 1],
+            "rcs": [1.0, 2.0, 3.0, 4.0],
+        }
+    )
+    model = PointClassifier(MovingIsPedestrian()).fit(X, [3, -1, 3, -2])
+    np.testing.assert_array_equal(model.classifier_.X_.to_numpy(), [[2.0, 1.0], [0.0, 2.0]])  # rows 0 and 1
+    assert model.classifier_.y_.tolist() == [3, -1]
+    assert model.feature_names_.tolist() == ["v_r", "rcs"]  # no range or line of sight in X
+    # A detection the filter removed is background whatever its features.
+    assert model.predict(X).tolist() == [3, -1, -1, 3]
+    np.testing.assert_allclose(model.predict_proba(X)[2], [1.0, 0.0])
+
+
+@pytest.fixture(scope="module")
+def scenes():
+    return make_scenes(n_sequences=3, duration=8.0, random_state=21), make_scenes(1, duration=8.0, random_state=22)
+
+
+def test_every_feature_from_the_detection_table_and_a_prediction_per_detection(scenes):
+    train, test = scenes
+    model = make_pipeline(FrameTransform(), PointClassifier()).fit(train.data, road_user_class(train.data["label_id"]))
+    assert model[-1].feature_names_.tolist() == list(POINT_FEATURES)
+    Xt = model[0].transform(test.data)
+    predicted = model.predict(test.data)
+    # A detection's class does not depend on the others: predicting a half gives that half of the whole.
+    half = np.arange(len(Xt)) % 2 == 0
+    np.testing.assert_array_equal(model[-1].predict(Xt[half]), predicted[half])
+    y = road_user_class(test.data["label_id"])
+    present = np.unique(y[y >= 0])
+    assert f1_score(y, predicted, labels=present, average="macro") > 0.15  # it learns something per detection
+    result = model[-1].predict_instances(Xt)
+    np.testing.assert_array_equal(result["class"], predicted)
+    assert ((result["instance"] == -1) == (result["class"] == -1)).all()
+
+
+def test_bad_targets_name_the_problem():
+    X = pd.DataFrame({"x": [0.0, 1.0], "y": 0.0, "v_r": 1.0, "t": 0.0})
+    with pytest.raises(ValueError, match="y has 1 values for 2 detections"):
+        PointClassifier().fit(X, [0])
+    with pytest.raises(ValueError, match="Unknown label type"):
+        PointClassifier().fit(X, [0.5, 1.0])
