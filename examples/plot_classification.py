@@ -52,7 +52,9 @@ print(pd.Series(y_train).map(names).value_counts().to_string())
 # clusters matched to the ground truth: a part takes the class of the annotated
 # road user it overlaps with an IoU above 0.5, and is background otherwise.
 paper = experiment_pipeline(8)
-model = make_pipeline(paper["frame"], paper["filter"], ClusterClassifier(paper["cluster"]))
+model = make_pipeline(
+    paper["frame"], paper["filter"], ClusterClassifier(paper["cluster"])
+)
 model.fit(train.data, y_train)
 predicted = model.predict(test.data)
 
@@ -116,7 +118,9 @@ Xt = model[:-1].transform(test.data)
 found = model[-1].predict_instances(Xt)
 t = Xt["t"].to_numpy()
 first = test.groups == test.groups[0]
-busiest = np.bincount(np.floor(t[first & (y_test >= 0)] - t[first].min()).astype(int)).argmax()
+busiest = np.bincount(
+    np.floor(t[first & (y_test >= 0)] - t[first].min()).astype(int)
+).argmax()
 start = t[first].min() + busiest
 now = first & (t >= start) & (t < start + 0.5)
 x, y = Xt["x"].to_numpy(), Xt["y"].to_numpy()
@@ -129,7 +133,9 @@ for ax, classes, title in (
 ):
     for code, colour in colours.items():
         mine = now & (classes == code)
-        ax.scatter(x[mine], y[mine], s=4 if code < 0 else 12, c=colour, label=names[code])
+        ax.scatter(
+            x[mine], y[mine], s=4 if code < 0 else 12, c=colour, label=names[code]
+        )
     ax.set(title=title, xlabel="x (m, FCS)", aspect="equal")
 for instance in np.unique(found["instance"][now & (found["instance"] >= 0)]):
     mine = now & (found["instance"] == instance).to_numpy()
@@ -157,7 +163,9 @@ plt.show()
 # classes separate well; the errors above come mostly from the clustering.
 Xtrain = model[:-1].transform(train.data)
 truth, rows = cluster_features(Xtrain, train.target, frame_length=0.5, return_rows=True)
-truth["class"] = pd.Series(y_train[rows >= 0], index=rows[rows >= 0]).groupby(level=0).first()
+truth["class"] = (
+    pd.Series(y_train[rows >= 0], index=rows[rows >= 0]).groupby(level=0).first()
+)
 fig, axes = plt.subplots(1, 3, figsize=(13, 4))
 for ax, (feature, unit) in zip(
     axes, [("rcs_mean", "dBsm"), ("extent_along", "m"), ("vr_std", "m/s")], strict=True

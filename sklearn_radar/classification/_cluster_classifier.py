@@ -13,6 +13,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from .._labels import consecutive_labels
 from .._schema import CLUSTER_FEATURE_READS, instance_target
+from ..cluster import RadarDBSCAN
 from ._classes import BACKGROUND, IGNORED
 from ._features import _check_labels, frame_index, segment_features
 from ._reading import columns_at, time_columns, validated_input
@@ -37,8 +38,9 @@ class ClusterClassifier(BaseEstimator):
     the clusterer, so that it is the last step of a pipeline of
     :class:`~sklearn_radar.FrameTransform` and
     :class:`~sklearn_radar.DopplerDensityFilter`, and a search reaches every
-    stage's parameters (``classify__clusterer__eps_xyv``,
-    ``classify__classifier__max_iter``, ...).
+    stage's parameters (in a ``make_pipeline``:
+    ``clusterclassifier__clusterer__eps_xyv``,
+    ``clusterclassifier__classifier__max_iter``, ...).
 
     **Training target** (:meth:`fit`).  ``y`` is the road-user class of each
     detection (:func:`~sklearn_radar.classification.road_user_class` of
@@ -51,9 +53,9 @@ class ClusterClassifier(BaseEstimator):
     matched to an ignored instance (-2: RadarScenes ANIMAL and OTHER) are
     left out of training.  A cluster that is one part of a long track is
     therefore a positive example wherever it covers the object in a frame,
-    and the clusters of static structure (86-89 % of the clusters of the
-    paper's V1-tuned settings, which its V-measure does not count) are the
-    background examples.
+    and the clusters of static structure (most clusters of V-measure-tuned
+    settings: the paper's V-measure does not count them) are the background
+    examples.
 
     Parameters
     ----------
@@ -62,13 +64,13 @@ class ClusterClassifier(BaseEstimator):
         None means ``RadarDBSCAN()``.  Its labels must be integers, -1 for
         noise.
     classifier : classifier with ``fit`` and ``predict_proba``, default=None
-        Classifies the segments' feature rows (cloned).  None means
-        a
+        Classifies the segments' feature rows (cloned).  None means a
         :class:`~sklearn.ensemble.HistGradientBoostingClassifier` with
         ``max_iter=30`` and ``random_state=0``, which takes the NaN of an
         unknown velocity as missing (30 boosting iterations instead of 100
         cost a third of the prediction time at the same macro-F1, measured:
-        ``benchmarks/bench_classifier.py --accuracy``).  A classifier that cannot take NaN needs an imputer in front
+        ``benchmarks/bench_classifier.py --accuracy``).  A classifier that
+        cannot take NaN needs an imputer in front
         (``make_pipeline(SimpleImputer(), ...)``).
     frame_length : float or None, default=0.5
         Length of the time frames a cluster is cut into, s, > 0; frames
@@ -300,8 +302,6 @@ class ClusterClassifier(BaseEstimator):
 
     def _cluster(self, X, n):
         """The clusterer's labels of X (a fresh clone), checked."""
-        from ..cluster import RadarDBSCAN
-
         clusterer = RadarDBSCAN() if self.clusterer is None else clone(self.clusterer)
         return _check_labels(clusterer.fit_predict(X), n, "ClusterClassifier: the clusterer's")
 

@@ -14,6 +14,7 @@ from sklearn.utils.validation import check_is_fitted
 from .._config import config_context
 from .._schema import POINT_FEATURE_READS
 from .._validation import read_columns
+from ..cluster import RadarDBSCAN
 from ._classes import BACKGROUND, IGNORED
 from ._wrapped import check_class_target, class_proba, fit_classifier
 
@@ -216,8 +217,6 @@ class PointClassifier(BaseEstimator):
 
     def _components(self, c, classes):
         """Connected components of the detections of each (sequence, class), -1 for background."""
-        from ..cluster import RadarDBSCAN
-
         instance = np.full(len(classes), -1, dtype=np.int64)
         found = np.flatnonzero(classes != BACKGROUND)
         if not len(found):
