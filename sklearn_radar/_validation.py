@@ -56,6 +56,35 @@ def read_columns(estimator, X, reads: ColumnsRead, *, reset):
         Every column of ``reads``.
     """
     name = type(estimator).__name__
+    X = validated_input(estimator, X, reads, reset=reset)
+    if isinstance(X, pd.DataFrame):
+        present = [column for column in reads.names if column in X.columns]
+        columns = {column: None for column in reads.names}
+        columns.update({column: _numeric_column(X[column], column, name) for column in present})
+        check_plausible(columns, name, sensor=_sensor_of(X))
+        return X, columns
+    columns = _array_columns(X, reads, name)
+    check_plausible(columns, name, layout=reads.layout, n_columns=X.shape[1])
+    return X, columns
+
+
+def validated_input(estimator, X, reads: ColumnsRead, *, reset):
+    """X validated as :func:`read_columns` validates it (names or width, a numeric array, rows), columns unread.
+
+    Parameters
+    ----------
+    estimator : estimator
+        Receives ``n_features_in_`` (and ``feature_names_in_``).
+    X : DataFrame or array-like
+    reads : ColumnsRead
+    reset : bool
+        True in ``fit``.
+
+    Returns
+    -------
+    X : DataFrame or ndarray of float64
+    """
+    name = type(estimator).__name__
     if isinstance(X, pd.DataFrame):
         validate_data(estimator, X, skip_check_array=True, reset=reset)
         if len(X) == 0:
@@ -63,16 +92,9 @@ def read_columns(estimator, X, reads: ColumnsRead, *, reset):
         missing = [column for column in reads.required if column not in X.columns]
         if missing:
             raise ValueError(f"{name}: X is missing the column(s) {missing}")
-        present = [column for column in reads.names if column in X.columns]
-        columns = {column: None for column in reads.names}
-        columns.update({column: _numeric_column(X[column], column, estimator) for column in present})
-        check_plausible(columns, name, sensor=_sensor_of(X))
-        return X, columns
+        return X
     _refuse_other_frames(X, reads.layout, name)
-    X = _validate_array(estimator, X, reads.layout, reset=reset)
-    columns = _array_columns(X, reads, name)
-    check_plausible(columns, name, layout=reads.layout, n_columns=X.shape[1])
-    return X, columns
+    return _validate_array(estimator, X, reads.layout, reset=reset)
 
 
 def _sensor_of(X):
@@ -189,15 +211,17 @@ def check_filter_rule(threshold_ratios, min_neighbors):
     return ratios, min_neighbors_
 
 
-def _numeric_column(series, name, estimator):
+def _numeric_column(series, name, where, rows=None):
+    """A DataFrame column (at ``rows``, None: all) as float64; a ValueError, prefixed by ``where``, if it is not
+    numeric or not finite."""
     values = series.to_numpy()
-    if values.dtype.kind == "b":
-        values = values.astype(np.float64)
-    if values.dtype.kind not in "iuf":
-        raise ValueError(f"{type(estimator).__name__}: column {name!r} must be numeric, got dtype {series.dtype}")
+    if rows is not None:
+        values = values[rows]
+    if values.dtype.kind not in "biuf":
+        raise ValueError(f"{where}: column {name!r} must be numeric, got dtype {series.dtype}")
     values = values.astype(np.float64)
     if not np.all(np.isfinite(values)):
-        raise ValueError(f"{type(estimator).__name__}: column {name!r} contains NaN or infinity")
+        raise ValueError(f"{where}: column {name!r} contains NaN or infinity")
     return values
 
 

@@ -13,10 +13,11 @@ from sklearn.utils.validation import check_is_fitted
 
 from .._labels import consecutive_labels
 from .._schema import CLUSTER_FEATURE_READS, instance_target
+from .._validation import validated_input
 from ..cluster import RadarDBSCAN
 from ._classes import BACKGROUND, IGNORED
 from ._features import _check_labels, frame_index, segment_features
-from ._reading import columns_at, time_columns, validated_input
+from ._reading import columns_at, time_columns
 from ._targets import segment_targets
 from ._wrapped import check_class_target, class_proba, fit_classifier, instance_column_of
 

@@ -26,7 +26,7 @@ import pandas as pd
 from sklearn.utils._param_validation import Interval, validate_params
 
 from .._schema import CLUSTER_FEATURE_READS
-from .._validation import check_plausible
+from .._validation import _numeric_column, check_plausible
 from ..cluster._velocity import _velocities_and_residuals
 
 __all__ = ["CLUSTER_FEATURES", "cluster_features"]
@@ -178,18 +178,7 @@ def _frame_columns(X, reads, where):
     missing = [name for name in reads.required if name not in X.columns]
     if missing:
         raise ValueError(f"{where}: X is missing the column(s) {missing} (the working columns of FrameTransform)")
-    columns = {}
-    for name in reads.names:
-        if name not in X.columns:
-            columns[name] = None
-            continue
-        values = X[name].to_numpy()
-        if values.dtype.kind not in "biuf":
-            raise ValueError(f"{where}: column {name!r} must be numeric, got dtype {X[name].dtype}")
-        values = values.astype(np.float64)
-        if not np.all(np.isfinite(values)):
-            raise ValueError(f"{where}: column {name!r} contains NaN or infinity")
-        columns[name] = values
+    columns = {name: _numeric_column(X[name], name, where) if name in X.columns else None for name in reads.names}
     check_plausible(columns, where)
     return columns
 

@@ -15,41 +15,10 @@ finite, physically plausible.
 
 from __future__ import annotations
 
-import numpy as np
 import pandas as pd
-from sklearn.utils.validation import validate_data
 
 from .._schema import ColumnsRead
-from .._validation import _array_columns, _refuse_other_frames, _sensor_of, _validate_array, check_plausible
-
-
-def validated_input(estimator, X, reads, *, reset):
-    """X validated as :func:`~sklearn_radar._validation.read_columns` validates it, without reading its columns.
-
-    Parameters
-    ----------
-    estimator : estimator
-        Receives ``n_features_in_`` (and ``feature_names_in_``).
-    X : DataFrame or array-like
-    reads : ColumnsRead
-    reset : bool
-        True in ``fit``.
-
-    Returns
-    -------
-    X : DataFrame or ndarray of float64
-    """
-    name = type(estimator).__name__
-    if isinstance(X, pd.DataFrame):
-        validate_data(estimator, X, skip_check_array=True, reset=reset)
-        if len(X) == 0:
-            raise ValueError(f"{name}: X has 0 rows; at least 1 is required")
-        missing = [column for column in reads.required if column not in X.columns]
-        if missing:
-            raise ValueError(f"{name}: X is missing the column(s) {missing}")
-        return X
-    _refuse_other_frames(X, reads.layout, name)
-    return _validate_array(estimator, X, reads.layout, reset=reset)
+from .._validation import _array_columns, _numeric_column, _sensor_of, check_plausible
 
 
 def time_columns(estimator, X, reads):
@@ -66,7 +35,7 @@ def columns_at(estimator, X, reads, rows, *, skip=()):
     estimator : estimator
         Named in the error messages.
     X : DataFrame or ndarray
-        Validated by :func:`validated_input`.
+        Validated by :func:`~sklearn_radar._validation.validated_input`.
     reads : ColumnsRead
     rows : ndarray of int or None
     skip : tuple of str, default=()
@@ -79,19 +48,9 @@ def columns_at(estimator, X, reads, rows, *, skip=()):
     name = type(estimator).__name__
     names = [column for column in reads.names if column not in skip]
     if isinstance(X, pd.DataFrame):
-        columns = {}
-        for column in names:
-            if column not in X.columns:
-                columns[column] = None
-                continue
-            values = X[column].to_numpy()
-            values = values if rows is None else values[rows]
-            if values.dtype.kind not in "biuf":
-                raise ValueError(f"{name}: column {column!r} must be numeric, got dtype {X[column].dtype}")
-            values = values.astype(np.float64)
-            if not np.all(np.isfinite(values)):
-                raise ValueError(f"{name}: column {column!r} contains NaN or infinity")
-            columns[column] = values
+        columns = {
+            column: _numeric_column(X[column], column, name, rows) if column in X.columns else None for column in names
+        }
         check_plausible(columns, name, sensor=_sensor_of(X) if rows is None else None)
         return columns
     every = _array_columns(X, reads, name)  # validated: float64 and finite
