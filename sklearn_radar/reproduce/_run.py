@@ -42,7 +42,16 @@ from .. import __version__
 from .._executor import connect_executor
 from ..experiments import SKLEARN_BASELINES, get_experiment
 from ..metrics._parts import OBJECTIVES  # what the searches can maximise: "v1", "pq"
-from ._constants import ALL_EXPERIMENTS, BASELINES, FILTER, FILTER_EFFECT, NUMBERS, OBJECTS, TRACKING
+from ._constants import (
+    ALL_EXPERIMENTS,
+    BASELINES,
+    CLASSIFICATION,
+    FILTER,
+    FILTER_EFFECT,
+    NUMBERS,
+    OBJECTS,
+    TRACKING,
+)
 from ._context import RunContext
 from ._io import (
     RUN_TOOL,
@@ -129,7 +138,7 @@ def parse_experiments(text):
             if not (low.isdigit() and high.isdigit()) or not first <= int(low) <= int(high) <= last:
                 raise ValueError(
                     f"unknown experiment range {part!r}; experiments are {first}-{last}, "
-                    f"{FILTER}, {FILTER_EFFECT}, {BASELINES}, {TRACKING}"
+                    f"{FILTER}, {FILTER_EFFECT}, {BASELINES}, {TRACKING}, {CLASSIFICATION}"
                 )
             chosen.update(str(n) for n in range(int(low), int(high) + 1))
         elif part in ALL_EXPERIMENTS:
@@ -461,6 +470,8 @@ def _store(results, key, result):
         results.objects = result
     elif key == TRACKING:
         results.tracking = result
+    elif key == CLASSIFICATION:
+        results.classification = result
     else:
         results.experiments[int(key)] = result
 
@@ -579,6 +590,7 @@ def _title(key):
         "sliding past window)",
         OBJECTS: "the object experiment (the framework's stages tuned for PQ)",
         TRACKING: "object tracking online (IDF1, ID switches, MOTA of the streamed ids)",
+        CLASSIFICATION: "the classifier of clusters (class PQ, mAP@0.5, macro-F1, mCov)",
     }[key]
 
 
