@@ -116,31 +116,31 @@ def _checked(classes_true, instances_true, classes_pred, instances_pred, confide
 # ---------------------------------------------------------------------------------------------------------------
 # Segments
 # ---------------------------------------------------------------------------------------------------------------
-def _canonical_sums(codes, n_codes, weights):
-    """Sums of ``weights`` per code, added in the order of the values (the same sums for any order of rows)."""
-    order = np.lexsort((weights, codes))
-    return np.bincount(codes[order], weights=weights[order], minlength=n_codes)
-
-
 def _majority_class(segment, n_segments, classes, weights):
     """Class of each segment: the most frequent of its rows' ``classes``.
 
     Ties go to the highest summed ``weights`` (None: no weights), then to
-    the smallest code.
+    the smallest code.  The rows come in a canonical order (by weight:
+    :func:`_semantic_layout`), so that the sums are the same floats for any
+    order of the input rows.
     """
     result = np.full(n_segments, _BACKGROUND, dtype=np.int64)
     if not len(segment):
         return result
     class_code, n_classes = _codes(classes)
     pair, n_pairs = _joint_codes(segment, n_segments, class_code, n_classes)
-    count = np.bincount(pair, minlength=n_pairs)
-    weight = np.zeros(n_pairs) if weights is None else _canonical_sums(pair, n_pairs, weights)
     first = np.zeros(n_pairs, dtype=np.int64)
     first[pair[::-1]] = np.arange(len(pair))[::-1]
     pair_segment, pair_class = segment[first], classes[first]
-    order = np.lexsort((pair_class, -weight, -count, pair_segment))  # the winner first within each segment
-    winner = order[np.r_[True, pair_segment[order][1:] != pair_segment[order][:-1]]]
-    result[pair_segment[winner]] = pair_class[winner]
+    result[pair_segment] = pair_class  # right for the segments of one class, most of them
+    mixed = np.bincount(pair_segment, minlength=n_segments)[pair_segment] > 1
+    if mixed.any():
+        count = np.bincount(pair, minlength=n_pairs)[mixed]
+        weight = np.zeros(n_pairs) if weights is None else np.bincount(pair, weights=weights, minlength=n_pairs)
+        mixed_segment, mixed_class = pair_segment[mixed], pair_class[mixed]
+        order = np.lexsort((mixed_class, -weight[mixed], -count, mixed_segment))  # the winner first
+        winner = order[np.r_[True, mixed_segment[order][1:] != mixed_segment[order][:-1]]]
+        result[mixed_segment[winner]] = mixed_class[winner]
     return result
 
 
@@ -166,9 +166,12 @@ def _semantic_layout(arrays, frame):
     """
     n = arrays["classes_true"].shape[0]
     _, _, cell, n_cell = _frame_cells(n, arrays["times"], arrays["groups"], frame)
-    kept = arrays["classes_true"] != _IGNORED  # after the frames are laid out
+    kept = np.flatnonzero(arrays["classes_true"] != _IGNORED)  # after the frames are laid out
+    confidence = arrays["confidence"]
+    if confidence is not None:  # in order of confidence: every sum of confidences is then the same float
+        kept = kept[np.argsort(confidence[kept], kind="stable")]
+        confidence = confidence[kept]
     cell = cell[kept]
-    confidence = None if arrays["confidence"] is None else arrays["confidence"][kept]
     true_seg, true_class = _road_user_segments(
         cell, n_cell, arrays["instances_true"][kept], arrays["classes_true"][kept], None
     )
@@ -181,7 +184,7 @@ def _semantic_layout(arrays, frame):
     pred_score = None
     if confidence is not None:
         clustered = pred_seg >= 0
-        pred_score = _canonical_sums(pred_seg[clustered], n_pred, confidence[clustered]) / np.maximum(pred_size, 1)
+        pred_score = np.bincount(pred_seg[clustered], confidence[clustered], n_pred) / np.maximum(pred_size, 1)
 
     both = (true_seg >= 0) & (pred_seg >= 0)
     pair, n_pairs = _joint_codes(true_seg[both], n_true, pred_seg[both], n_pred)
