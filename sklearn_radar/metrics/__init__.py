@@ -2,7 +2,8 @@
 
 The radar V-measure and the pre-clustered target of Scheiner et al. 2019 (Sec. "Parameter Optimization"), and
 object-level scores per time frame: panoptic quality, coverage and the share of background-only clusters; and
-the tracking quality of object ids over frames: ID switches, MOTA and IDF1.
+the tracking quality of object ids over frames: ID switches, MOTA and IDF1; and the semantic scores of
+classified road users: class-aware panoptic quality, mAP, point-wise macro-F1 and coverage.
 """
 
 from ._instance import (
@@ -13,20 +14,32 @@ from ._instance import (
     panoptic_quality,
     panoptic_quality_scorer,
 )
+from ._semantic import (
+    class_panoptic_quality,
+    make_semantic_scorer,
+    mean_average_precision,
+    pointwise_macro_f1,
+    semantic_scores,
+)
 from ._target import precluster_target
 from ._tracking import tracking_scores
 from ._v_measure import radar_homogeneity_completeness_v_measure, radar_v_measure, radar_v_measure_scorer
 
 __all__ = [
     "background_share",
+    "class_panoptic_quality",
     "instance_coverage",
     "instance_scores",
     "make_instance_scorer",
+    "make_semantic_scorer",
+    "mean_average_precision",
     "panoptic_quality",
     "panoptic_quality_scorer",
+    "pointwise_macro_f1",
     "precluster_target",
     "radar_homogeneity_completeness_v_measure",
     "radar_v_measure",
     "radar_v_measure_scorer",
+    "semantic_scores",
     "tracking_scores",
 ]

@@ -56,6 +56,25 @@ def _ratio(numerator, denominator):
     return float(numerator / denominator) if denominator else 0.0
 
 
+def _frame_cells(n, times, groups, frame):
+    """Sequence and (sequence, frame) codes of n detections: ``(seq, n_seq, cell, n_cell)``.
+
+    Detection ``i`` of sequence ``s`` lies in frame ``floor((times[i] - min(times of s)) / frame)``; with
+    ``times`` or ``frame`` None every sequence is one frame.  ``times`` (s) and ``groups`` are 1-D arrays of
+    length n or None.
+    """
+    seq, n_seq = _codes(groups) if groups is not None else (np.zeros(n, dtype=np.int64), 1 if n else 0)
+    if times is None or frame is None:  # one frame per sequence
+        return seq, n_seq, seq, n_seq
+    if not np.isfinite(times).all():
+        raise ValueError("times must be finite")
+    start = np.full(n_seq, np.inf)
+    np.minimum.at(start, seq, times)
+    frame_index, n_frame = _codes(np.floor((times - start[seq]) / frame))
+    cell, n_cell = _joint_codes(seq, n_seq, frame_index, n_frame)
+    return seq, n_seq, cell, n_cell
+
+
 def _segment_counts(labels_true, labels_pred, *, times=None, groups=None, frame=0.5):
     """The sums and counts of :data:`COUNT_KEYS` of a labelling, in one pass, as a dict."""
     labels_true = np.asarray(labels_true)
@@ -71,17 +90,7 @@ def _segment_counts(labels_true, labels_pred, *, times=None, groups=None, frame=
             shapes = {key: value.shape for key, value in arrays.items()}
             raise ValueError(f"{', '.join(arrays)} must be 1-D of equal length, got shapes {shapes}")
 
-    # Sequence, then (sequence, frame) of every detection.
-    seq, n_seq = _codes(groups) if groups is not None else (np.zeros(n, dtype=np.int64), 1 if n else 0)
-    if times is not None and frame is not None:
-        if not np.isfinite(times).all():
-            raise ValueError("times must be finite")
-        start = np.full(n_seq, np.inf)
-        np.minimum.at(start, seq, times)
-        frame_index, n_frame = _codes(np.floor((times - start[seq]) / frame))
-        cell, n_cell = _joint_codes(seq, n_seq, frame_index, n_frame)
-    else:  # one frame per sequence
-        cell, n_cell = seq, n_seq
+    seq, n_seq, cell, n_cell = _frame_cells(n, times, groups, frame)
 
     # Segment ids: (sequence, frame, label) -> 0 .. n_segments - 1; -1 for background and noise.
     is_object = labels_true != -1
