@@ -125,7 +125,7 @@ def _verdict(ours: ClassifiedSetting, theirs: ClassifiedSetting, rival, score, s
         return f"{head}; one test sequence cannot tell a difference from the spread between sequences."
     words = {HOLDS: "yes, it is higher", DOES_NOT_HOLD: "no, it is lower"}.get(said, "cannot tell (within the noise)")
     return (
-        f"{head}: {words} (mean paired difference over the {len(differences)} test sequences "
+        f"{head}: {words} (per test sequence, the mean paired difference over the {len(differences)} test sequences "
         f"{mean:+.3f} \u00b1 {se:.3f} standard error; it counts beyond {N_STANDARD_ERRORS:g} standard errors)."
     )
 
