@@ -130,6 +130,39 @@ def test_one_cluster_is_one_instance_over_its_frames_and_instances_do_not_span_s
     assert model.predict_instances(X)["instance"].tolist() == [0, 0, 0, 0, 0, 1, 1, 2, 2, 3, 3, -1]
 
 
+def test_given_labels_are_classified_without_running_the_clusterer():
+    X = _detections()
+    model = ClusterClassifier(Given(LABELS), Recording()).fit(X, road_user_class(X["label_id"]))
+    model.clusterer = Given(np.zeros(3))  # would fail (wrong length) if it were run
+    # Other cluster ids for the same clusters: the same classes and instances as for LABELS (hand-checked above).
+    result = model.predict_instances_of(X, np.where(LABELS >= 0, 10 * LABELS + 7, -1))
+    assert result["class"].tolist() == [0, 0, 0] + [-1] * 9
+    assert result["instance"].tolist() == [0, 0, 0] + [-1] * 9
+    np.testing.assert_allclose(result["confidence"], [0.8] * 3 + [0.9] * 8 + [1.0])
+    # The car one cluster over two frames (3 and 2 detections), the pedestrian and the wall one cluster.
+    joined = model.predict_instances_of(X, np.array([0, 0, 0, 0, 0, 2, 2, 2, 2, -1, -1, -1]))
+    # Segments: car frame 0 (3, car), car frame 1 (2, background), pedestrian + wall in sequence 1 (4, car).
+    assert joined["class"].tolist() == [0, 0, 0, -1, -1, 0, 0, 0, 0, -1, -1, -1]
+    assert joined["instance"].tolist() == [0, 0, 0, -1, -1, 1, 1, 1, 1, -1, -1, -1]
+
+
+def test_predict_instances_is_predict_instances_of_the_clusterers_labels():
+    X = _detections()
+    model = ClusterClassifier(Given(LABELS), Recording()).fit(X, road_user_class(X["label_id"]))
+    pd.testing.assert_frame_equal(model.predict_instances(X), model.predict_instances_of(X, LABELS))
+
+
+@pytest.mark.parametrize(
+    "labels, match",
+    [(LABELS[:-1], "one label per row of X"), (LABELS.astype(str), "integers"), (LABELS + 0.5, "integers")],
+)
+def test_bad_given_labels_raise(labels, match):
+    X = _detections()
+    model = ClusterClassifier(Given(LABELS), Recording()).fit(X, road_user_class(X["label_id"]))
+    with pytest.raises(ValueError, match=match):
+        model.predict_instances_of(X, labels)
+
+
 @pytest.fixture(scope="module")
 def scenes():
     train = make_scenes(n_sequences=4, duration=10.0, random_state=11)
