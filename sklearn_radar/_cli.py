@@ -211,7 +211,7 @@ def _parser():
         ("--out", True, f"predictions file to write (JSON, final object id per detection); {replaced_only} a file"),
         ("--objects", False, f"object list to write (CSV, one row per live object per scan); {replaced_only} a list"),
     ):
-        stream.add_argument(flag, required=required, help=text)
+        stream.add_argument(flag, required=required, help=text, metavar="FILE" if flag == "--classifier" else None)
     _add_checked(stream, "--experiment", _saved_experiment, help=_SAVED_EXPERIMENT_HELP)
     return parser
 
