@@ -5,6 +5,8 @@ import warnings
 import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from sklearn.base import BaseEstimator, ClassifierMixin, ClusterMixin
 from sklearn.dummy import DummyClassifier
 from sklearn.ensemble import HistGradientBoostingClassifier
@@ -150,6 +152,16 @@ def test_predict_instances_is_predict_instances_of_the_clusterers_labels():
     X = _detections()
     model = ClusterClassifier(Given(LABELS), Recording()).fit(X, road_user_class(X["label_id"]))
     pd.testing.assert_frame_equal(model.predict_instances(X), model.predict_instances_of(X, LABELS))
+
+
+@settings(max_examples=25, deadline=None)
+@given(ids=st.lists(st.integers(0, 10**9), min_size=5, max_size=5, unique=True))
+def test_given_labels_count_only_as_a_partition(ids):
+    # Any other ids for the same five clusters: the same classes, instances and confidences.
+    X = _detections()
+    model = ClusterClassifier(Given(LABELS), Recording()).fit(X, road_user_class(X["label_id"]))
+    renamed = np.array([ids[label] if label >= 0 else -1 for label in LABELS])
+    pd.testing.assert_frame_equal(model.predict_instances_of(X, renamed), model.predict_instances_of(X, LABELS))
 
 
 @pytest.mark.parametrize(
