@@ -177,11 +177,14 @@ def _parser():
         "cluster",
         help="cluster a RadarScenes folder with saved parameters",
         description="Apply a setting saved by 'sklearn-radar reproduce' (params.json) and write the devkit's "
-        "per-point predictions JSON (schema 2), keyed by detection uuid.",
+        "per-point predictions JSON (schema 2), keyed by detection uuid. With --classifier, each detection's "
+        "class is the devkit's ClassificationLabel index of its predicted road-user class (CAR 0, PEDESTRIAN 1, "
+        "PEDESTRIAN_GROUP 2, TWO_WHEELER 3, LARGE_VEHICLE 4; STATIC 5 for noise and background).",
     )
     cluster.set_defaults(run=_cluster, parser=cluster)
     cluster.add_argument("--data", required=True, help="RadarScenes data folder (or its parent)")
-    cluster.add_argument("--params", required=True, help="params.json written by 'sklearn-radar reproduce'")
+    cluster.add_argument("--params", help=_PARAMS_HELP)
+    cluster.add_argument("--classifier", metavar="FILE", help=_CLASSIFIER_HELP)
     cluster.add_argument(
         "--out",
         required=True,
@@ -195,17 +198,20 @@ def _parser():
         help="replay a RadarScenes folder scan by scan through the online pipeline",
         description="Label every radar scan of a RadarScenes folder as it would arrive on a car (timestamp order "
         "across sensors, each stage causal), with persistent object ids; write the devkit's per-point predictions "
-        "JSON and print the per-scan latency and the real-time factor.",
+        "JSON and print the per-scan latency and the real-time factor. With --classifier, the final objects are "
+        "classified after the replay (per 0.5 s frame, not causally) and each detection's class is the devkit's "
+        "ClassificationLabel index, as for 'cluster'.",
     )
     stream.set_defaults(run=_stream, parser=stream)
     replaced_only = "an existing file is replaced only if it is such"
     for flag, required, text in (
         ("--data", True, "RadarScenes data folder (or its parent)"),
-        ("--params", True, "params.json written by 'sklearn-radar reproduce'"),
+        ("--params", False, _PARAMS_HELP),
+        ("--classifier", False, _CLASSIFIER_HELP),
         ("--out", True, f"predictions file to write (JSON, final object id per detection); {replaced_only} a file"),
         ("--objects", False, f"object list to write (CSV, one row per live object per scan); {replaced_only} a list"),
     ):
-        stream.add_argument(flag, required=required, help=text)
+        stream.add_argument(flag, required=required, help=text, metavar="FILE" if flag == "--classifier" else None)
     _add_checked(stream, "--experiment", _saved_experiment, help=_SAVED_EXPERIMENT_HELP)
     return parser
 
@@ -249,6 +255,18 @@ def _at_least(low):
 
     return check
 
+
+#: ``--params`` of ``cluster`` and ``stream``.
+_PARAMS_HELP = (
+    "params.json written by 'sklearn-radar reproduce' (required unless --classifier holds a whole pipeline; "
+    "with both, their clustering must agree)"
+)
+#: ``--classifier`` of ``cluster`` and ``stream``.
+_CLASSIFIER_HELP = (
+    "classifier file written by save_classifier: a pipeline from raw detections ending in a ClusterClassifier "
+    "(it fixes the clustering, --params is then optional) or a bare ClusterClassifier (--params gives the steps "
+    "before it); loading runs pickle: only use files you trust"
+)
 
 #: What ``--experiment`` of ``cluster`` and ``stream`` takes.
 _SAVED_EXPERIMENT_HELP = "which saved experiment: a number 1-13 or 'objects' (default: the best)"
@@ -372,13 +390,38 @@ def _cluster(args) -> int:
     from ._cluster_command import cluster_radarscenes
 
     summary = cluster_radarscenes(
-        args.data, args.params, args.out, experiment=args.experiment, scheduler=args.scheduler, workers=args.workers
+        args.data,
+        args.params,
+        args.out,
+        experiment=args.experiment,
+        classifier=args.classifier,
+        scheduler=args.scheduler,
+        workers=args.workers,
     )
-    print(f"applied experiment {_named(summary['experiment'])} of {_shown(args.params)}: {_setting(summary['params'])}")
+    _print_applied("applied", summary, args)
     if summary["stage1_params"] is not None:
         print(f"  with stage 1: {_setting(summary['stage1_params'])}")
-    print(f"{summary['n_detections']} detections in {summary['n_clusters']} clusters; wrote {_shown(summary['out'])}")
+    wrote = f"wrote {_shown(summary['out'])}"
+    if "classes" in summary:
+        print(f"{summary['n_detections']} detections, {summary['n_clusters']} road users; {_classes(summary)}")
+        print(wrote)
+    else:
+        print(f"{summary['n_detections']} detections in {summary['n_clusters']} clusters; {wrote}")
     return 0
+
+
+def _print_applied(verb, summary, args):
+    """``applied experiment #13 of params.json: ...`` and/or ``classified with FILE``."""
+    if summary["experiment"] is not None:
+        applied = f"{_named(summary['experiment'])} of {_shown(args.params)}: {_setting(summary['params'])}"
+        print(f"{verb} experiment {applied}")
+    if args.classifier is not None:
+        print(f"classified with {_shown(args.classifier)}")
+
+
+def _classes(summary):
+    """``detections per class: CAR 120, ...``."""
+    return "detections per class: " + ", ".join(f"{name} {count}" for name, count in summary["classes"].items())
 
 
 def _stream(args) -> int:
@@ -386,13 +429,21 @@ def _stream(args) -> int:
 
     from .online._replay import stream_radarscenes
 
-    summary = stream_radarscenes(args.data, args.params, args.out, objects=args.objects, experiment=args.experiment)
-    applied = f"{_named(summary['experiment'])} of {_shown(args.params)}: {_setting(summary['params'])}"
-    print(f"streamed experiment {applied}")
+    summary = stream_radarscenes(
+        args.data,
+        args.params,
+        args.out,
+        objects=args.objects,
+        experiment=args.experiment,
+        classifier=args.classifier,
+    )
+    _print_applied("streamed", summary, args)
     print(
         f"{summary['n_detections']} detections in {summary['n_scans']} scans, {summary['n_objects']} objects "
         f"({summary['n_aliases']} merges made aliases)"
     )
+    if "classes" in summary:
+        print(f"{summary['n_road_users']} of them road users; {_classes(summary)}")
     for name, seconds in (("wall", summary["latency"]), ("cpu", summary["cpu"])):
         micro = seconds * 1e6 if len(seconds) else np.zeros(1)
         p50, p99 = np.percentile(micro, [50, 99])

@@ -14,6 +14,7 @@ from sklearn.utils._param_validation import Interval, StrOptions, validate_param
 
 from ._executor import connect_executor
 from ._schema import LABELS, STATIC_LABEL
+from .classification._classes import CLASS_OF_LABEL, DEVKIT_CLASS_INDEX, DEVKIT_CLASS_NAMES, IGNORED
 from .datasets import load_radarscenes
 from .datasets._radarscenes import _read_sensors_json, _read_sequences_json, _resolve_data_dir
 from .experiments import OBJECT_EXPERIMENT, experiment_pipeline, get_experiment, object_pipeline
@@ -143,15 +144,16 @@ def _json_type(value):
 @validate_params(
     {
         "data": [str, os.PathLike],
-        "params": [str, os.PathLike],
+        "params": [str, os.PathLike, None],
         "out": [str, os.PathLike],
         "experiment": _EXPERIMENT,
+        "classifier": [str, os.PathLike, None],
         "scheduler": [str, None],
         "workers": [Integral, None],
     },
     prefer_skip_nested_validation=True,
 )
-def cluster_radarscenes(data, params, out, experiment=None, *, scheduler=None, workers=None):
+def cluster_radarscenes(data, params, out, experiment=None, *, classifier=None, scheduler=None, workers=None):
     """Cluster every detection of a RadarScenes folder with saved parameters, one sequence at a time.
 
     Writes the RadarScenes devkit's per-point predictions JSON (schema 2:
@@ -163,16 +165,35 @@ def cluster_radarscenes(data, params, out, experiment=None, *, scheduler=None, w
     fit in memory.  The file is written atomically (a temporary sibling,
     renamed when complete).
 
+    With ``classifier`` each sequence is also classified
+    (:meth:`~sklearn_radar.classification.ClusterClassifier.predict_instances`):
+    the class is the devkit's ``ClassificationLabel`` index of the
+    predicted road-user class (CAR 0, PEDESTRIAN 1, PEDESTRIAN_GROUP 2,
+    TWO_WHEELER 3, LARGE_VEHICLE 4; STATIC 5 for noise and for clusters
+    classified as background), the instance the road user (-1 for
+    STATIC), and the file's ``label_mapping`` is the devkit's
+    ``ClassificationLabel.translation_dict``.
+
     Parameters
     ----------
     data : str or path-like
         RadarScenes data folder (or its parent).
-    params : str or path-like
-        ``params.json`` written by ``sklearn-radar reproduce``.
+    params : str or path-like or None
+        ``params.json`` written by ``sklearn-radar reproduce``.  None only
+        with a ``classifier`` that holds a whole pipeline (which fixes the
+        clustering).
     out : str or path-like
         Predictions file to write.
     experiment : int or "objects", default=None
         Which saved experiment (a number, or the object experiment); None: the best.
+    classifier : str or path-like, default=None
+        File written by :func:`~sklearn_radar.classification.save_classifier`.
+        A whole pipeline from raw detections ending in a ClusterClassifier
+        needs no ``params``; if ``params`` is given too, its setting must
+        cluster exactly as the classifier's pipeline.  A bare
+        ClusterClassifier takes the steps before it from ``params``, whose
+        clusterer must be the classifier's.  Loading runs pickle: only
+        use files you trust.
     scheduler : str, default=None
         Address of a running dask scheduler: the sequences are loaded and
         clustered on its workers (which must see ``data`` at the same
@@ -183,8 +204,11 @@ def cluster_radarscenes(data, params, out, experiment=None, *, scheduler=None, w
     Returns
     -------
     summary : dict
-        ``experiment`` (its number), ``params`` and ``stage1_params`` (the
-        setting applied), ``n_detections``, ``n_clusters`` and ``out``.
+        ``experiment`` (its number; None without ``params``), ``params``
+        and ``stage1_params`` (the setting applied; None without
+        ``params``), ``n_detections``, ``n_clusters`` (with
+        ``classifier``: the road users), ``out``, and with ``classifier``
+        ``classes`` (detections per devkit class name).
 
     Raises
     ------
@@ -192,10 +216,17 @@ def cluster_radarscenes(data, params, out, experiment=None, *, scheduler=None, w
         If ``out`` exists and is neither empty nor a predictions file that
         this package wrote (checked before the data are read and again
         before the file is replaced).
+    ValueError
+        If neither ``params`` nor ``classifier`` is given, or they disagree.
     """
-    setting = load_params(params, experiment)
-    number = setting["experiment"]
-    pipeline = setting_pipeline(setting, params)
+    setting, pipeline = _params_setting(params, experiment, classifier)
+    if classifier is not None:
+        from ._classifier_setting import classifier_setting, classify_sequence
+
+        model = classifier_setting(classifier, setting, params, pipeline)
+        run, head, counted = classify_sequence, _CLASSES_HEAD, {name: 0 for name in DEVKIT_CLASS_NAMES.values()}
+    else:
+        model, run, head, counted = pipeline, cluster_sequence, _PREDICTIONS_HEAD, None
     check_predictions_file(out)
     data_dir = _resolve_data_dir(Path(data))
     _read_sensors_json(data_dir / "sensors.json")  # a malformed folder fails here, before any worker starts
@@ -204,35 +235,68 @@ def cluster_radarscenes(data, params, out, experiment=None, *, scheduler=None, w
     failed = []
 
     def write(stream):
-        stream.write(_PREDICTIONS_HEAD)
+        stream.write(head)
         try:
-            for uuids, labels in executor.stream(cluster_sequence, tasks):
+            for uuids, labels, *classes in executor.stream(run, tasks):
                 shifted = np.where(labels >= 0, labels + counts["n_clusters"], -1)
-                _write_entries(stream, uuids, shifted, first=counts["n_detections"] == 0)
+                classes = classes[0] if classes else None
+                _write_entries(stream, uuids, shifted, first=counts["n_detections"] == 0, classes=classes)
                 counts["n_detections"] += len(labels)
                 counts["n_clusters"] += int(labels.max()) + 1 if len(labels) else 0
+                if counted is not None:
+                    _count_classes(counted, classes)
         except OSError as error:  # reading a sequence failed: not a write error of ``out``
             failed.append(error)
             raise _ReadFailed from None
         stream.write(_PREDICTIONS_TAIL if counts["n_detections"] else _PREDICTIONS_EMPTY_TAIL)
 
     with connect_executor(scheduler, workers) as executor:
-        tasks = [(str(data_dir), n, pipeline) for n in numbers]
+        tasks = [(str(data_dir), n, model) for n in numbers]
         try:
             atomic_write(Path(out), write, replaceable=check_predictions_file)
         except _ReadFailed:
             raise failed[0] from None
-    applied = {"params": setting["params"], "stage1_params": setting.get("stage1_params")}
-    return {"experiment": number, **applied, **counts, "out": str(out)}
+    applied = {
+        "experiment": None if setting is None else setting["experiment"],
+        "params": None if setting is None else setting["params"],
+        "stage1_params": None if setting is None else setting.get("stage1_params"),
+    }
+    summary = {**applied, **counts, "out": str(out)}
+    if counted is not None:
+        summary["classes"] = counted
+    return summary
+
+
+def _params_setting(params, experiment, classifier):
+    """``(setting, pipeline)`` of ``params`` (both None without it); ValueError when neither file is given."""
+    if params is None:
+        if classifier is None:
+            raise ValueError("give --params (a params.json of 'sklearn-radar reproduce'), --classifier, or both")
+        if experiment is not None:
+            raise ValueError("--experiment chooses a setting of --params: give --params with it")
+        return None, None
+    setting = load_params(params, experiment)
+    return setting, setting_pipeline(setting, params)
+
+
+def _count_classes(counted, classes):
+    """Add the detections of each devkit class index in ``classes`` to ``counted`` (by class name)."""
+    from ._classifier_setting import devkit_class_index
+
+    indices, numbers = np.unique(classes, return_counts=True)
+    name_of = {int(devkit_class_index([code])[0]): name for code, name in DEVKIT_CLASS_NAMES.items()}
+    for index, number in zip(indices.tolist(), numbers.tolist(), strict=True):
+        counted[name_of[index]] += number
 
 
 def check_predictions_file(out):
     """Refuse to replace ``out`` unless it is absent, empty, or a predictions file this package wrote.
 
-    A predictions file is recognised by its first bytes, the document head
+    A predictions file is recognised by its first bytes, a document head
     that :func:`write_predictions` writes (schema 2 with this package's
-    ``NOISE``/``CLUSTERED`` classes): any other file (``params.json``, a
-    devkit file, a typo) is another's work and is kept.
+    ``NOISE``/``CLUSTERED`` classes, or with the devkit's classes of
+    ``--classifier``): any other file (``params.json``, a devkit file, a
+    typo) is another's work and is kept.
 
     Parameters
     ----------
@@ -252,7 +316,8 @@ def check_predictions_file(out):
     else:
         try:
             with open(out, "rb") as stream:
-                if stream.read(len(_PREDICTIONS_HEAD)) == _PREDICTIONS_HEAD:
+                start = stream.read(max(len(_PREDICTIONS_HEAD), len(_CLASSES_HEAD)))
+                if start.startswith(_PREDICTIONS_HEAD) or start.startswith(_CLASSES_HEAD):
                     return
         except OSError as error:
             raise OSError(f"cannot read {out}: {error.strerror or error}") from None
@@ -304,21 +369,36 @@ def setting_pipeline(setting, path):
 
 
 @validate_params(
-    {"uuids": ["array-like"], "labels": ["array-like"], "out": [str, os.PathLike]}, prefer_skip_nested_validation=True
+    {"uuids": ["array-like"], "labels": ["array-like"], "out": [str, os.PathLike], "classes": ["array-like", None]},
+    prefer_skip_nested_validation=True,
 )
-def write_predictions(uuids, labels, out):
+def write_predictions(uuids, labels, out, classes=None):
     """Write cluster labels in the devkit's ``per_point_predictions_to_json`` layout, schema 2 (label and instance).
+
+    Without ``classes`` the class of a detection is 1 (``CLUSTERED``) for
+    a clustered detection and 0 (``NOISE``) for noise, with the
+    ``label_mapping`` STATIC -> 0, every other label -> 1.  With
+    ``classes`` (road-user class codes of
+    :class:`~sklearn_radar.classification.ClusterClassifier`) it is the
+    devkit's ``ClassificationLabel`` index of the class
+    (:data:`~sklearn_radar.classification.DEVKIT_CLASS_INDEX`: background
+    and noise are STATIC, 5), with the devkit's own
+    ``ClassificationLabel.translation_dict`` as ``label_mapping``: the
+    file the devkit writes for those predictions, byte for byte.
 
     Parameters
     ----------
     uuids : array-like of str
         Detection uuids.
     labels : array-like of int
-        Cluster per detection, -1 for noise.
+        Cluster (or instance) per detection, -1 for noise.
     out : str or path-like
         File to write (atomically).  An existing file is replaced only if it
         is empty or a predictions file written by this package
         (:func:`check_predictions_file`).
+    classes : array-like of int, default=None
+        Road-user class code per detection (0 car ... 4 pedestrian group,
+        -1 background), or None.
 
     Raises
     ------
@@ -329,28 +409,44 @@ def write_predictions(uuids, labels, out):
     uuids = np.asarray(uuids)
     if len(uuids) != len(labels):
         raise ValueError(f"uuids and labels differ in length: {len(uuids)} != {len(labels)}")
+    if classes is not None:
+        classes = _devkit_classes(classes, len(labels))
+    head = _PREDICTIONS_HEAD if classes is None else _CLASSES_HEAD
 
     def write(stream):
-        stream.write(_PREDICTIONS_HEAD)
-        _write_entries(stream, uuids, labels, first=True)
+        stream.write(head)
+        _write_entries(stream, uuids, labels, first=True, classes=classes)
         stream.write(_PREDICTIONS_TAIL if len(labels) else _PREDICTIONS_EMPTY_TAIL)
 
     check_predictions_file(out)
     atomic_write(Path(out), write, replaceable=check_predictions_file)
 
 
-def _predictions_frame():
+def _devkit_classes(classes, n):
+    """The devkit's class index of each road-user class code; ValueError for another length or code."""
+    from ._classifier_setting import devkit_class_index
+
+    classes = np.asarray(classes)
+    if len(classes) != n:
+        raise ValueError(f"classes and labels differ in length: {len(classes)} != {n}")
+    if classes.dtype.kind not in "iu" or not np.isin(classes, list(DEVKIT_CLASS_INDEX)).all():
+        raise ValueError(f"classes must be road-user class codes {sorted(DEVKIT_CLASS_INDEX)}")
+    return devkit_class_index(classes)
+
+
+def _predictions_frame(mapping, names):
     """The document around the predictions, split where they go: ``(head, tail, tail without predictions)``.
 
-    The pieces and :func:`_write_entries` make the same bytes as
-    ``json.dumps(document, ensure_ascii=True, indent=2)``, written a
-    sequence at a time.
+    ``mapping`` is the devkit's ``label_mapping`` (RadarScenes label id ->
+    class index or None), ``names`` its ``new_label_names``.  The pieces
+    and :func:`_write_entries` make the same bytes as
+    ``json.dumps(document, ensure_ascii=True, indent=2)`` (the devkit's
+    ``per_point_predictions_to_json``), written a sequence at a time.
     """
-    mapping = {label: (0 if label == STATIC_LABEL else 1) for label in LABELS}
     document = {
         "schema": 2,
         "label_mapping": {str(k): v for k, v in mapping.items()},
-        "new_label_names": {str(k): v for k, v in CLASS_NAMES.items()},
+        "new_label_names": {str(k): v for k, v in names.items()},
         "predictions": {},
     }
     text = json.dumps(document, ensure_ascii=True, indent=2)
@@ -360,14 +456,34 @@ def _predictions_frame():
     return head.encode("ascii"), b"\n  }\n}", b"}\n}"
 
 
-_PREDICTIONS_HEAD, _PREDICTIONS_TAIL, _PREDICTIONS_EMPTY_TAIL = _predictions_frame()
+def _class_frame():
+    """The frame of classified predictions: the devkit's ``ClassificationLabel.translation_dict``, in its order."""
+    mapping, names = {}, {}
+    for label in sorted(LABELS):
+        code = CLASS_OF_LABEL[label]
+        mapping[label] = None if code == IGNORED else DEVKIT_CLASS_INDEX[code]
+        if code != IGNORED:
+            names.setdefault(DEVKIT_CLASS_INDEX[code], DEVKIT_CLASS_NAMES[code])
+    return _predictions_frame(mapping, names)
 
 
-def _write_entries(stream, uuids, labels, first):
-    """``"uuid": [class, instance]`` lines (indent 2, as json.dumps), comma-separated across calls."""
+_PREDICTIONS_HEAD, _PREDICTIONS_TAIL, _PREDICTIONS_EMPTY_TAIL = _predictions_frame(
+    {label: (0 if label == STATIC_LABEL else 1) for label in LABELS}, CLASS_NAMES
+)
+#: The head of a predictions file with the classifier's classes (``--classifier``); the tails are the same.
+_CLASSES_HEAD = _class_frame()[0]
+
+
+def _write_entries(stream, uuids, labels, first, classes=None):
+    """``"uuid": [class, instance]`` lines (indent 2, as json.dumps), comma-separated across calls.
+
+    The class is ``classes`` when given (the devkit's class indices), else 1 for a clustered detection, 0 for noise.
+    """
+    labels = np.asarray(labels)
+    classes = (labels >= 0).astype(np.int64) if classes is None else np.asarray(classes)
     lines = [
         f"{'' if first and i == 0 else ','}\n    {json.dumps(str(u), ensure_ascii=True)}: [\n"
-        f"      {int(label >= 0)},\n      {int(label)}\n    ]"
-        for i, (u, label) in enumerate(zip(uuids, labels.tolist(), strict=True))
+        f"      {int(kind)},\n      {int(label)}\n    ]"
+        for i, (u, kind, label) in enumerate(zip(uuids, classes.tolist(), labels.tolist(), strict=True))
     ]
     stream.write("".join(lines).encode("ascii"))

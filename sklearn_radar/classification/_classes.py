@@ -34,7 +34,15 @@ from sklearn.utils._param_validation import validate_params
 
 from .._schema import LABELS
 
-__all__ = ["BACKGROUND", "CLASS_OF_LABEL", "DEVKIT_CLASS_NAMES", "IGNORED", "ROAD_USER_CLASSES", "road_user_class"]
+__all__ = [
+    "BACKGROUND",
+    "CLASS_OF_LABEL",
+    "DEVKIT_CLASS_INDEX",
+    "DEVKIT_CLASS_NAMES",
+    "IGNORED",
+    "ROAD_USER_CLASSES",
+    "road_user_class",
+]
 
 #: Code of static background (RadarScenes STATIC) and of detections that no road user explains.
 BACKGROUND = -1
@@ -70,6 +78,11 @@ DEVKIT_CLASS_NAMES = {
     4: "PEDESTRIAN_GROUP",
     BACKGROUND: "STATIC",
 }
+
+#: ``{code: devkit ClassificationLabel value}``: the class index a predictions file of the devkit holds (CAR 0,
+#: PEDESTRIAN 1, PEDESTRIAN_GROUP 2, TWO_WHEELER 3, LARGE_VEHICLE 4, STATIC 5).  Background, and noise, is STATIC:
+#: the devkit's own class of every detection that is no road user (it has no "unclassified" class).
+DEVKIT_CLASS_INDEX = {0: 0, 1: 4, 2: 3, 3: 1, 4: 2, BACKGROUND: 5}
 
 _LOOKUP = np.array([CLASS_OF_LABEL[label] for label in range(len(LABELS))], dtype=np.int64)
 

@@ -233,10 +233,44 @@ class ClusterClassifier(BaseEstimator):
     def predict_instances(self, X):
         """The road users in X: a class, an instance id and a confidence per detection.
 
+        Clusters X with a fresh clone of ``clusterer``, then classifies its
+        clusters as :meth:`predict_instances_of` does.
+
         Parameters
         ----------
         X : DataFrame or array-like of shape (n_detections, n_columns)
             Working detections, as for :meth:`fit`.
+
+        Returns
+        -------
+        instances : DataFrame of shape (n_detections, 3)
+            ``class``, ``instance`` and ``confidence`` per detection, as
+            :meth:`predict_instances_of` returns them.
+        """
+        check_is_fitted(self)
+        X = validated_input(self, X, CLUSTER_FEATURE_READS, reset=False)
+        return self._instances_of(X, self._cluster(X, X.shape[0]))
+
+    def predict_instances_of(self, X, labels):
+        """Classify clusters computed elsewhere: a class, an instance id and a confidence per detection.
+
+        The same classification as :meth:`predict_instances`, on the given
+        ``labels`` instead of those of ``clusterer`` (which is not run): for
+        example the persistent object ids of
+        :class:`~sklearn_radar.online.OnlinePipeline` or the clusters of a
+        setting saved by ``sklearn-radar reproduce``.  The classifier was
+        trained on the clusters of its own ``clusterer``; on those of
+        another clustering it is applied to clusters that can look unlike
+        its training examples.
+
+        Parameters
+        ----------
+        X : DataFrame or array-like of shape (n_detections, n_columns)
+            Working detections, as for :meth:`fit`.
+        labels : array-like of int, shape (n_detections,)
+            Cluster of each detection, -1 for noise; any integers (they are
+            renumbered), a cluster id may span sequences (its detections in
+            each sequence are then separate segments).
 
         Returns
         -------
@@ -253,8 +287,20 @@ class ClusterClassifier(BaseEstimator):
             * ``confidence`` (float64): the probability the classifier gives
               the predicted class for the segment, in [0, 1] (1 for noise),
               the ranking score of mAP.
+
+        Raises
+        ------
+        ValueError
+            If ``labels`` is not one integer per row of X.
         """
-        table, rows, segment_proba = self._segments(X)
+        check_is_fitted(self)
+        X = validated_input(self, X, CLUSTER_FEATURE_READS, reset=False)
+        labels = _check_labels(labels, X.shape[0], "ClusterClassifier.predict_instances_of: the")
+        return self._instances_of(X, labels)
+
+    def _instances_of(self, X, labels):
+        """``predict_instances_of`` of a validated X and checked labels: the one classification code path."""
+        table, rows, segment_proba = self._segments_of(X, labels)
         best = np.argmax(segment_proba, axis=1)
         clustered = rows >= 0
         classes = np.full(len(rows), BACKGROUND, dtype=np.int64)
@@ -277,7 +323,12 @@ class ClusterClassifier(BaseEstimator):
     def _segments(self, X):
         """The segment table of X, the table row of each detection (-1: noise) and each segment's probabilities."""
         check_is_fitted(self)
-        _, _, table, rows = self._read_segments(X, reset=False)
+        X = validated_input(self, X, CLUSTER_FEATURE_READS, reset=False)
+        return self._segments_of(X, self._cluster(X, X.shape[0]))
+
+    def _segments_of(self, X, labels):
+        """``_segments`` of a validated X with the given cluster labels."""
+        _, table, rows = self._describe(X, labels)
         missing = sorted(set(self.feature_names_) - set(table.columns))
         if missing:
             raise ValueError(f"ClusterClassifier: X lacks the columns of the feature(s) {missing} it was fitted with")
@@ -285,15 +336,19 @@ class ClusterClassifier(BaseEstimator):
         return table, rows, class_proba(self.classifier_, features, self.feature_names_, self.classes_)
 
     def _read_segments(self, X, *, reset):
-        """Validate, cluster and describe X: ``(X, time columns, feature table, table row of each detection)``.
+        """Validate, cluster and describe X: ``(X, time columns, feature table, table row of each detection)``."""
+        X = validated_input(self, X, CLUSTER_FEATURE_READS, reset=reset)
+        time, table, rows = self._describe(X, self._cluster(X, X.shape[0]))
+        return X, time, table, rows
+
+    def _describe(self, X, labels):
+        """The segments of a validated X with cluster ``labels``: ``(time columns, feature table, table rows)``.
 
         Only ``t`` and ``sequence`` are read for every row (the frames start at
         each sequence's first detection); the other columns only for the
         clustered detections (:mod:`._reading`).
         """
-        X = validated_input(self, X, CLUSTER_FEATURE_READS, reset=reset)
         n = X.shape[0]
-        labels = self._cluster(X, n)
         time = time_columns(self, X, CLUSTER_FEATURE_READS)
         clustered = np.flatnonzero(labels >= 0)
         c = columns_at(self, X, CLUSTER_FEATURE_READS, clustered, skip=("t", "sequence"))
@@ -303,7 +358,7 @@ class ClusterClassifier(BaseEstimator):
         table, local_rows = segment_features(c, labels[clustered], frame)
         rows = np.full(n, -1, dtype=np.int64)
         rows[clustered] = local_rows
-        return X, time, table, rows
+        return time, table, rows
 
     def _cluster(self, X, n):
         """The clusterer's labels of X (a fresh clone), checked."""

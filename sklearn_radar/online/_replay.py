@@ -110,7 +110,7 @@ def recording_seconds(data):
     return float((span["max"] - span["min"]).sum()) * 1e-6
 
 
-def stream_radarscenes(data, params, out, objects=None, experiment=None):
+def stream_radarscenes(data, params, out, objects=None, experiment=None, classifier=None):
     """Replay a RadarScenes folder through the online pipeline of a saved setting; write devkit predictions.
 
     The scans of all sequences are fed in timestamp order (the sensors of a
@@ -120,31 +120,53 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None):
     cluster ids.  Nothing is written before every argument is checked, and
     no file that this package did not write is replaced.
 
+    With ``classifier``, the final objects are classified after the replay
+    (:meth:`~sklearn_radar.classification.ClusterClassifier.predict_instances_of`
+    on the final object ids, per time frame as in training: not causal,
+    a frame's class uses the whole frame): the class is the devkit's
+    ``ClassificationLabel`` index (STATIC 5 for noise and for objects
+    classified as background), the instance the final object id where
+    the class is a road user, -1 where it is STATIC.
+
     Parameters
     ----------
     data : str or path-like
         The RadarScenes folder to replay (or its parent).
-    params : str or path-like
-        The setting: a ``params.json`` of ``sklearn-radar reproduce``.
+    params : str or path-like or None
+        The setting: a ``params.json`` of ``sklearn-radar reproduce``.  None
+        only with a ``classifier`` that holds a whole pipeline (its
+        clustering is replayed).
     out : str or path-like
         Predictions file to write.
     objects : str or path-like, default=None
         Object-list CSV to write (one row per live object per scan); None: none.
     experiment : int, default=None
         Which saved experiment; None: the best.
+    classifier : str or path-like, default=None
+        File written by :func:`~sklearn_radar.classification.save_classifier`,
+        with the same rules as for ``sklearn-radar cluster``
+        (:func:`~sklearn_radar.reproduce.cluster_radarscenes`).  Loading
+        runs pickle: only use files you trust.
 
     Returns
     -------
     summary : dict
-        ``experiment``, ``params``, ``n_detections``, ``n_scans``, ``n_objects``, ``n_aliases``,
-        ``latency`` and ``cpu`` (wall and thread CPU time per scan, s), ``recording`` (s), ``out`` and
-        ``objects``.
+        ``experiment``, ``params`` (None without ``params``), ``n_detections``, ``n_scans``, ``n_objects``,
+        ``n_aliases``, ``latency`` and ``cpu`` (wall and thread CPU time per scan, s), ``recording`` (s),
+        ``out`` and ``objects``; with ``classifier`` also ``classes`` (detections per devkit class name) and
+        ``n_road_users`` (objects classified as a road user in some frame).
     """
-    from .._cluster_command import check_predictions_file, load_params, setting_pipeline, write_predictions
+    from .._cluster_command import _params_setting, check_predictions_file, write_predictions
     from ..reproduce._io import atomic_write
 
-    setting = load_params(params, experiment)
-    online = OnlinePipeline(setting_pipeline(setting, params))
+    setting, pipeline = _params_setting(params, experiment, classifier)
+    model = None
+    if classifier is not None:
+        from .._classifier_setting import classifier_setting
+
+        model = classifier_setting(classifier, setting, params, pipeline)
+        pipeline = model.clustering
+    online = OnlinePipeline(pipeline)
     check_predictions_file(out)
     if objects is not None:
         if Path(objects).resolve() == Path(out).resolve():
@@ -152,7 +174,15 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None):
         check_objects_file(objects)
     scenes = load_radarscenes(data)
     replayed = replay(online, scenes.data, objects=objects is not None)
-    write_predictions(scenes.data["uuid"].to_numpy(), replayed["object_ids"], out)
+    final = replayed["object_ids"]
+    summary = {}
+    if model is None:
+        write_predictions(scenes.data["uuid"].to_numpy(), final, out)
+    else:
+        classes, instances = classify_objects(model, scenes.data, final)
+        write_predictions(scenes.data["uuid"].to_numpy(), instances, out, classes=classes)
+        summary["classes"] = _class_counts(classes)
+        summary["n_road_users"] = len(np.unique(instances[instances >= 0]))
     if objects is not None:
         table = replayed["objects"]
         if table is None:
@@ -162,10 +192,9 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None):
             stream.write(table.to_csv(index=False, lineterminator="\n").encode("ascii"))
 
         atomic_write(Path(objects), write, replaceable=check_objects_file)
-    final = replayed["object_ids"]
     return {
-        "experiment": setting["experiment"],
-        "params": setting["params"],
+        "experiment": None if setting is None else setting["experiment"],
+        "params": None if setting is None else setting["params"],
         "n_detections": len(final),
         "n_scans": len(replayed["latency"]),
         "n_objects": len(np.unique(final[final >= 0])),
@@ -175,4 +204,27 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None):
         "recording": recording_seconds(scenes.data),
         "out": str(out),
         "objects": None if objects is None else str(objects),
+        **summary,
     }
+
+
+def classify_objects(model, data, object_ids):
+    """Class code and instance of each detection of ``data`` for the final ``object_ids`` of a replay.
+
+    Returns
+    -------
+    classes : ndarray of int64
+        Road-user class code (-1 background and noise).
+    instances : ndarray of int64
+        The object id where the class is a road user, else -1.
+    """
+    predicted = model.classifier.predict_instances_of(model.working(data), object_ids)
+    classes = predicted["class"].to_numpy(np.int64)
+    return classes, np.where(classes >= 0, object_ids, -1).astype(np.int64)
+
+
+def _class_counts(classes):
+    """Detections per devkit class name, for every class."""
+    from ..classification import DEVKIT_CLASS_NAMES
+
+    return {name: int(np.count_nonzero(classes == code)) for code, name in DEVKIT_CLASS_NAMES.items()}

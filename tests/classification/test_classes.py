@@ -8,6 +8,7 @@ from sklearn_radar import LABELS
 from sklearn_radar.classification import (
     BACKGROUND,
     CLASS_OF_LABEL,
+    DEVKIT_CLASS_INDEX,
     DEVKIT_CLASS_NAMES,
     IGNORED,
     ROAD_USER_CLASSES,
@@ -26,6 +27,17 @@ def test_mapping_is_the_devkits_translation():
             assert code == IGNORED, label
         else:
             assert DEVKIT_CLASS_NAMES[code] == devkit_class.name, label
+
+
+def test_devkit_class_index_is_the_value_of_the_devkits_class_of_that_name():
+    assert set(DEVKIT_CLASS_INDEX) == set(DEVKIT_CLASS_NAMES) == {*ROAD_USER_CLASSES, BACKGROUND}
+    for code, index in DEVKIT_CLASS_INDEX.items():
+        assert ClassificationLabel(index).name == DEVKIT_CLASS_NAMES[code], code
+    assert DEVKIT_CLASS_INDEX[BACKGROUND] == ClassificationLabel.STATIC.value
+    # Every label_id lands on the devkit's index of its class (through our code).
+    for label, devkit_class in ClassificationLabel.translation_dict().items():
+        if devkit_class is not None:
+            assert DEVKIT_CLASS_INDEX[CLASS_OF_LABEL[label.value]] == devkit_class.value, label
 
 
 def test_the_devkits_none_classes_are_animal_and_other():

@@ -5,6 +5,8 @@ import warnings
 import numpy as np
 import pandas as pd
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 from sklearn.base import BaseEstimator, ClassifierMixin, ClusterMixin
 from sklearn.dummy import DummyClassifier
 from sklearn.ensemble import HistGradientBoostingClassifier
@@ -128,6 +130,49 @@ def test_one_cluster_is_one_instance_over_its_frames_and_instances_do_not_span_s
     labels = np.array([0, 0, 0, 0, 0, 2, 2, 3, 3, 2, 2, -1])  # label 2 in both sequences; the car one cluster
     model = ClusterClassifier(Given(labels), AllCars()).fit(X, road_user_class(X["label_id"]))
     assert model.predict_instances(X)["instance"].tolist() == [0, 0, 0, 0, 0, 1, 1, 2, 2, 3, 3, -1]
+
+
+def test_given_labels_are_classified_without_running_the_clusterer():
+    X = _detections()
+    model = ClusterClassifier(Given(LABELS), Recording()).fit(X, road_user_class(X["label_id"]))
+    model.clusterer = Given(np.zeros(3))  # would fail (wrong length) if it were run
+    # Other cluster ids for the same clusters: the same classes and instances as for LABELS (hand-checked above).
+    result = model.predict_instances_of(X, np.where(LABELS >= 0, 10 * LABELS + 7, -1))
+    assert result["class"].tolist() == [0, 0, 0] + [-1] * 9
+    assert result["instance"].tolist() == [0, 0, 0] + [-1] * 9
+    np.testing.assert_allclose(result["confidence"], [0.8] * 3 + [0.9] * 8 + [1.0])
+    # The car one cluster over two frames (3 and 2 detections), the pedestrian and the wall one cluster.
+    joined = model.predict_instances_of(X, np.array([0, 0, 0, 0, 0, 2, 2, 2, 2, -1, -1, -1]))
+    # Segments: car frame 0 (3, car), car frame 1 (2, background), pedestrian + wall in sequence 1 (4, car).
+    assert joined["class"].tolist() == [0, 0, 0, -1, -1, 0, 0, 0, 0, -1, -1, -1]
+    assert joined["instance"].tolist() == [0, 0, 0, -1, -1, 1, 1, 1, 1, -1, -1, -1]
+
+
+def test_predict_instances_is_predict_instances_of_the_clusterers_labels():
+    X = _detections()
+    model = ClusterClassifier(Given(LABELS), Recording()).fit(X, road_user_class(X["label_id"]))
+    pd.testing.assert_frame_equal(model.predict_instances(X), model.predict_instances_of(X, LABELS))
+
+
+@settings(max_examples=25, deadline=None)
+@given(ids=st.lists(st.integers(0, 10**9), min_size=5, max_size=5, unique=True))
+def test_given_labels_count_only_as_a_partition(ids):
+    # Any other ids for the same five clusters: the same classes, instances and confidences.
+    X = _detections()
+    model = ClusterClassifier(Given(LABELS), Recording()).fit(X, road_user_class(X["label_id"]))
+    renamed = np.array([ids[label] if label >= 0 else -1 for label in LABELS])
+    pd.testing.assert_frame_equal(model.predict_instances_of(X, renamed), model.predict_instances_of(X, LABELS))
+
+
+@pytest.mark.parametrize(
+    "labels, match",
+    [(LABELS[:-1], "one label per row of X"), (LABELS.astype(str), "integers"), (LABELS + 0.5, "integers")],
+)
+def test_bad_given_labels_raise(labels, match):
+    X = _detections()
+    model = ClusterClassifier(Given(LABELS), Recording()).fit(X, road_user_class(X["label_id"]))
+    with pytest.raises(ValueError, match=match):
+        model.predict_instances_of(X, labels)
 
 
 @pytest.fixture(scope="module")
