@@ -150,3 +150,43 @@ def test_the_strongest_offline_baseline_skips_the_causal_one(classified):
     offline = {n: r.instance_test.pq for n, r in results.baselines.items() if "sliding" not in n}
     assert result.instance_test.pq == max(offline.values())
     assert strongest_offline_baseline(None) is None
+
+
+def test_the_run_saves_each_tuned_settings_classifier_for_the_cluster_command(classified, tiny_folder, tmp_path):
+    """Saved beside params.json, listed there and in run.json; `cluster --classifier` applies it, as the devkit reads."""
+    from sklearn_radar.classification import load_classifier
+
+    results = RunResults.read(classified / "results.json")
+    settings = results.classification.settings
+    assert settings["#1"].classifier_file == "classifier_1.joblib"
+    assert settings["#13"].classifier_file == "classifier_13.joblib"
+    assert settings["#8"].classifier_file is None  # the paper's setting: no params.json entry to go with it
+    assert settings[POINT_WISE].classifier_file is None
+    saved = sorted(p.name for p in classified.glob("*.joblib"))
+    assert saved == sorted(results.saved_classifiers())
+    params = json.loads((classified / "params.json").read_text())
+    assert params["experiments"]["13"]["classifier"] == "classifier_13.joblib"
+    marker = json.loads((classified / "run.json").read_text())
+    assert set(saved) <= set(marker["files"])
+    model = load_classifier(classified / "classifier_13.joblib")
+    assert model[-1].n_training_examples_ == settings["#13"].n_training_examples
+    out = tmp_path / "predictions.json"
+    with contextlib.redirect_stdout(io.StringIO()):
+        code = main(
+            [
+                "cluster",
+                "--data",
+                str(tiny_folder),
+                "--classifier",
+                str(classified / "classifier_13.joblib"),
+                "--out",
+                str(out),
+            ]
+        )
+    assert code == 0
+    document = json.loads(out.read_text())
+    assert document["new_label_names"]["5"] == "STATIC"  # the devkit's class numbering, not NOISE / CLUSTERED
+    entries = {key: value for key, value in document.items() if isinstance(value, dict) and len(value) > 20}
+    (predictions,) = entries.values()
+    data = load_radarscenes(tiny_folder).data
+    assert set(predictions) == set(data["uuid"].astype(str)) and len(predictions) == len(data)

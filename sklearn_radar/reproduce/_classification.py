@@ -40,6 +40,14 @@ CLASSIFICATION_FRAME_S = 0.5
 #: Name of the point-wise classifier's row.
 POINT_WISE = "point-wise (no clustering)"
 
+#: The file of the saved classifier (:func:`~sklearn_radar.classification.save_classifier`: the whole pipeline
+#: from raw detections, for ``sklearn-radar cluster --classifier``) of each classified experiment, and of the
+#: strongest baseline, in the run's folder.
+CLASSIFIER_FILES = {
+    **{f"#{number}": f"classifier_{number}.joblib" for number in CLASSIFIED},
+    "baseline": "classifier_baseline.joblib",
+}
+
 #: The scores of :class:`SemanticScores` kept per test sequence, for the paired comparisons.
 PER_SEQUENCE = ("pq", "map", "macro_f1", "mcov")
 
@@ -118,13 +126,16 @@ def classified_sequence(sequence, model, clusterer):
 
 
 def run_classification(env, key, needed):
-    """Train the classifier on each setting's training clusters, score it on the test half; the point-wise too."""
+    """Train the classifier on each setting's training clusters, score it on the test half; the point-wise too.
+
+    Returns ``(ClassificationResult, summary, models)``, ``models`` the fitted pipelines to save, by file name.
+    """
     start = time.perf_counter()
     tables = env.sequences.map(training_table, env.train, executor=env.executor)
     X_train = pd.concat(tables, ignore_index=True)
     y_train = road_user_class(X_train["label_id"])
     X_train = X_train.drop(columns=["label_id"])
-    rows, lines = {}, []
+    rows, lines, models = {}, [], {}
     jobs = [
         (name, source, classifier_model(pipeline), pipeline, params)
         for name, source, pipeline, params in classified_settings(needed)
@@ -133,17 +144,31 @@ def run_classification(env, key, needed):
     for name, source, model, clusterer, params in jobs:
         model.fit(X_train, y_train)
         parts = env.sequences.map(classified_sequence, env.test, model, clusterer, executor=env.executor)
-        rows[name] = _classified_setting(name, source, params, model, parts)
+        file = _classifier_file(name, source)
+        rows[name] = _classified_setting(name, source, params, model, parts, file)
+        if file is not None:
+            models[file] = model
         scores = rows[name].scores
         lines.append(
             f"    {name}: class PQ {scores.pq:.3f}, mAP@0.5 {scores.map:.3f}, macro-F1 {scores.macro_f1:.3f}, "
             f"mCov {scores.mcov:.3f}"
         )
     result = ClassificationResult(settings=rows, test_sequences=list(env.test), wall_time_s=time.perf_counter() - start)
-    return result, "\n".join(lines)
+    return result, "\n".join(lines), models
 
 
-def _classified_setting(name, source, params, model, parts):
+def _classifier_file(name, source):
+    """The file the run saves the classifier of ``name`` to: None for the point-wise one and the paper's settings.
+
+    A classifier of the paper's setting (an experiment that did not run) is not saved: ``params.json`` has no such
+    setting to go with it.
+    """
+    if name == POINT_WISE or source.startswith("paper's"):
+        return None
+    return CLASSIFIER_FILES.get(name, CLASSIFIER_FILES["baseline"])
+
+
+def _classified_setting(name, source, params, model, parts, file):
     """The :class:`ClassifiedSetting` of one fitted model from its test sequences' arrays."""
     pooled = {k: np.concatenate([p[k] for p in parts]) for k in parts[0] if k not in ("id", "clusters")}
     groups = np.concatenate([np.full(len(p["times"]), p["id"]) for p in parts])
@@ -165,6 +190,7 @@ def _classified_setting(name, source, params, model, parts):
         background_share_before=before,
         background_share_after=_background_share(pooled, pooled["instances_pred"], groups),
         n_training_examples=model[-1].n_training_examples_,
+        classifier_file=file,
     )
 
 
@@ -199,4 +225,4 @@ def _background_share(arrays, labels, groups):
     return float(share.background_segment_share)
 
 
-__all__ = ["CLASSIFICATION_FRAME_S", "POINT_WISE", "classified_settings", "run_classification"]
+__all__ = ["CLASSIFICATION_FRAME_S", "CLASSIFIER_FILES", "POINT_WISE", "classified_settings", "run_classification"]

@@ -1221,6 +1221,17 @@ class RunResults(_JsonRecord):
         """
         return {number: result.v1_test for number, result in self.experiments.items()}
 
+    def saved_classifiers(self):
+        """The files of the classifiers the classification step saved in the run's folder, in order.
+
+        Returns
+        -------
+        names : list of str
+        """
+        if self.classification is None:
+            return []
+        return [row.classifier_file for row in self.classification.settings.values() if row.classifier_file]
+
     def to_json_dict(self, *, figures=False):
         """What ``results.json`` holds.
 
@@ -1281,7 +1292,9 @@ class RunResults(_JsonRecord):
             ``{"best": key, "objective": ..., "experiments": {key: {"experiment",
             "v1_test", ["pq_test",] "params", "stage1_params"}}}``; ``best`` is the
             first experiment with the highest test score of the run's objective.  The object experiment, when
-            it ran, is the key ``"objects"`` (with ``causal_pq_test`` besides).
+            it ran, is the key ``"objects"`` (with ``causal_pq_test`` besides).  An experiment whose clusters the
+            classification step classified has ``"classifier"``: the file of its saved classifier in the run's
+            folder (``sklearn-radar cluster --classifier``).
         """
         experiments = {}
         for number, result in self.experiments.items():
@@ -1289,6 +1302,9 @@ class RunResults(_JsonRecord):
             if result.instance_test is not None:
                 entry["pq_test"] = result.instance_test.pq
             entry.update(params=result.params, stage1_params=result.stage1_params)
+            classified = (self.classification.settings if self.classification else {}).get(f"#{number}")
+            if classified is not None and classified.classifier_file:
+                entry["classifier"] = classified.classifier_file
             experiments[str(number)] = entry
         if self.objects is not None:
             experiments[OBJECT_EXPERIMENT] = {

@@ -40,8 +40,10 @@ from sklearn.utils._param_validation import HasMethods, Interval, StrOptions, va
 
 from .. import __version__
 from .._executor import connect_executor
+from ..classification import save_classifier
 from ..experiments import SKLEARN_BASELINES, get_experiment
 from ..metrics._parts import OBJECTIVES  # what the searches can maximise: "v1", "pq"
+from ._classification import CLASSIFIER_FILES
 from ._constants import (
     ALL_EXPERIMENTS,
     BASELINES,
@@ -79,7 +81,17 @@ SEED_MAX = 2**32 - 1
 #: The run marker: which run the folder holds and whether it is complete.
 RUN_MARKER = "run.json"
 #: Every file a run may write besides the marker (a previous run's are removed when a new one starts).
-RUN_FILES = ("report.md", "results.json", "params.json", HEATMAP, FILTER_SCENE, V1_BARS, SCENE, CONVERGENCE)
+RUN_FILES = (
+    "report.md",
+    "results.json",
+    "params.json",
+    HEATMAP,
+    FILTER_SCENE,
+    V1_BARS,
+    SCENE,
+    CONVERGENCE,
+    *CLASSIFIER_FILES.values(),
+)
 #: Simulated data of at most this many sequence-seconds (the default run's 4 x 20 s) with one search at a time
 #: runs in this process although ``--workers`` asks for a local cluster: measured on 2 cores, such a run
 #: (``--experiments 3 --n-iter 24``) took 20 s in one process against 39 s on 2 local workers, whose start and
@@ -439,6 +451,8 @@ def _run_step(run, env, keys, context, found, position, key, ahead):
     _store(run.results, key, outcome.result)
     if outcome.labels is not None:
         context.labels[int(key)] = outcome.labels
+    for name, model in (outcome.models or {}).items():
+        save_classifier(model, run.out / name)
     if outcome.summary:
         run.say(outcome.summary)
     run.results.meta.completed.append(key)
@@ -528,7 +542,8 @@ def _write_marker(run, status, error=None):
     """Write ``run.json``: the run's id, its status and, once it ended, the SHA-256 of each of its files."""
     files = {}
     if status in ("complete", "interrupted"):
-        names = ["report.md", "results.json", "params.json", *sorted(set(run.results.figures.drawn.values()))]
+        drawn = sorted(set(run.results.figures.drawn.values()))
+        names = ["report.md", "results.json", "params.json", *drawn, *run.results.saved_classifiers()]
         files = {name: sha256(run.out / name) for name in names if (run.out / name).is_file()}
     marker = {
         "tool": RUN_TOOL,  # what run_marker recognises

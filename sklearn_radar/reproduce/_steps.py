@@ -180,11 +180,14 @@ class Outcome:
         The line that says it.
     labels : ndarray or None
         An experiment's labels of the test sequence the figures draw.
+    models : dict of str to estimator or None
+        Fitted classifiers the run saves in its folder, by file name (the classification step's).
     """
 
     result: Any
     summary: str | None = None
     labels: np.ndarray | None = None
+    models: dict | None = None
 
 
 @dataclass(frozen=True)
@@ -663,8 +666,8 @@ def run_tracking(env, key, needed):
 
 def run_classification_step(env, key, needed):
     """The classifier trained on the clusters of :data:`CLASSIFIED` and of the best baseline; the point-wise one."""
-    result, summary = run_classification(env, key, needed)
-    return Outcome(result, summary)
+    result, summary, models = run_classification(env, key, needed)
+    return Outcome(result, summary, models=models)
 
 
 # ----------------------------------------------------------------------------- scoring and searching
