@@ -153,7 +153,7 @@ def test_the_strongest_offline_baseline_skips_the_causal_one(classified):
 
 
 def test_the_run_saves_each_tuned_settings_classifier_for_the_cluster_command(classified, tiny_folder, tmp_path):
-    """Saved beside params.json, listed there and in run.json; `cluster --classifier` applies it, as the devkit reads."""
+    """Saved beside params.json, listed there and in run.json; `cluster --classifier` applies it (devkit classes)."""
     from sklearn_radar.classification import load_classifier
 
     results = RunResults.read(classified / "results.json")
