@@ -1,10 +1,11 @@
 """The "easy" and "realistic" presets pinned bit for bit against the simulator before issue 32.
 
 The digests were computed on main at a5d7ae3 (before any of issue 32's knobs
-existed; the realistic one again after issue 31's class signatures), with the function below, for ``make_scenes(n_sequences=2,
-duration=6.0, random_state=7, difficulty=...)``.  A new knob that is off in a
-preset must leave that preset's output exactly as it was: same rows, same
-values, same dtypes, same ids.
+existed; the realistic one again after issue 31's class signatures), with the
+function below, for ``make_scenes(n_sequences=2, duration=6.0,
+random_state=7, difficulty=...)``.  A new knob that is off in a preset must
+leave that preset's output exactly as it was: same rows, same values, same
+dtypes, same ids.
 """
 
 import hashlib
