@@ -70,6 +70,7 @@ def main():
             "clutter": ["rain", "spray", "sidelobes"],
             "traffic": ["traffic", "occlusion"],
             "sensing": ["detection_range", "angular_noise_range", "rcs_fluctuation"],
+            "signatures": ["rcs_object_spread", "rcs_aspect", "wheel_micro_doppler"],
         }
         for name, knobs in groups.items():
             values = {k: DIFFICULTY_PRESETS["realistic"][k] for k in knobs}

@@ -40,6 +40,7 @@ GROUPS = {
         "angular_noise_range",
         "rcs_fluctuation",
     ],
+    "class signatures": ["rcs_object_spread", "rcs_aspect", "wheel_micro_doppler"],
 }
 for name, knobs in GROUPS.items():
     print(f"{name:<18}", {knob: REALISTIC[knob] for knob in knobs})

@@ -649,7 +649,9 @@ def test_tune_searches_exactly_as_the_plain_pipeline_search(number):
     from sklearn_radar.reproduce._sequences import RunSequences
     from sklearn_radar.reproduce._steps import RunEnv, TrainingData, tune
 
-    scenes = make_scenes(n_sequences=4, duration=3.0, random_state=5)
+    # Seed 6: on the 4 x 3 s data of seed 5, #13's five candidates all score alike since the class signatures
+    # (issue 31) changed the realistic data, and the comparison below would be vacuous.
+    scenes = make_scenes(n_sequences=4, duration=3.0, random_state=6)
     X = scenes.data[[c for c in scenes.data.columns if c not in ("uuid", "track_id", "label_id")]]
     target = precluster_target(scenes.data, scenes.target)
     train = np.flatnonzero(np.isin(scenes.groups, np.unique(scenes.groups)[:3]))
@@ -660,7 +662,7 @@ def test_tune_searches_exactly_as_the_plain_pipeline_search(number):
     else:
         pipeline, space = experiment_pipeline(number), search_space(number)
     budget = Budget(label="test", n_iter=5, n_initial_points=2, cv_folds=2)
-    sequences = RunSequences.simulated(4, 3.0, 5)  # the sequences of scenes, simulated one by one
+    sequences = RunSequences.simulated(4, 3.0, 6)  # the sequences of scenes, simulated one by one
     train_ids = sequences.ids[:3]
     progress = RunProgress({"test": ("stage 1", 7)}, started=0.0, stream=io.StringIO())
     env = RunEnv(

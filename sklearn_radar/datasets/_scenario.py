@@ -77,14 +77,58 @@ class StaticScatterers:
 
 #: Road-user classes: RadarScenes label, size (length, width) ranges in m,
 #: mean detections per scan at 10 m range, micro-Doppler amplitude, RCS in dBsm.
+#: The class signatures of the realistic preset (issue 31; off in "easy", see
+#: ``_simulator.DIFFICULTY_PRESETS``): ``rcs_side`` and ``rcs_oblique`` (dB) shape
+#: the aspect dependence of the RCS (:func:`aspect_rcs`), ``axles`` are the
+#: positions of the wheel axles along the body, as fractions of half the length
+#: (a car's wheelbase is about 60 % of its length; no wheels: empty).
 ROAD_USER_CLASSES = {
-    "car": dict(label=0, length=(4.0, 5.0), width=(1.7, 1.95), det_10m=6.0, micro=0.0, rcs=5.0),
-    "truck": dict(label=2, length=(7.0, 12.0), width=(2.4, 2.55), det_10m=10.0, micro=0.0, rcs=12.0),
-    "bus": dict(label=3, length=(11.0, 13.0), width=(2.5, 2.55), det_10m=11.0, micro=0.0, rcs=12.0),
-    "bicycle": dict(label=5, length=(1.6, 1.9), width=(0.5, 0.7), det_10m=2.5, micro=0.35, rcs=-3.0),
-    "pedestrian": dict(label=7, length=(0.4, 0.6), width=(0.5, 0.7), det_10m=1.8, micro=0.9, rcs=-8.0),
-    "pedestrian_group": dict(label=8, length=(0.8, 1.4), width=(1.4, 3.0), det_10m=3.5, micro=0.9, rcs=-5.0),
-}
+    "car": dict(
+        label=0, length=(4.0, 5.0), width=(1.7, 1.95), det_10m=6.0, micro=0.0, rcs=5.0,
+        rcs_side=6.0, rcs_oblique=6.0, axles=(-0.6, 0.6),
+    ),
+    "truck": dict(
+        label=2, length=(7.0, 12.0), width=(2.4, 2.55), det_10m=10.0, micro=0.0, rcs=12.0,
+        rcs_side=8.0, rcs_oblique=8.0, axles=(-0.75, -0.55, 0.65),
+    ),
+    "bus": dict(
+        label=3, length=(11.0, 13.0), width=(2.5, 2.55), det_10m=11.0, micro=0.0, rcs=12.0,
+        rcs_side=8.0, rcs_oblique=8.0, axles=(-0.45, 0.6),
+    ),
+    "bicycle": dict(
+        label=5, length=(1.6, 1.9), width=(0.5, 0.7), det_10m=2.5, micro=0.35, rcs=-3.0,
+        rcs_side=10.0, rcs_oblique=0.0, axles=(-0.6, 0.6),
+    ),
+    "pedestrian": dict(
+        label=7, length=(0.4, 0.6), width=(0.5, 0.7), det_10m=1.8, micro=0.9, rcs=-8.0,
+        rcs_side=0.0, rcs_oblique=0.0, axles=(),
+    ),
+    "pedestrian_group": dict(
+        label=8, length=(0.8, 1.4), width=(1.4, 3.0), det_10m=3.5, micro=0.9, rcs=-5.0,
+        rcs_side=0.0, rcs_oblique=0.0, axles=(),
+    ),
+}  # fmt: skip
+
+
+def aspect_rcs(params, cos_aspect, sin_aspect):
+    """Aspect dependence of a road user's RCS, dB, zero on average over all aspects.
+
+    ``cos_aspect`` and ``sin_aspect`` are the cosine and sine of the aspect
+    angle: the angle between the body's forward axis and the line from the
+    body to the sensor (0: seen head-on from ahead, pi/2: broadside).  Two
+    terms, both of mean 0 over uniformly distributed aspects::
+
+        rcs_side * (sin^2 - 1/2) + rcs_oblique * (|cos 2 aspect| - 2 / pi)
+
+    The first makes the long side stronger than the ends (a larger flat
+    surface; a bicycle's frame and wheels broadside against its narrow front),
+    the second makes the principal aspects (head-on, tail-on and broadside,
+    where flat panels face the radar and reflect specularly) stronger than the
+    oblique ones.  A car (6 dB, 6 dB) is about 5 dB above its average
+    broadside, 1 dB below it head-on and 4 dB below it at 45 deg.
+    """
+    cos_2 = cos_aspect**2 - sin_aspect**2
+    return params["rcs_side"] * (sin_aspect**2 - 0.5) + params["rcs_oblique"] * (np.abs(cos_2) - 2 / np.pi)
 
 
 @dataclass

@@ -30,6 +30,7 @@ from .._schema import (
 from ._scenario import (
     ROAD_USER_CLASSES,
     add_occlusions,
+    aspect_rcs,
     make_dense_traffic,
     make_road,
     make_road_users,
@@ -82,6 +83,9 @@ DIFFICULTY_PRESETS = {
         "object_detection_probability": 1.0,
         "angular_noise_range": np.inf,
         "rcs_fluctuation": False,
+        "rcs_object_spread": 0.0,
+        "rcs_aspect": 0.0,
+        "wheel_micro_doppler": 0.0,
     },
     "realistic": {
         "odometry_speed_scale": 0.005,
@@ -101,6 +105,9 @@ DIFFICULTY_PRESETS = {
         "object_detection_probability": 0.5,
         "angular_noise_range": 40.0,
         "rcs_fluctuation": True,
+        "rcs_object_spread": 3.0,
+        "rcs_aspect": 1.0,
+        "wheel_micro_doppler": 0.25,
     },
 }
 
@@ -225,6 +232,38 @@ def make_scenes(
           value near the detection threshold (40).  ``inf``: no growth.
         * ``rcs_fluctuation``: bool, Swerling-1 fluctuation (exponential
           power, 5.6 dB spread) on top of the aspect noise of the RCS (True).
+        * ``rcs_object_spread``: dB, standard deviation of a road user's own
+          offset of its mean RCS, one draw per object (3): objects of one
+          class differ in shape, size and material (a small hatchback and a
+          van, a child and an adult, clothing), and measured 77 GHz RCS
+          distributions differ from vehicle to vehicle and person to person
+          (Lee et al., "Radar cross section measurement with 77 GHz
+          automotive FMCW radar", PIMRC 2016, four people and four vehicles;
+          Fortuny-Guasch and Chareau, JRC report EUR 25762, 2013, people and
+          dummies at 24 and 77 GHz).  Without it every object of a class has
+          the same mean RCS and the mean RCS is an unrealistically clean
+          class feature.
+        * ``rcs_aspect``: scale, >= 0, of the classes' aspect dependence of
+          the RCS (1: the amplitudes ``rcs_side`` and ``rcs_oblique`` of
+          ``_scenario.ROAD_USER_CLASSES``; see ``_scenario.aspect_rcs``).  Flat
+          panels reflect specularly: a vehicle is strongest broadside and
+          head- or tail-on and weakest at oblique aspects (a car about 5 dB
+          above its average broadside, 4 dB below it at 45 deg), a bicycle's
+          frame and wheels are strong broadside and thin from ahead (+-5 dB);
+          a pedestrian looks alike from all sides (0).  The detection
+          threshold sees this RCS: ``detection_range``'s ``r_50`` follows the
+          object's offset and aspect.
+        * ``wheel_micro_doppler``: in [0, 1], the share of the detections of a
+          car, truck, bus or bicycle seen broadside that come from its wheels
+          (0.25); a share ``|sin aspect|`` of that from other aspects, none
+          head-on, where the body hides the wheels.  A rolling wheel's rim
+          point moves at ``v (1 + sin phi)``, from 0 at the road to ``2 v`` at
+          the top, so wheel detections spread the object's Doppler over
+          ``[0, 2 v]`` times the line-of-sight projection (Kellner et al.,
+          "Wheel extraction based on micro Doppler distribution using
+          high-resolution radar", ICMIM 2015).  Pedestrians' limbs already
+          swing every detection's velocity over 0.1-1.9 times the body's (in
+          both presets).
 
         Unknown names raise a ValueError.
 
@@ -270,7 +309,8 @@ def simulate_sequences(numbers, seeds, duration, n_objects, static_density, knob
     """
     data, odometry = [], []
     for number, seed in zip(numbers, seeds, strict=True):
-        # The phenomena draw from a stream of their own, so that both presets share the world of a seed.
+        # The phenomena draw from a stream of their own, so that both presets share the world of a seed; the
+        # class signatures from a third, so that they leave the phenomena's draws alone.
         det, odo = _simulate_sequence(
             int(number),
             duration,
@@ -279,6 +319,7 @@ def simulate_sequences(numbers, seeds, duration, n_objects, static_density, knob
             np.random.default_rng(seed),
             knobs,
             np.random.default_rng([int(seed), 13]),
+            np.random.default_rng([int(seed), 31]),
         )
         data.append(det)
         odometry.append(odo)
@@ -328,10 +369,10 @@ def _check_knobs(difficulty, knobs):
     for name, value in (knobs or {}).items():
         if name not in values:
             raise ValueError(f"knobs: unknown knob {name!r}; the knobs are {', '.join(sorted(values))}")
-        if name == "object_detection_probability" and not (
+        if name in ("object_detection_probability", "wheel_micro_doppler") and not (
             isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_)) and 0 <= value <= 1
         ):
-            raise ValueError(f"knobs: object_detection_probability must be in [0, 1], got {value!r}")
+            raise ValueError(f"knobs: {name} must be in [0, 1], got {value!r}")
         if name == "rcs_fluctuation":
             if not isinstance(value, (bool, np.bool_)):
                 raise ValueError(f"knobs: rcs_fluctuation must be a bool, got {value!r}")
@@ -354,12 +395,14 @@ def _overrides(difficulty, knobs):
     return {k: v for k, v in (knobs or {}).items() if v != preset[k]}
 
 
-def _simulate_sequence(number, duration, n_objects, density, rng, knobs=None, extra=None):
+def _simulate_sequence(number, duration, n_objects, density, rng, knobs=None, extra=None, signature=None):
     """Detection table and odometry of one sequence.
 
     ``rng`` draws the world and the easy simulator's measurements; ``extra``
     draws everything the realistic phenomena (``knobs``) add, and nothing
-    else, so that with every knob off the data are those of the easy preset.
+    else, so that with every knob off the data are those of the easy preset;
+    ``signature`` draws what the class-signature knobs (``rcs_object_spread``,
+    ``wheel_micro_doppler``) add.
     """
     knobs = DIFFICULTY_PRESETS["easy"] if knobs is None else knobs
     t0_us = 156_000_000_000 + 1_000_000_000 * number
@@ -380,7 +423,7 @@ def _simulate_sequence(number, duration, n_objects, density, rng, knobs=None, ex
         add_occlusions(users, duration, knobs["occlusion"], extra)
     static_part = _static_detections(static, sensor, rng)
     parts = [static_part, _clutter(sensor, density, rng)]
-    objects, world = _object_detections(users, sensor, rng, knobs, extra)
+    objects, world = _object_detections(users, sensor, rng, knobs, extra, signature)
     parts += [objects, _ghosts(objects, rng)]
     parts += _phenomena(static_part, objects, world, static, road, sensor, knobs, extra)
     truth = {key: np.concatenate([p[key] for p in parts]) for key in parts[0]}
@@ -585,7 +628,7 @@ def _clutter(sensor, density, rng):
     return _truth(scan, r, azimuth, vr, rcs, np.full(len(scan), STATIC_LABEL), np.full(len(scan), -1))
 
 
-def _object_detections(users, sensor, rng, knobs=None, extra=None):
+def _object_detections(users, sensor, rng, knobs=None, extra=None, signature=None):
     """Detections on the visible outline of each road user, and their world-frame geometry.
 
     Returns the truth dict and ``world``: per detection the reflecting
@@ -594,7 +637,7 @@ def _object_detections(users, sensor, rng, knobs=None, extra=None):
     realistic phenomena (ghosts, spray) start from.
     """
     knobs = DIFFICULTY_PRESETS["easy"] if knobs is None else knobs
-    parts = [_one_object(i, user, sensor, rng, knobs, extra) for i, user in enumerate(users)]
+    parts = [_one_object(i, user, sensor, rng, knobs, extra, signature) for i, user in enumerate(users)]
     empty = np.zeros(0)
     parts.append(
         (
@@ -610,9 +653,11 @@ def _object_detections(users, sensor, rng, knobs=None, extra=None):
 _WORLD_KEYS = ("x", "y", "vx", "vy", "cx", "cy", "cvx", "cvy", "heading", "length", "width")
 
 
-def _one_object(index, user, sensor, rng, knobs=None, extra=None):
+def _one_object(index, user, sensor, rng, knobs=None, extra=None, signature=None):
     knobs = DIFFICULTY_PRESETS["easy"] if knobs is None else knobs
     params = ROAD_USER_CLASSES[user.kind]
+    # The object's own mean RCS: its shape, size and material (one draw per object; 0 dB when the knob is off).
+    rcs_offset = signature.normal(0.0, knobs["rcs_object_spread"]) if knobs["rcs_object_spread"] > 0 else 0.0
     t = sensor["t"]
     cx, cy, vx, vy, heading, yaw_rate = user.kinematics(t)
     r_centre, az_centre = _polar(sensor, np.arange(len(t)), cx, cy)
@@ -631,14 +676,24 @@ def _one_object(index, user, sensor, rng, knobs=None, extra=None):
             2 * np.pi * user.gait_hz * t[scan] + rng.uniform(0, 2 * np.pi, len(scan))
         )
         pvx, pvy = pvx * swing, pvy * swing
+    cos_aspect, sin_aspect = _aspect(sensor, scan, cx, cy, heading)
+    if knobs["wheel_micro_doppler"] > 0 and params["axles"]:
+        px, py, pvx, pvy = _wheel_reflections(
+            user, scan, (cx, cy, vx, vy, heading, yaw_rate), (px, py, pvx, pvy), sin_aspect, knobs, signature
+        )
     r, azimuth = _polar(sensor, scan, px, py)
     angle = azimuth + sensor["boresight"][scan]
     vr = (pvx - sensor["vx"][scan]) * np.cos(angle) + (pvy - sensor["vy"][scan]) * np.sin(angle)
     rcs = params["rcs"] + rng.normal(0.0, 4.0, len(scan))
+    mean_rcs = params["rcs"]
+    if knobs["rcs_object_spread"] > 0 or knobs["rcs_aspect"] > 0:
+        # The mean RCS of this object from this aspect, dBsm: what the detection threshold sees.
+        mean_rcs = params["rcs"] + rcs_offset + knobs["rcs_aspect"] * aspect_rcs(params, cos_aspect, sin_aspect)
+        rcs = rcs + (mean_rcs - params["rcs"])
     keep = _visibility(r, azimuth) > 0
     if np.isfinite(knobs["detection_range"]) or knobs["object_detection_probability"] < 1:
         # Radar equation with a Swerling-1 target: P_d = exp(-ln 2 (r / r_50)^4), r_50 growing as RCS^(1/4).
-        r_50 = knobs["detection_range"] * 10 ** ((params["rcs"] - 10.0) / 40.0)
+        r_50 = knobs["detection_range"] * 10 ** ((mean_rcs - 10.0) / 40.0)
         p_d = knobs["object_detection_probability"] * np.exp(-np.log(2.0) * (r / r_50) ** 4)
         keep &= extra.random(len(scan)) < p_d
     label = np.full(len(scan), params["label"])
@@ -658,6 +713,60 @@ def _one_object(index, user, sensor, rng, knobs=None, extra=None):
         "width": np.full(n, user.width),
     }
     return truth, world
+
+
+def _aspect(sensor, scan, cx, cy, heading):
+    """Cosine and sine of the aspect angle of each detection's scan: body axis against the line body-sensor."""
+    dx, dy = sensor["x"][scan] - cx[scan], sensor["y"][scan] - cy[scan]
+    c, s = np.cos(heading[scan]), np.sin(heading[scan])
+    q_along, q_across = c * dx + s * dy, -s * dx + c * dy
+    distance = np.maximum(np.hypot(q_along, q_across), 1e-6)
+    return q_along / distance, q_across / distance
+
+
+#: m, radius of the wheels of the wheeled road users (a car tyre of 0.6-0.7 m diameter, a 28-inch bicycle wheel).
+WHEEL_RADIUS = 0.33
+
+
+def _wheel_reflections(user, scan, motion, points, sin_aspect, knobs, rng):
+    """Move a share of a wheeled road user's detections onto its wheels, with the wheels' micro-Doppler.
+
+    A wheel rolling without slip at hub velocity ``v`` turns about its
+    contact point: the rim point at angle ``phi`` (``R cos phi`` ahead of the
+    hub, ``R sin phi`` above it) moves horizontally at ``v (1 + sin phi)``,
+    from 0 at the bottom to ``2 v`` at the top.  The wheels are seen from
+    the side only (the body hides them from ahead and behind), so a
+    detection lies on a wheel of the visible side with probability
+    ``wheel_micro_doppler * |sin aspect|``; it keeps its scan and gets a
+    uniform ``phi``, an axle of the class (``ROAD_USER_CLASSES[...]["axles"]``)
+    and the velocity of that rim point.  Kellner et al., "Wheel extraction
+    based on micro Doppler distribution using high-resolution radar"
+    (ICMIM 2015), find a car's wheels in 77 GHz radar data by exactly this
+    spread of Doppler about the body's; cyclist models carry scatterers on
+    the rims and spokes (Stolz et al., "Multi-target reflection point model
+    of cyclists for automotive radar", EuRAD 2017).
+    """
+    cx, cy, vx, vy, heading, yaw_rate = motion
+    px, py, pvx, pvy = points
+    n = len(scan)
+    on_wheel = rng.random(n) < knobs["wheel_micro_doppler"] * np.abs(sin_aspect)
+    axles = np.asarray(ROAD_USER_CLASSES[user.kind]["axles"]) * user.length / 2
+    axle = axles[rng.integers(len(axles), size=n)]
+    phi = rng.uniform(0.0, 2 * np.pi, n)
+    along = axle + WHEEL_RADIUS * np.cos(phi)
+    across = np.sign(sin_aspect) * user.width / 2
+    c, s = np.cos(heading[scan]), np.sin(heading[scan])
+    wx = cx[scan] + c * along - s * across
+    wy = cy[scan] + s * along + c * across
+    roll = 1.0 + np.sin(phi)
+    hub_vx = vx[scan] - yaw_rate[scan] * (wy - cy[scan])
+    hub_vy = vy[scan] + yaw_rate[scan] * (wx - cx[scan])
+    return (
+        np.where(on_wheel, wx, px),
+        np.where(on_wheel, wy, py),
+        np.where(on_wheel, hub_vx * roll, pvx),
+        np.where(on_wheel, hub_vy * roll, pvy),
+    )
 
 
 def _outline_points(user, sensor, scan, cx, cy, heading, rng):
