@@ -30,6 +30,7 @@ from .._schema import (
 from ._scenario import (
     ROAD_USER_CLASSES,
     add_occlusions,
+    add_stops,
     aspect_rcs,
     make_dense_traffic,
     make_road,
@@ -86,6 +87,8 @@ DIFFICULTY_PRESETS = {
         "rcs_object_spread": 0.0,
         "rcs_aspect": 0.0,
         "wheel_micro_doppler": 0.0,
+        "road_user_share": 1.0,
+        "stop_and_go": 0.0,
     },
     "realistic": {
         "odometry_speed_scale": 0.005,
@@ -108,8 +111,22 @@ DIFFICULTY_PRESETS = {
         "rcs_object_spread": 3.0,
         "rcs_aspect": 1.0,
         "wheel_micro_doppler": 0.25,
+        "road_user_share": 1.0,
+        "stop_and_go": 0.0,
     },
 }
+#: Issue 32's preset: the realistic one with RadarScenes' traffic (fewer, longer-lived road users; see the user
+#: guide's "Towards RadarScenes' statistics") and road users that stop and start.
+DIFFICULTY_PRESETS["radarscenes"] = {
+    **DIFFICULTY_PRESETS["realistic"],
+    "traffic": 4.0,
+    "occlusion": 0.1,
+    "object_detection_probability": 0.7,
+    "road_user_share": 0.7,
+    "stop_and_go": 0.3,
+}
+#: The knobs that issue 32 added: off in "easy" and in "realistic" (so both stay as they were), on in "radarscenes".
+ISSUE_32_KNOBS = ("road_user_share", "stop_and_go")
 
 
 @validate_params(
@@ -310,7 +327,8 @@ def simulate_sequences(numbers, seeds, duration, n_objects, static_density, knob
     data, odometry = [], []
     for number, seed in zip(numbers, seeds, strict=True):
         # The phenomena draw from a stream of their own, so that both presets share the world of a seed; the
-        # class signatures from a third, so that they leave the phenomena's draws alone.
+        # class signatures from a third and the road users' traffic and behaviour (issue 32) from a fourth, so
+        # that each leaves the others' draws alone.
         det, odo = _simulate_sequence(
             int(number),
             duration,
@@ -320,6 +338,7 @@ def simulate_sequences(numbers, seeds, duration, n_objects, static_density, knob
             knobs,
             np.random.default_rng([int(seed), 13]),
             np.random.default_rng([int(seed), 31]),
+            np.random.default_rng([int(seed), 32]),
         )
         data.append(det)
         odometry.append(odo)
@@ -369,7 +388,7 @@ def _check_knobs(difficulty, knobs):
     for name, value in (knobs or {}).items():
         if name not in values:
             raise ValueError(f"knobs: unknown knob {name!r}; the knobs are {', '.join(sorted(values))}")
-        if name in ("object_detection_probability", "wheel_micro_doppler") and not (
+        if name in ("object_detection_probability", "wheel_micro_doppler", "road_user_share", "stop_and_go") and not (
             isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_)) and 0 <= value <= 1
         ):
             raise ValueError(f"knobs: {name} must be in [0, 1], got {value!r}")
@@ -395,14 +414,17 @@ def _overrides(difficulty, knobs):
     return {k: v for k, v in (knobs or {}).items() if v != preset[k]}
 
 
-def _simulate_sequence(number, duration, n_objects, density, rng, knobs=None, extra=None, signature=None):
+def _simulate_sequence(
+    number, duration, n_objects, density, rng, knobs=None, extra=None, signature=None, behaviour=None
+):
     """Detection table and odometry of one sequence.
 
     ``rng`` draws the world and the easy simulator's measurements; ``extra``
     draws everything the realistic phenomena (``knobs``) add, and nothing
     else, so that with every knob off the data are those of the easy preset;
     ``signature`` draws what the class-signature knobs (``rcs_object_spread``,
-    ``wheel_micro_doppler``) add.
+    ``wheel_micro_doppler``) add, ``behaviour`` what ``road_user_share`` and
+    ``stop_and_go`` do.
     """
     knobs = DIFFICULTY_PRESETS["easy"] if knobs is None else knobs
     t0_us = 156_000_000_000 + 1_000_000_000 * number
@@ -417,10 +439,15 @@ def _simulate_sequence(number, duration, n_objects, density, rng, knobs=None, ex
         road, sensor["s"].min() - MAX_RANGE - 10, sensor["s"].max() + MAX_RANGE + 10, rng, density
     )
     users = make_road_users(ego, road, duration, rng.integers(n_objects[0], n_objects[1] + 1), rng)
+    if knobs["road_user_share"] < 1:
+        # Drawn after the base users, so that the world stream is that of the other presets.
+        users = [user for user in users if behaviour.random() < knobs["road_user_share"]]
     if knobs["traffic"] > 0:
         users += make_dense_traffic(ego, road, duration, knobs["traffic"], extra)
     if knobs["occlusion"] > 0:
         add_occlusions(users, duration, knobs["occlusion"], extra)
+    if knobs["stop_and_go"] > 0:
+        add_stops(users, ego, knobs["stop_and_go"], behaviour)
     static_part = _static_detections(static, sensor, rng)
     parts = [static_part, _clutter(sensor, density, rng)]
     objects, world = _object_detections(users, sensor, rng, knobs, extra, signature)
@@ -697,7 +724,12 @@ def _one_object(index, user, sensor, rng, knobs=None, extra=None, signature=None
         p_d = knobs["object_detection_probability"] * np.exp(-np.log(2.0) * (r / r_50) ** 4)
         keep &= extra.random(len(scan)) < p_d
     label = np.full(len(scan), params["label"])
-    truth = _truth(scan[keep], r[keep], azimuth[keep], vr[keep], rcs[keep], label[keep], np.full(keep.sum(), index))
+    obj = np.full(len(scan), index)
+    if user.stop is not None:
+        # RadarScenes annotates moving road users only: a standing one is static background, without a track id.
+        standing = user.standing(t[scan])
+        label, obj = np.where(standing, STATIC_LABEL, label), np.where(standing, -1, obj)
+    truth = _truth(scan[keep], r[keep], azimuth[keep], vr[keep], rcs[keep], label[keep], obj[keep])
     n = int(keep.sum())
     world = {
         "x": px[keep],
