@@ -123,10 +123,10 @@ DIFFICULTY_PRESETS["radarscenes"] = {
     **DIFFICULTY_PRESETS["realistic"],
     "traffic": 4.0,
     "occlusion": 0.1,
-    "object_detection_probability": 0.7,
-    "road_user_share": 0.7,
+    "object_detection_probability": 0.9,
+    "road_user_share": 0.6,
     "stop_and_go": 0.3,
-    "annotation_margin": 0.3,
+    "annotation_margin": 0.2,
 }
 #: The knobs that issue 32 added: off in "easy" and in "realistic" (so both stay as they were), on in "radarscenes".
 ISSUE_32_KNOBS = ("road_user_share", "stop_and_go", "annotation_margin")
