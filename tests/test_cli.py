@@ -33,7 +33,7 @@ def test_simulate_writes_a_loadable_data_set_equal_to_make_scenes(tmp_path, caps
     assert loaded.data.equals(expected.data)
 
 
-@pytest.mark.parametrize("difficulty", ["easy", "realistic"])
+@pytest.mark.parametrize("difficulty", ["easy", "realistic", "radarscenes"])
 def test_simulate_difficulty_is_that_of_make_scenes(tmp_path, capsys, difficulty):
     out = tmp_path / "sim"
     argv = ["simulate", "--out", str(out), "--n-sequences", "1", "--duration", "2", "--seed", "3"]

@@ -189,13 +189,18 @@ def make_scenes(
         street), > 0.
     first_sequence : int, default=1
         Number N >= 1 of the first sequence (folder ``sequence_N``).
-    difficulty : {"easy", "realistic"}, default="realistic"
+    difficulty : {"easy", "realistic", "radarscenes"}, default="realistic"
         Preset of the phenomena that make real radar data hard.  "easy" turns
         them all off (the simulator described above); "realistic" turns each
         on at a physically argued value
-        (``sklearn_radar.datasets._simulator.DIFFICULTY_PRESETS``).  Equal
-        seeds give the same drive, road, static world and base road users
-        in both presets.
+        (``sklearn_radar.datasets._simulator.DIFFICULTY_PRESETS``);
+        "radarscenes" is "realistic" with RadarScenes' traffic statistics
+        (about 31 road users per minute with about 470 annotated detections
+        each, instead of about 83 with 240), road users that stop and start
+        and box annotation (issue 32; the user guide's "Towards RadarScenes'
+        statistics").  Equal seeds give the same drive, road, static world
+        and base road users in all presets ("radarscenes" keeps a share of
+        them).
     knobs : dict, default=None
         Values that override single knobs of the preset (all seedable
         through ``random_state``):
@@ -284,6 +289,30 @@ def make_scenes(
           high-resolution radar", ICMIM 2015).  Pedestrians' limbs already
           swing every detection's velocity over 0.1-1.9 times the body's (in
           both presets).
+        * ``road_user_share``: in [0, 1], the share of the base road users
+          (``n_objects``) kept, each drawn alone (1 in "realistic", 0.6 in
+          "radarscenes"): the simulated sequences are 20-30 s of busy urban
+          streets, while RadarScenes' mean of at most 31 road users per minute
+          (7,500 in more than 4 h) includes quieter stretches.
+        * ``stop_and_go``: in [0, 1], the share of the road users that keep
+          to a lane or a pavement which brake to a standstill near the time
+          they are closest to the ego car, stand for 2-8 s and start again
+          (0.3 in "radarscenes"): pedestrians waiting to cross, cars at a
+          light, cyclists at a junction, at 1-2 m/s^2.  RadarScenes annotates
+          moving road users only and gives a new track id after more than
+          500 ms of standstill (radar-scenes.com): a standing road user's
+          detections are static background, and it is annotated again, with
+          low Doppler, as it starts.
+        * ``annotation_margin``: m, >= 0, the labels of a box annotator:
+          in each scan in which a road user has a detection, the detections
+          *measured* within its box enlarged by this margin are its own, and
+          only those (0.2 in "radarscenes"; ``inf``: the simulation's truth).
+          RadarScenes' labels come from a semi-automatic process that selects
+          a road user's detections by its extent (Schumann et al.,
+          "RadarScenes", FUSION 2021), so an own detection that the azimuth
+          noise pushed out of the box (0.1-0.5 m across at 20-50 m) is
+          background, and a ghost, spray or clutter detection inside it
+          belongs to the object.
 
         Unknown names raise a ValueError.
 
