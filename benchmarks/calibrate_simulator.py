@@ -10,7 +10,15 @@ and prints, beside the paper's figures,
   (paper: 67.57 %);
 * the share of background the filter removes at the paper's FCS default
   eta=0.10 m/s, d_xy=1.4 m, and its error count (paper: 29.10 %, 0 errors);
-* the realism statistics of ``sklearn-radar stats``.
+* the realism statistics of ``sklearn-radar stats``;
+
+and then issue 32's table over the seeds: instances per minute, annotated
+detections per instance and per scan, V1 of #1, the filter's removal and
+error windows, each beside its published value with its mean and whether the
+mean is on target, and the class mix.  ``--difficulty radarscenes --seeds 0 1
+2 3 4`` gives the table of the user guide's "Towards RadarScenes'
+statistics"; ``--n-sequences 17 --duration 30`` the data of
+``reproduce --full``.
 
 Nothing here tunes a clusterer: the settings are the paper's.
 """
