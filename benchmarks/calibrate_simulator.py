@@ -10,7 +10,15 @@ and prints, beside the paper's figures,
   (paper: 67.57 %);
 * the share of background the filter removes at the paper's FCS default
   eta=0.10 m/s, d_xy=1.4 m, and its error count (paper: 29.10 %, 0 errors);
-* the realism statistics of ``sklearn-radar stats``.
+* the realism statistics of ``sklearn-radar stats``;
+
+and then issue 32's table over the seeds: instances per minute, annotated
+detections per instance and per scan, V1 of #1, the filter's removal and
+error windows, each beside its published value with its mean and whether the
+mean is on target, and the class mix.  ``--difficulty radarscenes --seeds 0 1
+2 3 4`` gives the table of the user guide's "Towards RadarScenes'
+statistics"; ``--n-sequences 17 --duration 30`` the data of
+``reproduce --full``.
 
 Nothing here tunes a clusterer: the settings are the paper's.
 """
@@ -39,6 +47,10 @@ def figures(scenes, seed):
     static = scenes.data["label_id"].to_numpy() == 11
     p90 = float(np.quantile(np.abs(scenes.data["vr_compensated"].to_numpy()[static]), 0.9))
     return {
+        "instances_per_minute": summary["instances_per_minute"],
+        "annotated_per_instance": summary["annotated_per_instance"],
+        "annotated_per_scan": summary["annotated_per_scan"],
+        "class_mix": {name: 100 * share for name, share in summary["class_mix"].items()},
         "v1_expert_1": 100 * v1,
         "fcs_removed": float(fcs["removal_rate"].iloc[0]),
         "fcs_errors": int(fcs["errors"].iloc[0]),
@@ -47,6 +59,38 @@ def figures(scenes, seed):
         "static_vr_p90": p90,
         "table_ii": table,
     }
+
+
+#: The targets of issue 32: (key of ``figures``, label, published value, the band the calibration aims at).
+TARGETS = (
+    ("instances_per_minute", "instances per minute", "at most 31 (RadarScenes)", (24.8, 37.2)),
+    ("annotated_per_instance", "annotated detections per instance", "about 530 (RadarScenes)", (424.0, 636.0)),
+    ("annotated_per_scan", "annotated detections per scan", "about 4.2 (RadarScenes)", (3.36, 5.04)),
+    ("v1_expert_1", "expert #1 V1, %", "67.57 (paper)", (60.0, 75.0)),
+    ("fcs_removed", "background removed at FCS 0.10/1.4, %", "29.10 (paper)", (25.0, 35.0)),
+    ("fcs_errors", "filter error windows at FCS 0.10/1.4", "0 (paper)", (0.0, 0.0)),
+)
+
+
+def issue_table(results, seeds, difficulty):
+    """Issue 32's table: each statistic per seed, their mean, the published value and whether the mean is on target."""
+    lines = [
+        f"| statistic | published | {difficulty}: seeds {', '.join(map(str, seeds))} | mean | on target |",
+        "|---|---|---|---|---|",
+    ]
+    for key, label, published, (low, high) in TARGETS:
+        values = [f[key] for f in results]
+        mean = float(np.mean(values))
+        shown = ", ".join(f"{v:.1f}" if key != "fcs_errors" else str(v) for v in values)
+        lines.append(f"| {label} | {published} | {shown} | {mean:.1f} | {'yes' if low <= mean <= high else 'no'} |")
+    classes = sorted({name for f in results for name in f["class_mix"]})
+    mix = {name: np.mean([f["class_mix"].get(name, 0.0) for f in results]) for name in classes}
+    lines.append(
+        "| class mix of annotated detections, % | figures only | - | "
+        + ", ".join(f"{name} {share:.1f}" for name, share in mix.items())
+        + " | - |"
+    )
+    return "\n".join(lines)
 
 
 def main():
@@ -85,6 +129,7 @@ def main():
                 )
         return
     kwargs = {} if args.difficulty == "today" else {"difficulty": args.difficulty, "knobs": eval(args.knobs)}
+    results = []
     for seed in args.seeds:
         start = time.perf_counter()
         scenes = make_scenes(args.n_sequences, args.duration, random_state=seed, **kwargs)
@@ -99,6 +144,8 @@ def main():
         )
         if args.table:
             print(f["table_ii"].to_string())
+        results.append(f)
+    print(issue_table(results, args.seeds, args.difficulty))
 
 
 if __name__ == "__main__":

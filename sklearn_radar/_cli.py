@@ -98,10 +98,11 @@ def _parser():
     )
     simulate.add_argument(
         "--difficulty",
-        choices=("easy", "realistic"),
+        choices=("easy", "realistic", "radarscenes"),
         default="realistic",
         help="phenomena of real radar data: realistic (ego-motion errors, multipath, clutter, dense traffic, "
-        "sensing limits) or easy (none) (default: realistic)",
+        "sensing limits), radarscenes (realistic with RadarScenes' traffic statistics, road users that stop and "
+        "box annotation) or easy (none) (default: realistic)",
     )
 
     stats = commands.add_parser(
@@ -152,9 +153,10 @@ def _parser():
     )
     reproduce.add_argument(
         "--difficulty",
-        choices=("easy", "realistic"),
+        choices=("easy", "realistic", "radarscenes"),
         default="realistic",
-        help="difficulty of the simulated data when --data is not given (default: realistic)",
+        help="difficulty of the simulated data when --data is not given: easy, realistic or radarscenes "
+        "(default: realistic)",
     )
     reproduce.add_argument(
         "--objective",

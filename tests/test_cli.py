@@ -33,7 +33,7 @@ def test_simulate_writes_a_loadable_data_set_equal_to_make_scenes(tmp_path, caps
     assert loaded.data.equals(expected.data)
 
 
-@pytest.mark.parametrize("difficulty", ["easy", "realistic"])
+@pytest.mark.parametrize("difficulty", ["easy", "realistic", "radarscenes"])
 def test_simulate_difficulty_is_that_of_make_scenes(tmp_path, capsys, difficulty):
     out = tmp_path / "sim"
     argv = ["simulate", "--out", str(out), "--n-sequences", "1", "--duration", "2", "--seed", "3"]
@@ -75,3 +75,13 @@ def test_bad_simulation_parameter_is_a_one_line_error_naming_the_option(tmp_path
     assert main(["simulate", "--out", str(tmp_path / "x"), "--n-sequences", "0"]) == 1
     assert "--n-sequences" in capsys.readouterr().err
     assert not (tmp_path / "x").exists()
+
+
+def test_reproduce_accepts_every_difficulty_preset():
+    from sklearn_radar._cli import _parser
+    from sklearn_radar.datasets._simulator import DIFFICULTY_PRESETS
+
+    for difficulty in DIFFICULTY_PRESETS:
+        assert _parser().parse_args(["reproduce", "--difficulty", difficulty]).difficulty == difficulty
+    with pytest.raises(SystemExit):
+        _parser().parse_args(["reproduce", "--difficulty", "hard"])

@@ -92,7 +92,7 @@ def test_map_runs_in_order_on_the_sequences_asked_for(sequences):
     assert found == [(i, sequences.size([i]), "x") for i in asked]
 
 
-@pytest.mark.parametrize("difficulty", ["easy", "realistic"])
+@pytest.mark.parametrize("difficulty", ["easy", "realistic", "radarscenes"])
 def test_sequences_simulated_one_by_one_are_make_scenes_ones(difficulty):
     whole = make_scenes(n_sequences=3, duration=2.0, random_state=11, difficulty=difficulty)
     sequences = RunSequences.simulated(3, 2.0, 11, difficulty)

@@ -151,6 +151,7 @@ class RoadUser:
     gait_hz: float = 0.0
     centres: np.ndarray | None = None  # (K, 4): scattering centres (along, across) and outward normals, m
     path: tuple | None = None  # (arclength, x, y) of a world-frame path driven at ``speed`` from ``s0`` (m)
+    stop: tuple | None = None  # (brake, halt, start, cruise) times, s: one stop (:func:`add_stops`)
 
     @property
     def params(self):
@@ -161,14 +162,33 @@ class RoadUser:
         t = np.asarray(t, dtype=float)
         if self.path is not None:
             along, px, py = self.path
-            s = self.s0 + self.speed * t
+            s = self.s0 + self.speed * self.travel_time(t)
             return np.interp(s, along, px), np.interp(s, along, py)
         if self.follow_ego is not None:
             return self.road.to_world(self._leader_s(t), np.zeros_like(t))
         if self.crossing:
             d = self.d0 + self.speed * (t - self.t_cross)
             return self.road.to_world(np.full_like(t, self.s0), d)
-        return self.road.to_world(self.s0 + self.speed * t, np.full_like(t, self.d0))
+        return self.road.to_world(self.s0 + self.speed * self.travel_time(t), np.full_like(t, self.d0))
+
+    def travel_time(self, t):
+        """Time ``t`` (s) less the time lost to the stop: the object has moved as far as at constant speed by then.
+
+        Without a stop it is ``t``.  With ``stop = (brake, halt, start, cruise)`` the speed falls linearly from
+        ``speed`` at ``brake`` to 0 at ``halt`` (constant deceleration), stays 0 until ``start`` and rises
+        linearly back to ``speed`` at ``cruise``.
+        """
+        t = np.asarray(t, dtype=float)
+        if self.stop is None:
+            return t
+        return t - _lost_time(t, *self.stop)
+
+    def standing(self, t):
+        """True at the times ``t`` (s) at which the object stands still (between ``halt`` and ``start``)."""
+        t = np.asarray(t, dtype=float)
+        if self.stop is None:
+            return np.zeros(t.shape, dtype=bool)
+        return (t >= self.stop[1]) & (t < self.stop[2])
 
     def kinematics(self, t, h=0.01):
         """Centre (x, y), velocity (vx, vy), heading and yaw rate at times ``t``.
@@ -200,7 +220,7 @@ class RoadUser:
         elif self.crossing:
             rest = self.road.heading_at(np.full_like(t, self.s0)) + np.pi / 2 * np.sign(self.speed)
         else:
-            rest = self.road.heading_at(self.s0 + self.speed * t) + np.pi * (self.speed < 0)
+            rest = self.road.heading_at(self.s0 + self.speed * self.travel_time(t)) + np.pi * (self.speed < 0)
         return np.where(moving, np.arctan2(y1 - y0, x1 - x0), rest)
 
     def absent(self, t):
@@ -209,6 +229,16 @@ class RoadUser:
         for start, end in self.absences:
             out |= (t >= start) & (t < end)
         return out
+
+
+def _lost_time(t, brake, halt, start, cruise):
+    """Integral from -inf to ``t`` of ``1 - v(t') / v`` for the stop's speed profile (s): a trapezoid in time."""
+    ramp_down = np.clip(t, brake, halt) - brake
+    lost = ramp_down**2 / (2 * max(halt - brake, 1e-9))
+    lost += np.clip(t, halt, start) - halt
+    ramp_up = np.clip(t, start, cruise) - start
+    lost += ramp_up - ramp_up**2 / (2 * max(cruise - start, 1e-9))
+    return lost
 
 
 def _wrap(angle):
@@ -574,6 +604,43 @@ def _turn_path(road, s_turn, lane, side, radius, straight, backwards):
     x, y = road.to_world(s_turn + u, w)
     along = np.concatenate([[0.0], np.cumsum(np.hypot(np.diff(x), np.diff(y)))])
     return (along, x, y), float(along[first_arc])
+
+
+#: m/s^2, the deceleration and acceleration of a road user that stops and starts: moderate braking of a car
+#: at a light (about 2 m/s^2), a cyclist's (1.5), a pedestrian who stops and walks on within a step or two (1).
+STOP_DECELERATION = {"car": 2.0, "truck": 1.5, "bus": 1.5, "bicycle": 1.5, "pedestrian": 1.0, "pedestrian_group": 1.0}
+#: s, how long a road user that stops stands still: a pedestrian waiting to cross, a car at a light or behind a
+#: turning one, a cyclist at a junction.
+STAND_DURATION = (2.0, 8.0)
+
+
+def add_stops(users, ego, share, rng):
+    """Let a ``share`` of the road users that keep to a lane or a pavement stop once and start again.
+
+    Each chosen user (drawn with probability ``share``; followers of the ego
+    car, crossers and turning vehicles keep their motion) brakes at constant
+    deceleration (:data:`STOP_DECELERATION`) to a standstill near the time at
+    which it is closest to the ego car (+-3 s), stands for
+    :data:`STAND_DURATION` and starts again at the same rate.  While standing
+    it is not a moving road user, which RadarScenes does not annotate; while
+    braking and starting its Doppler is low.
+    """
+    for user in users:
+        if user.follow_ego is not None or user.crossing or user.path is not None:
+            continue
+        if rng.random() >= share:
+            continue
+        ramp = abs(user.speed) / STOP_DECELERATION[user.kind]
+        halt = _closest_time(user, ego) + rng.uniform(-3.0, 3.0)
+        start = halt + rng.uniform(*STAND_DURATION)
+        user.stop = (halt - ramp, halt, start, start + ramp)
+    return users
+
+
+def _closest_time(user, ego):
+    """Time (s) of the ego drive at which the user, moving at constant speed, is nearest to the ego car."""
+    x, y = user.position(ego.t)
+    return float(ego.t[np.argmin(np.hypot(x - ego.x, y - ego.y))])
 
 
 def add_occlusions(users, duration, rate, rng):

@@ -30,6 +30,7 @@ from .._schema import (
 from ._scenario import (
     ROAD_USER_CLASSES,
     add_occlusions,
+    add_stops,
     aspect_rcs,
     make_dense_traffic,
     make_road,
@@ -86,6 +87,9 @@ DIFFICULTY_PRESETS = {
         "rcs_object_spread": 0.0,
         "rcs_aspect": 0.0,
         "wheel_micro_doppler": 0.0,
+        "road_user_share": 1.0,
+        "stop_and_go": 0.0,
+        "annotation_margin": np.inf,
     },
     "realistic": {
         "odometry_speed_scale": 0.005,
@@ -108,8 +112,24 @@ DIFFICULTY_PRESETS = {
         "rcs_object_spread": 3.0,
         "rcs_aspect": 1.0,
         "wheel_micro_doppler": 0.25,
+        "road_user_share": 1.0,
+        "stop_and_go": 0.0,
+        "annotation_margin": np.inf,
     },
 }
+#: Issue 32's preset: the realistic one with RadarScenes' traffic (fewer, longer-lived road users; see the user
+#: guide's "Towards RadarScenes' statistics") and road users that stop and start.
+DIFFICULTY_PRESETS["radarscenes"] = {
+    **DIFFICULTY_PRESETS["realistic"],
+    "traffic": 4.0,
+    "occlusion": 0.1,
+    "object_detection_probability": 0.9,
+    "road_user_share": 0.6,
+    "stop_and_go": 0.3,
+    "annotation_margin": 0.2,
+}
+#: The knobs that issue 32 added: off in "easy" and in "realistic" (so both stay as they were), on in "radarscenes".
+ISSUE_32_KNOBS = ("road_user_share", "stop_and_go", "annotation_margin")
 
 
 @validate_params(
@@ -169,13 +189,18 @@ def make_scenes(
         street), > 0.
     first_sequence : int, default=1
         Number N >= 1 of the first sequence (folder ``sequence_N``).
-    difficulty : {"easy", "realistic"}, default="realistic"
+    difficulty : {"easy", "realistic", "radarscenes"}, default="realistic"
         Preset of the phenomena that make real radar data hard.  "easy" turns
         them all off (the simulator described above); "realistic" turns each
         on at a physically argued value
-        (``sklearn_radar.datasets._simulator.DIFFICULTY_PRESETS``).  Equal
-        seeds give the same drive, road, static world and base road users
-        in both presets.
+        (``sklearn_radar.datasets._simulator.DIFFICULTY_PRESETS``);
+        "radarscenes" is "realistic" with RadarScenes' traffic statistics
+        (about 31 road users per minute with about 470 annotated detections
+        each, instead of about 83 with 240), road users that stop and start
+        and box annotation (issue 32; the user guide's "Towards RadarScenes'
+        statistics").  Equal seeds give the same drive, road, static world
+        and base road users in all presets ("radarscenes" keeps a share of
+        them).
     knobs : dict, default=None
         Values that override single knobs of the preset (all seedable
         through ``random_state``):
@@ -264,6 +289,30 @@ def make_scenes(
           high-resolution radar", ICMIM 2015).  Pedestrians' limbs already
           swing every detection's velocity over 0.1-1.9 times the body's (in
           both presets).
+        * ``road_user_share``: in [0, 1], the share of the base road users
+          (``n_objects``) kept, each drawn alone (1 in "realistic", 0.6 in
+          "radarscenes"): the simulated sequences are 20-30 s of busy urban
+          streets, while RadarScenes' mean of at most 31 road users per minute
+          (7,500 in more than 4 h) includes quieter stretches.
+        * ``stop_and_go``: in [0, 1], the share of the road users that keep
+          to a lane or a pavement which brake to a standstill near the time
+          they are closest to the ego car, stand for 2-8 s and start again
+          (0.3 in "radarscenes"): pedestrians waiting to cross, cars at a
+          light, cyclists at a junction, at 1-2 m/s^2.  RadarScenes annotates
+          moving road users only and gives a new track id after more than
+          500 ms of standstill (radar-scenes.com): a standing road user's
+          detections are static background, and it is annotated again, with
+          low Doppler, as it starts.
+        * ``annotation_margin``: m, >= 0, the labels of a box annotator:
+          in each scan in which a road user has a detection, the detections
+          *measured* within its box enlarged by this margin are its own, and
+          only those (0.2 in "radarscenes"; ``inf``: the simulation's truth).
+          RadarScenes' labels come from a semi-automatic process that selects
+          a road user's detections by its extent (Schumann et al.,
+          "RadarScenes", FUSION 2021), so an own detection that the azimuth
+          noise pushed out of the box (0.1-0.5 m across at 20-50 m) is
+          background, and a ghost, spray or clutter detection inside it
+          belongs to the object.
 
         Unknown names raise a ValueError.
 
@@ -310,7 +359,8 @@ def simulate_sequences(numbers, seeds, duration, n_objects, static_density, knob
     data, odometry = [], []
     for number, seed in zip(numbers, seeds, strict=True):
         # The phenomena draw from a stream of their own, so that both presets share the world of a seed; the
-        # class signatures from a third, so that they leave the phenomena's draws alone.
+        # class signatures from a third and the road users' traffic and behaviour (issue 32) from a fourth, so
+        # that each leaves the others' draws alone.
         det, odo = _simulate_sequence(
             int(number),
             duration,
@@ -320,6 +370,7 @@ def simulate_sequences(numbers, seeds, duration, n_objects, static_density, knob
             knobs,
             np.random.default_rng([int(seed), 13]),
             np.random.default_rng([int(seed), 31]),
+            np.random.default_rng([int(seed), 32]),
         )
         data.append(det)
         odometry.append(odo)
@@ -369,7 +420,7 @@ def _check_knobs(difficulty, knobs):
     for name, value in (knobs or {}).items():
         if name not in values:
             raise ValueError(f"knobs: unknown knob {name!r}; the knobs are {', '.join(sorted(values))}")
-        if name in ("object_detection_probability", "wheel_micro_doppler") and not (
+        if name in ("object_detection_probability", "wheel_micro_doppler", "road_user_share", "stop_and_go") and not (
             isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_)) and 0 <= value <= 1
         ):
             raise ValueError(f"knobs: {name} must be in [0, 1], got {value!r}")
@@ -382,9 +433,11 @@ def _check_knobs(difficulty, knobs):
             or np.isnan(value)
             or value < 0
             or (name in ("detection_range", "angular_noise_range") and value == 0)
-            or (np.isinf(value) and name not in ("detection_range", "angular_noise_range"))
+            or (np.isinf(value) and name not in ("detection_range", "angular_noise_range", "annotation_margin"))
         ):
-            rule = "> 0 (inf: off)" if name in ("detection_range", "angular_noise_range") else "finite and >= 0"
+            rule = {"detection_range": "> 0 (inf: off)", "angular_noise_range": "> 0 (inf: off)"}.get(
+                name, ">= 0 (inf: off)" if name == "annotation_margin" else "finite and >= 0"
+            )
             raise ValueError(f"knobs: {name} must be a real number {rule}, got {value!r}")
         values[name] = value
     return values
@@ -395,14 +448,17 @@ def _overrides(difficulty, knobs):
     return {k: v for k, v in (knobs or {}).items() if v != preset[k]}
 
 
-def _simulate_sequence(number, duration, n_objects, density, rng, knobs=None, extra=None, signature=None):
+def _simulate_sequence(
+    number, duration, n_objects, density, rng, knobs=None, extra=None, signature=None, behaviour=None
+):
     """Detection table and odometry of one sequence.
 
     ``rng`` draws the world and the easy simulator's measurements; ``extra``
     draws everything the realistic phenomena (``knobs``) add, and nothing
     else, so that with every knob off the data are those of the easy preset;
     ``signature`` draws what the class-signature knobs (``rcs_object_spread``,
-    ``wheel_micro_doppler``) add.
+    ``wheel_micro_doppler``) add, ``behaviour`` what ``road_user_share`` and
+    ``stop_and_go`` do.
     """
     knobs = DIFFICULTY_PRESETS["easy"] if knobs is None else knobs
     t0_us = 156_000_000_000 + 1_000_000_000 * number
@@ -417,10 +473,15 @@ def _simulate_sequence(number, duration, n_objects, density, rng, knobs=None, ex
         road, sensor["s"].min() - MAX_RANGE - 10, sensor["s"].max() + MAX_RANGE + 10, rng, density
     )
     users = make_road_users(ego, road, duration, rng.integers(n_objects[0], n_objects[1] + 1), rng)
+    if knobs["road_user_share"] < 1:
+        # Drawn after the base users, so that the world stream is that of the other presets.
+        users = [user for user in users if behaviour.random() < knobs["road_user_share"]]
     if knobs["traffic"] > 0:
         users += make_dense_traffic(ego, road, duration, knobs["traffic"], extra)
     if knobs["occlusion"] > 0:
         add_occlusions(users, duration, knobs["occlusion"], extra)
+    if knobs["stop_and_go"] > 0:
+        add_stops(users, ego, knobs["stop_and_go"], behaviour)
     static_part = _static_detections(static, sensor, rng)
     parts = [static_part, _clutter(sensor, density, rng)]
     objects, world = _object_detections(users, sensor, rng, knobs, extra, signature)
@@ -433,6 +494,8 @@ def _simulate_sequence(number, duration, n_objects, density, rng, knobs=None, ex
 
     scans["odometry_index"] = nearest_odometry_index(scans["timestamp"], odometry["timestamp"].to_numpy())
     measured = _measure(truth, scans, odometry, rng, angular_noise_range=knobs["angular_noise_range"])
+    if np.isfinite(knobs["annotation_margin"]):
+        truth = _box_annotation(truth, measured, users, sensor, knobs["annotation_margin"])
     track_id = _track_ids(truth["object"], scans["t"][truth["scan"]], number)
     order = np.lexsort((measured["range_sc"], truth["scan"]))
     radar = {key: value[order] for key, value in measured.items()}
@@ -697,7 +760,12 @@ def _one_object(index, user, sensor, rng, knobs=None, extra=None, signature=None
         p_d = knobs["object_detection_probability"] * np.exp(-np.log(2.0) * (r / r_50) ** 4)
         keep &= extra.random(len(scan)) < p_d
     label = np.full(len(scan), params["label"])
-    truth = _truth(scan[keep], r[keep], azimuth[keep], vr[keep], rcs[keep], label[keep], np.full(keep.sum(), index))
+    obj = np.full(len(scan), index)
+    if user.stop is not None:
+        # RadarScenes annotates moving road users only: a standing one is static background, without a track id.
+        standing = user.standing(t[scan])
+        label, obj = np.where(standing, STATIC_LABEL, label), np.where(standing, -1, obj)
+    truth = _truth(scan[keep], r[keep], azimuth[keep], vr[keep], rcs[keep], label[keep], obj[keep])
     n = int(keep.sum())
     world = {
         "x": px[keep],
@@ -1007,6 +1075,44 @@ def _measure(truth, scans, odometry, rng, angular_noise_range=np.inf):
         "x_seq": (ego["x_seq"] + c * x_cc - s * y_cc).astype(np.float32),
         "y_seq": (ego["y_seq"] + s * x_cc + c * y_cc).astype(np.float32),
     }
+
+
+def _box_annotation(truth, measured, users, sensor, margin):
+    """The labels of an annotator who marks each road user, scan by scan, by its box enlarged by ``margin`` (m).
+
+    RadarScenes' labels come from a semi-automatic process in which the
+    detections of a road user are selected by its extent (Schumann et al.,
+    "RadarScenes", FUSION 2021, section III).  Such a label follows where a
+    detection was *measured*, not what reflected it: an own detection that
+    the azimuth noise (0.1-0.5 m across at 20-50 m) pushed beyond the box
+    becomes background, and a background detection measured inside the box
+    (a ghost, spray, clutter, a kerb or a parked car beside a pedestrian)
+    joins the object.  Only scans in which the object has a detection of its
+    own are marked, and never while it stands (it is not a moving road user).
+    """
+    scan = truth["scan"]
+    angle = measured["azimuth_sc"].astype(float) + sensor["boresight"][scan]
+    r = measured["range_sc"].astype(float)
+    px, py = sensor["x"][scan] + r * np.cos(angle), sensor["y"][scan] + r * np.sin(angle)
+    label, obj = truth["label"].copy(), truth["object"].copy()
+    n_scans = len(sensor["t"])
+    for index, user in enumerate(users):
+        own = truth["object"] == index
+        if not own.any():
+            continue
+        marked = (np.bincount(scan[own], minlength=n_scans) > 0) & ~user.standing(sensor["t"])
+        cx, cy, _, _, heading, _ = user.kinematics(sensor["t"])
+        c, s = np.cos(heading[scan]), np.sin(heading[scan])
+        dx, dy = px - cx[scan], py - cy[scan]
+        inside = (
+            marked[scan]
+            & (np.abs(c * dx + s * dy) <= user.length / 2 + margin)
+            & (np.abs(-s * dx + c * dy) <= user.width / 2 + margin)
+        )
+        leave, join = own & ~inside, inside & (truth["object"] == -1)
+        label[leave], obj[leave] = STATIC_LABEL, -1
+        label[join], obj[join] = ROAD_USER_CLASSES[user.kind]["label"], index
+    return {**truth, "label": label, "object": obj}
 
 
 def _track_ids(obj, t, sequence):

@@ -41,6 +41,7 @@ from sklearn.utils._param_validation import HasMethods, Interval, StrOptions, va
 from .. import __version__
 from .._executor import connect_executor
 from ..classification import save_classifier
+from ..datasets._simulator import DIFFICULTY_PRESETS
 from ..experiments import SKLEARN_BASELINES, get_experiment
 from ..metrics._parts import OBJECTIVES  # what the searches can maximise: "v1", "pq"
 from ._classification import CLASSIFIER_FILES
@@ -175,7 +176,7 @@ def parse_experiments(text):
         "seed": [Interval(Integral, 0, SEED_MAX, closed="both")],
         "stream": [HasMethods(["write"]), None],
         "objective": [StrOptions(set(OBJECTIVES))],
-        "difficulty": [StrOptions({"easy", "realistic"})],
+        "difficulty": [StrOptions(set(DIFFICULTY_PRESETS))],
         "scheduler": [str, None],
         "workers": [Interval(Integral, 1, None, closed="left"), None],
         "n_points": [Interval(Integral, 1, None, closed="left"), None],
@@ -241,7 +242,7 @@ def reproduce(
         ``"pq"`` the panoptic quality of moving road users per 0.5 s frame
         (:func:`~sklearn_radar.metrics.panoptic_quality`).  Both are
         reported for every experiment whatever the choice.
-    difficulty : {"easy", "realistic"}, default="realistic"
+    difficulty : {"easy", "realistic", "radarscenes"}, default="realistic"
         Difficulty of the simulated data (:func:`make_scenes`) when
         ``data`` is None; ignored for a RadarScenes folder.
     scheduler : str, default=None
