@@ -51,10 +51,25 @@ class ClassifierSetting:
     clustering: Pipeline
 
     def working(self, raw):
-        """The working detections of a raw detection table."""
+        """The working detections of a raw detection table.
+
+        A saved pipeline gets the columns it was fitted with, in that order (a pipeline fitted without the
+        ``uuid`` or the ground truth, as ``reproduce`` fits its classifiers, reads none of them).
+        """
         if self.fitted:
-            return self.preprocessing.transform(raw)
+            return self.preprocessing.transform(_fitted_columns(self.preprocessing, raw))
         return clone(self.preprocessing).fit_transform(raw)
+
+
+def _fitted_columns(preprocessing, raw):
+    """``raw`` reduced to the columns ``preprocessing`` was fitted with; ValueError names those it lacks."""
+    names = getattr(preprocessing, "feature_names_in_", None)
+    if names is None or not hasattr(raw, "columns"):
+        return raw
+    missing = [str(name) for name in names if name not in raw.columns]
+    if missing:
+        raise ValueError(f"the classifier was fitted with the column(s) {missing}, which the detections lack")
+    return raw[list(names)]
 
 
 def classifier_setting(classifier_path, setting=None, params_path=None, pipeline=None):

@@ -13,6 +13,7 @@ from sklearn.base import BaseEstimator, clone
 from sklearn.utils._param_validation import Interval, StrOptions, validate_params
 
 from ._executor import connect_executor
+from ._files import check_ours_to_replace
 from ._schema import LABELS, STATIC_LABEL
 from .classification._classes import CLASS_OF_LABEL, DEVKIT_CLASS_INDEX, DEVKIT_CLASS_NAMES, IGNORED
 from .datasets import load_radarscenes
@@ -308,21 +309,7 @@ def check_predictions_file(out):
     FileExistsError
         Naming ``out``.
     """
-    out = Path(out)
-    if out.is_symlink():
-        problem = "is a symbolic link"
-    elif not out.is_file() or out.stat().st_size == 0:
-        return  # absent, or a folder (atomic_write says so), or empty: nothing is lost
-    else:
-        try:
-            with open(out, "rb") as stream:
-                start = stream.read(max(len(_PREDICTIONS_HEAD), len(_CLASSES_HEAD)))
-                if start.startswith(_PREDICTIONS_HEAD) or start.startswith(_CLASSES_HEAD):
-                    return
-        except OSError as error:
-            raise OSError(f"cannot read {out}: {error.strerror or error}") from None
-        problem = "exists and is not a predictions file written by sklearn-radar"
-    raise FileExistsError(f"{out} {problem}; it is not replaced: choose another output file")
+    check_ours_to_replace(out, (_PREDICTIONS_HEAD, _CLASSES_HEAD), "a predictions file", "output file")
 
 
 class _ReadFailed(Exception):

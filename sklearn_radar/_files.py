@@ -70,3 +70,41 @@ def blocking_file(folder):
         if candidate.exists() or candidate.is_symlink():
             return None if candidate.is_dir() else candidate
     return None
+
+
+def check_ours_to_replace(path, heads, what, choose="file"):
+    """Refuse to replace ``path`` unless it is absent, empty, or starts with one of ``heads`` (we wrote it).
+
+    Parameters
+    ----------
+    path : str or path-like
+        The file about to be written.
+    heads : tuple of bytes
+        The first bytes of the files this package writes there.
+    what : str
+        What they are, for the message: ``"a predictions file"``.
+    choose : str, default="file"
+        What to choose instead, for the message: ``"output file"``.
+
+    Raises
+    ------
+    FileExistsError
+        Naming ``path``, when it is a symbolic link or another's file (which is kept).
+    OSError
+        Naming ``path``, when it cannot be read.
+    """
+    path = Path(path)
+    if path.is_symlink():
+        problem = "is a symbolic link"
+    elif not path.is_file() or path.stat().st_size == 0:
+        return  # absent, or a folder (atomic_write says so), or empty: nothing is lost
+    else:
+        try:
+            with open(path, "rb") as stream:
+                start = stream.read(max(len(head) for head in heads))
+        except OSError as error:
+            raise OSError(f"cannot read {path}: {error.strerror or error}") from None
+        if any(start.startswith(head) for head in heads):
+            return
+        problem = f"exists and is not {what} written by sklearn-radar"
+    raise FileExistsError(f"{path} {problem}; it is not replaced: choose another {choose}")

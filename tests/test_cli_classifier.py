@@ -13,6 +13,7 @@ import pytest
 from radar_scenes.evaluation import PredictionFileSchemas, per_point_predictions_to_json
 from radar_scenes.labels import ClassificationLabel, Label
 from radar_scenes.sequence import Sequence
+from sklearn.base import clone
 from sklearn.pipeline import make_pipeline
 
 from sklearn_radar._cli import main
@@ -290,3 +291,18 @@ def test_help_says_when_params_is_needed(capsys):
         text = " ".join(capsys.readouterr().out.split())
         assert "--classifier FILE" in text and "required unless --classifier holds a whole pipeline" in text
         assert "only use files you trust" in text
+
+
+def test_a_saved_pipeline_reads_only_the_columns_it_was_fitted_with(folder, files, tmp_path, capsys):
+    """Fitted without uuid and label_id (as reproduce fits), it runs on a folder with them; a lacking column: named."""
+    train = make_scenes(n_sequences=3, duration=8.0, random_state=22).data
+    model = clone(files.model).fit(train.drop(columns=["uuid", "label_id"]), road_user_class(train["label_id"]))
+    lean, needy = tmp_path / "lean.joblib", tmp_path / "needy.joblib"
+    save_classifier(model, lean)
+    out = tmp_path / "p.json"
+    assert _cluster(folder, out, "--classifier", str(lean)) == 0
+    assert json.loads(out.read_text())["new_label_names"]["5"] == "STATIC"
+    with_extra = train.assign(weather=1.0)
+    save_classifier(clone(files.model).fit(with_extra, road_user_class(train["label_id"])), needy)
+    assert _cluster(folder, tmp_path / "q.json", "--classifier", str(needy)) == 1
+    assert "['weather']" in capsys.readouterr().err

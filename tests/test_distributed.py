@@ -168,8 +168,8 @@ def test_search_on_the_cluster_equals_the_single_process_run(local_cluster, tiny
 
 
 #: Every step that reads the data: statistics (always), filter evaluation, an untuned, a tuned, a derived and a
-#: stage-2 experiment, the filter effect and the baselines.
-EVERY_STEP = {"n_iter": 2, "experiments": "filter,1,8,10,13,filter-effect,baselines", "seed": 0}
+#: stage-2 experiment, the filter effect, the baselines and the classifier.
+EVERY_STEP = {"n_iter": 2, "experiments": "filter,1,8,10,13,filter-effect,baselines,classification", "seed": 0}
 
 
 def _without_clock(figures):

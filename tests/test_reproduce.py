@@ -16,7 +16,7 @@ from sklearn_radar.reproduce import parse_experiments
 @pytest.fixture(scope="module")
 def tiny_report(tiny_folder, tmp_path_factory):
     out = tmp_path_factory.mktemp("report") / "out"
-    steps = "filter,1,2,8,10,11,13,objects,filter-effect,baselines,tracking"
+    steps = "filter,1,2,8,10,11,13,objects,filter-effect,baselines,tracking,classification"
     printed = io.StringIO()  # the progress output, as a file would receive it
     with contextlib.redirect_stdout(printed):
         code = main(
@@ -53,6 +53,7 @@ def test_reproduce_writes_report_results_params_and_figures(tiny_report):
         "filter-effect",
         "baselines",
         "tracking",
+        "classification",
     ]
     assert list(results["experiments"]) == ["1", "2", "8", "10", "11", "13"]
     assert len(results["experiments"]["2"]["convergence"]) == 2
@@ -335,6 +336,7 @@ def test_experiment_numbers_come_from_the_papers_metadata():
         "filter-effect",
         "baselines",
         "tracking",
+        "classification",
     )
 
 
@@ -558,11 +560,11 @@ def test_progress_estimates_the_run_and_shows_overall_progress_in_plain_lines(ti
     text = (tiny_report.parent / "stdout.txt").read_text()
     assert "\r" not in text and "\x1b" not in text  # readable in a file: no carriage returns, no escapes
     lines = text.splitlines()
-    assert re.match(r"the run's work: 11 steps, \d+ search iterations in all; the progress lines estimate", lines[1])
+    assert re.match(r"the run's work: 12 steps, \d+ search iterations in all; the progress lines estimate", lines[1])
     status = re.compile(r"\| run (\d+) %, (\d+:)?\d+:\d\d elapsed, about (\d+:)?\d+:\d\d left$")
-    done = [line for line in lines if re.match(r"\[\d+/11\] .* done in ", line)]
+    done = [line for line in lines if re.match(r"\[\d+/12\] .* done in ", line)]
     iterations = [line for line in lines if " iteration " in line]
-    assert len(done) == 11 and iterations
+    assert len(done) == 12 and iterations
     shares = [int(status.search(line).group(1)) for line in done]
     assert all(status.search(line) for line in iterations)
     assert shares == sorted(shares) and shares[0] < shares[-1] < 100  # the report itself is the rest

@@ -99,6 +99,9 @@ class ClusterClassifier(BaseEstimator):
     feature_names_ : ndarray of str
         The features of :func:`~sklearn_radar.classification.cluster_features`
         it uses: those whose columns X holds.
+    n_training_examples_ : int
+        The segments it was trained on (those not matched to an ignored
+        instance).
     n_features_in_ : int
         Number of columns seen in :meth:`fit`.
     feature_names_in_ : ndarray of str
@@ -190,6 +193,7 @@ class ClusterClassifier(BaseEstimator):
             self.classifier, table.to_numpy(dtype=np.float64)[learn, 3:], targets[learn], self.feature_names_, self
         )
         self.classes_ = np.union1d([BACKGROUND], np.asarray(self.classifier_.classes_, dtype=np.int64))
+        self.n_training_examples_ = int(learn.sum())
         return self
 
     def predict(self, X):

@@ -32,6 +32,7 @@ from sklearn.utils._param_validation import validate_params
 from sklearn.utils.validation import check_is_fitted
 
 from .. import __version__
+from .._files import check_ours_to_replace
 from ._cluster_classifier import ClusterClassifier
 
 __all__ = ["ClassifierVersionWarning", "load_classifier", "save_classifier"]
@@ -196,20 +197,7 @@ def check_classifier_file(path):
     FileExistsError
         Naming ``path``.
     """
-    path = Path(path)
-    if path.is_symlink():
-        problem = "is a symbolic link"
-    elif not path.is_file() or path.stat().st_size == 0:
-        return  # absent, or a folder (atomic_write says so), or empty: nothing is lost
-    else:
-        try:
-            with open(path, "rb") as stream:
-                if stream.read(len(CLASSIFIER_MAGIC)) == CLASSIFIER_MAGIC:
-                    return
-        except OSError as error:
-            raise OSError(f"cannot read {path}: {error.strerror or error}") from None
-        problem = "exists and is not a classifier file written by sklearn-radar"
-    raise FileExistsError(f"{path} {problem}; it is not replaced: choose another file")
+    check_ours_to_replace(path, (CLASSIFIER_MAGIC,), "a classifier file")
 
 
 def final_classifier(model):

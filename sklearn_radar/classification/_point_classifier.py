@@ -77,6 +77,8 @@ class PointClassifier(BaseEstimator):
         warning, when the training detections hold a single class).
     feature_names_ : ndarray of str
         The features of :data:`POINT_FEATURES` it uses.
+    n_training_examples_ : int
+        The detections it was trained on (kept by the filter, not ignored).
     n_features_in_ : int
         Number of columns seen in :meth:`fit`.
     feature_names_in_ : ndarray of str
@@ -140,6 +142,7 @@ class PointClassifier(BaseEstimator):
         learn = _kept(c) & (classes != IGNORED)
         self.classifier_ = fit_classifier(self.classifier, features[learn], classes[learn], self.feature_names_, self)
         self.classes_ = np.union1d([BACKGROUND], np.asarray(self.classifier_.classes_, dtype=np.int64))
+        self.n_training_examples_ = int(np.count_nonzero(learn))
         return self
 
     def predict(self, X):

@@ -45,12 +45,19 @@ BASELINES = "baselines"
 #: Beyond the paper: the framework's stages set up for objects (``experiments.object_pipeline``).
 OBJECTS = OBJECT_EXPERIMENT
 TRACKING = "tracking"
+#: Beyond the paper: the paper's next stage, a classifier of the clusters (issue 31).
+CLASSIFICATION = "classification"
 
 #: Every step key, in the order they run.
-ALL_EXPERIMENTS = (FILTER, *(str(n) for n in NUMBERS), OBJECTS, FILTER_EFFECT, BASELINES, TRACKING)
+ALL_EXPERIMENTS = (FILTER, *(str(n) for n in NUMBERS), OBJECTS, FILTER_EFFECT, BASELINES, TRACKING, CLASSIFICATION)
 
 #: The settings the tracking step streams online (causal): the expert's, the best stage 1 and both stage-2 modes.
 TRACKED = (EXPERT, BEST_STAGE1, *STAGE2)
+
+#: The settings whose clusters the classification step classifies: the expert's, the FCS box baseline, the best
+#: stage 1 (the V1 winner) and stage 2 by predicted continuation (#1, #3, #8, #13); beside them the strongest
+#: offline scikit-learn baseline and the point-wise classifier.
+CLASSIFIED = (EXPERT, FCS_BASELINE, BEST_STAGE1, STAGE2[-1])
 
 #: The paper's chosen filter setting (eta_1 in m/s, d_xy in m): the defaults of DopplerDensityFilter.
 PAPER_FILTER_SETTING = (0.10, 1.4)
@@ -68,6 +75,8 @@ __all__ = [
     "BASELINES",
     "BEST_STAGE1",
     "BEST_STAGE1_UNFILTERED",
+    "CLASSIFICATION",
+    "CLASSIFIED",
     "DERIVED_FROM_BEST",
     "EXPERT",
     "FCS_BASELINE",

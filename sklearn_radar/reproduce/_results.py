@@ -1066,6 +1066,95 @@ class TrackingResult(_JsonRecord):
     n_aliases: int
 
 
+# ----------------------------------------------------------------------------- the classifier of clusters
+
+
+@dataclass(**_RECORD)
+class SemanticScores(_JsonRecord):
+    """Semantic instance-segmentation scores (:func:`~sklearn_radar.metrics.semantic_scores`), per 0.5 s frame.
+
+    Attributes
+    ----------
+    frame_s : float
+        Frame length, s.
+    pq, sq, rq : float
+        Class-aware panoptic quality and its factors, the mean over the classes.
+    map : float
+        Mean average precision at IoU 0.5 over the classes (COCO's 101-point interpolation).
+    macro_f1 : float
+        Point-wise F1 per class (background included), their mean.
+    mcov : float
+        Mean coverage of the annotated instances' segments, class-agnostic.
+    per_class : dict of str to dict of str to float
+        By class name: ``{"pq", "ap", "f1"}``.
+    """
+
+    frame_s: float
+    pq: float
+    sq: float
+    rq: float
+    map: float
+    macro_f1: float
+    mcov: float
+    per_class: dict[str, dict[str, float]]
+
+
+@dataclass(**_RECORD)
+class ClassifiedSetting(_JsonRecord):
+    """One clustering with the classifier trained on its clusters, or the point-wise classifier, on the test half.
+
+    Attributes
+    ----------
+    name : str
+        ``"#8"``, a baseline's name, or ``"point-wise (no clustering)"``.
+    setting_source : str
+        Where the clustering's setting comes from (``"tuned #8"``, ``"paper's #13"``, ``"tuned baseline"``, ...).
+    params : dict
+        The clustering's setting, as pipeline parameters (empty for the point-wise classifier).
+    scores : SemanticScores
+        On the whole test half.
+    per_sequence : dict of str to list of float
+        ``pq``, ``map``, ``macro_f1`` and ``mcov`` of each test sequence, in order (the paired comparisons'
+        data).
+    background_share_before : float or None
+        Share of the clustering's segments (per frame) with no detection of an annotated road user; None for the
+        point-wise classifier, which has no clusters.
+    background_share_after : float
+        The same share among the segments the classifier keeps as road users.
+    n_training_examples : int
+        The classifier's training examples: segments, or detections for the point-wise classifier.
+    classifier_file : str or None, default=None
+        The saved classifier, in the run's folder.
+    """
+
+    name: str
+    setting_source: str
+    params: dict[str, Any]
+    scores: SemanticScores
+    per_sequence: dict[str, list[float]]
+    background_share_before: float | None
+    background_share_after: float
+    n_training_examples: int
+    classifier_file: str | None = None
+
+
+@dataclass(**_RECORD)
+class ClassificationResult(_JsonRecord):
+    """The classification step: the classifier on the clusters of several settings and the point-wise one.
+
+    Attributes
+    ----------
+    settings : dict of str to ClassifiedSetting
+        By name, in the order of the report's table.
+    test_sequences : list of int
+    wall_time_s : float
+    """
+
+    settings: dict[str, ClassifiedSetting]
+    test_sequences: list[int]
+    wall_time_s: float
+
+
 # ----------------------------------------------------------------------------- the whole run
 
 
@@ -1106,6 +1195,8 @@ class RunResults(_JsonRecord):
     tracking : dict of int to TrackingResult or None, default=None
         The online pipeline's object ids scored over time, by experiment number; None when it did not run
         (and in results of older versions).
+    classification : ClassificationResult or None, default=None
+        The classifier of clusters on the test half, when it ran.
     figures : FigureRecord, default=FigureRecord()
         Figures drawn; written to ``results.json`` only on request.
     """
@@ -1118,6 +1209,7 @@ class RunResults(_JsonRecord):
     baselines: dict[str, BaselineResult] | None = None
     objects: ObjectExperimentResult | None = None
     tracking: dict[int, TrackingResult] | None = None
+    classification: ClassificationResult | None = None
     figures: FigureRecord = field(default_factory=FigureRecord, metadata=_NOT_WRITTEN)
 
     def v1_test(self):
@@ -1128,6 +1220,17 @@ class RunResults(_JsonRecord):
         scores : dict of int to float
         """
         return {number: result.v1_test for number, result in self.experiments.items()}
+
+    def saved_classifiers(self):
+        """The files of the classifiers the classification step saved in the run's folder, in order.
+
+        Returns
+        -------
+        names : list of str
+        """
+        if self.classification is None:
+            return []
+        return [row.classifier_file for row in self.classification.settings.values() if row.classifier_file]
 
     def to_json_dict(self, *, figures=False):
         """What ``results.json`` holds.
@@ -1142,7 +1245,8 @@ class RunResults(_JsonRecord):
         -------
         document : dict
             ``meta``, ``statistics`` (when measured), ``experiments`` (keyed by the number as a string), then
-            ``filter``, ``filter_effect``, ``baselines``, ``objects`` and ``tracking`` where they ran.
+            ``filter``, ``filter_effect``, ``baselines``, ``objects``, ``tracking`` and ``classification``
+            where they ran.
         """
         document = _to_json(self)
         if figures:
@@ -1188,7 +1292,9 @@ class RunResults(_JsonRecord):
             ``{"best": key, "objective": ..., "experiments": {key: {"experiment",
             "v1_test", ["pq_test",] "params", "stage1_params"}}}``; ``best`` is the
             first experiment with the highest test score of the run's objective.  The object experiment, when
-            it ran, is the key ``"objects"`` (with ``causal_pq_test`` besides).
+            it ran, is the key ``"objects"`` (with ``causal_pq_test`` besides).  An experiment whose clusters the
+            classification step classified has ``"classifier"``: the file of its saved classifier in the run's
+            folder (``sklearn-radar cluster --classifier``).
         """
         experiments = {}
         for number, result in self.experiments.items():
@@ -1196,6 +1302,9 @@ class RunResults(_JsonRecord):
             if result.instance_test is not None:
                 entry["pq_test"] = result.instance_test.pq
             entry.update(params=result.params, stage1_params=result.stage1_params)
+            classified = (self.classification.settings if self.classification else {}).get(f"#{number}")
+            if classified is not None and classified.classifier_file:
+                entry["classifier"] = classified.classifier_file
             experiments[str(number)] = entry
         if self.objects is not None:
             experiments[OBJECT_EXPERIMENT] = {
@@ -1218,6 +1327,8 @@ __all__ = [
     "BaselineResult",
     "BestRemoval",
     "Budget",
+    "ClassificationResult",
+    "ClassifiedSetting",
     "ClusteringCost",
     "DataMeta",
     "DataStatistics",
@@ -1236,6 +1347,7 @@ __all__ = [
     "RunMeta",
     "RunResults",
     "SearchRecord",
+    "SemanticScores",
     "TrackingResult",
     "TrackingScores",
     "repeated_scores",

@@ -40,10 +40,21 @@ from sklearn.utils._param_validation import HasMethods, Interval, StrOptions, va
 
 from .. import __version__
 from .._executor import connect_executor
+from ..classification import save_classifier
 from ..datasets._simulator import DIFFICULTY_PRESETS
 from ..experiments import SKLEARN_BASELINES, get_experiment
 from ..metrics._parts import OBJECTIVES  # what the searches can maximise: "v1", "pq"
-from ._constants import ALL_EXPERIMENTS, BASELINES, FILTER, FILTER_EFFECT, NUMBERS, OBJECTS, TRACKING
+from ._classification import CLASSIFIER_FILES
+from ._constants import (
+    ALL_EXPERIMENTS,
+    BASELINES,
+    CLASSIFICATION,
+    FILTER,
+    FILTER_EFFECT,
+    NUMBERS,
+    OBJECTS,
+    TRACKING,
+)
 from ._context import RunContext
 from ._io import (
     RUN_TOOL,
@@ -71,7 +82,17 @@ SEED_MAX = 2**32 - 1
 #: The run marker: which run the folder holds and whether it is complete.
 RUN_MARKER = "run.json"
 #: Every file a run may write besides the marker (a previous run's are removed when a new one starts).
-RUN_FILES = ("report.md", "results.json", "params.json", HEATMAP, FILTER_SCENE, V1_BARS, SCENE, CONVERGENCE)
+RUN_FILES = (
+    "report.md",
+    "results.json",
+    "params.json",
+    HEATMAP,
+    FILTER_SCENE,
+    V1_BARS,
+    SCENE,
+    CONVERGENCE,
+    *CLASSIFIER_FILES.values(),
+)
 #: Simulated data of at most this many sequence-seconds (the default run's 4 x 20 s) with one search at a time
 #: runs in this process although ``--workers`` asks for a local cluster: measured on 2 cores, such a run
 #: (``--experiments 3 --n-iter 24``) took 20 s in one process against 39 s on 2 local workers, whose start and
@@ -130,7 +151,7 @@ def parse_experiments(text):
             if not (low.isdigit() and high.isdigit()) or not first <= int(low) <= int(high) <= last:
                 raise ValueError(
                     f"unknown experiment range {part!r}; experiments are {first}-{last}, "
-                    f"{FILTER}, {FILTER_EFFECT}, {BASELINES}, {TRACKING}"
+                    f"{FILTER}, {FILTER_EFFECT}, {BASELINES}, {TRACKING}, {CLASSIFICATION}"
                 )
             chosen.update(str(n) for n in range(int(low), int(high) + 1))
         elif part in ALL_EXPERIMENTS:
@@ -431,6 +452,8 @@ def _run_step(run, env, keys, context, found, position, key, ahead):
     _store(run.results, key, outcome.result)
     if outcome.labels is not None:
         context.labels[int(key)] = outcome.labels
+    for name, model in (outcome.models or {}).items():
+        save_classifier(model, run.out / name)
     if outcome.summary:
         run.say(outcome.summary)
     run.results.meta.completed.append(key)
@@ -462,6 +485,8 @@ def _store(results, key, result):
         results.objects = result
     elif key == TRACKING:
         results.tracking = result
+    elif key == CLASSIFICATION:
+        results.classification = result
     else:
         results.experiments[int(key)] = result
 
@@ -518,7 +543,8 @@ def _write_marker(run, status, error=None):
     """Write ``run.json``: the run's id, its status and, once it ended, the SHA-256 of each of its files."""
     files = {}
     if status in ("complete", "interrupted"):
-        names = ["report.md", "results.json", "params.json", *sorted(set(run.results.figures.drawn.values()))]
+        drawn = sorted(set(run.results.figures.drawn.values()))
+        names = ["report.md", "results.json", "params.json", *drawn, *run.results.saved_classifiers()]
         files = {name: sha256(run.out / name) for name in names if (run.out / name).is_file()}
     marker = {
         "tool": RUN_TOOL,  # what run_marker recognises
@@ -580,6 +606,7 @@ def _title(key):
         "sliding past window)",
         OBJECTS: "the object experiment (the framework's stages tuned for PQ)",
         TRACKING: "object tracking online (IDF1, ID switches, MOTA of the streamed ids)",
+        CLASSIFICATION: "the classifier of clusters (class PQ, mAP@0.5, macro-F1, mCov)",
     }[key]
 
 

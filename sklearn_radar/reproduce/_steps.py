@@ -61,11 +61,14 @@ from ..model_selection._sequence_search import (
     sized_sequence_folds,
 )
 from ..preprocessing import DopplerDensityFilter, FrameTransform
+from ._classification import run_classification
 from ._constants import (
     ALL_EXPERIMENTS,
     BASELINES,
     BEST_STAGE1,
     BEST_STAGE1_UNFILTERED,
+    CLASSIFICATION,
+    CLASSIFIED,
     FILTER,
     FILTER_EFFECT,
     FRAMES,
@@ -177,11 +180,14 @@ class Outcome:
         The line that says it.
     labels : ndarray or None
         An experiment's labels of the test sequence the figures draw.
+    models : dict of str to estimator or None
+        Fitted classifiers the run saves in its folder, by file name (the classification step's).
     """
 
     result: Any
     summary: str | None = None
     labels: np.ndarray | None = None
+    models: dict | None = None
 
 
 @dataclass(frozen=True)
@@ -655,6 +661,15 @@ def run_tracking(env, key, needed):
     return Outcome(found, "\n".join(lines))
 
 
+# ----------------------------------------------------------------------------- the classifier of clusters
+
+
+def run_classification_step(env, key, needed):
+    """The classifier trained on the clusters of :data:`CLASSIFIED` and of the best baseline; the point-wise one."""
+    result, summary, models = run_classification(env, key, needed)
+    return Outcome(result, summary, models=models)
+
+
 # ----------------------------------------------------------------------------- scoring and searching
 
 
@@ -857,7 +872,8 @@ def _experiment_step(number):
 #: Every step by key, in run order: its function, the steps whose results it reads, its kind of work.
 #: #10 and #11 (#8's setting transferred), stage 2 (#12, #13: merging #8's clusters) and the filter's effect (at
 #: #8's setting) need #8; the tracking step the settings it streams (#1, #8, #12, #13); every other step needs
-#: none (the object experiment tunes its own stage 1).
+#: none (the object experiment tunes its own stage 1); the classification step the settings whose clusters it
+#: classifies (#1, #3, #8, #13) and the baselines (the strongest one's clusters).
 STEPS = {
     FILTER: Step(run_filter, kind=FILTER),
     **{key: _experiment_step(int(key)) for key in ALL_EXPERIMENTS if key.isdigit()},
@@ -865,6 +881,7 @@ STEPS = {
     FILTER_EFFECT: Step(run_filter_effect, (str(BEST_STAGE1),), kind=FILTER_EFFECT),
     BASELINES: Step(run_baselines, kind=BASELINES),
     TRACKING: Step(run_tracking, tuple(str(number) for number in TRACKED)),
+    CLASSIFICATION: Step(run_classification_step, (*(str(number) for number in CLASSIFIED), BASELINES)),
 }
 
 

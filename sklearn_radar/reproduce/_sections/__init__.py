@@ -10,6 +10,7 @@ write a module here with its ``SECTION`` and add it to :data:`SECTIONS`.
 
 from . import (
     _baselines,
+    _classification,
     _comparison,
     _data,
     _figures,
@@ -38,6 +39,7 @@ SECTIONS: tuple[Section, ...] = (
     _instance.SECTION,
     _objects.SECTION,
     _tracking.SECTION,
+    _classification.SECTION,
     _figures.SECTION,
     _comparison.SECTION,
 )

@@ -1,0 +1,228 @@
+"""The classification step: the paper's next stage, a classifier trained on each setting's clusters (issue 31).
+
+The paper clusters so that a classifier can name road users (Sec. I, and its
+future work: "the impact of the proposed clustering framework on a
+classifier shall be investigated").  For each setting of
+:data:`~._constants.CLASSIFIED` (the run's tuned one where its experiment
+ran, the paper's otherwise) and for the strongest offline scikit-learn
+baseline, a :class:`~sklearn_radar.classification.ClusterClassifier` is
+trained on the clusters of the training half (matched to the annotated
+road users) and scored on the test half with the semantic metrics of
+:func:`~sklearn_radar.metrics.semantic_scores`; the
+:class:`~sklearn_radar.classification.PointClassifier` (no clustering) is
+the baseline a user would try instead.
+
+The classifiers are fitted where the command runs, on the whole training
+half (one table: a classifier needs all its examples at once), and applied to
+each test sequence where it lives; each test sequence returns its
+detections' true and predicted classes and instances, a few arrays of its
+length.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pandas as pd
+from sklearn.base import clone
+
+from ..classification import ROAD_USER_CLASSES, ClusterClassifier, PointClassifier, road_user_class
+from ..experiments import BASELINE_INPUT, SKLEARN_BASELINES, SLIDING_BASELINE, baseline_pipeline, experiment_pipeline
+from ..metrics import background_share, semantic_scores
+from ._constants import CLASSIFIED
+from ._results import ClassificationResult, ClassifiedSetting, SemanticScores
+from ._tracking import tracked_setting
+
+#: Frame of the semantic scores and of the classifier's segments, s (as the object-level scores').
+CLASSIFICATION_FRAME_S = 0.5
+
+#: Name of the point-wise classifier's row.
+POINT_WISE = "point-wise (no clustering)"
+
+#: The file of the saved classifier (:func:`~sklearn_radar.classification.save_classifier`: the whole pipeline
+#: from raw detections, for ``sklearn-radar cluster --classifier``) of each classified experiment, and of the
+#: strongest baseline, in the run's folder.
+CLASSIFIER_FILES = {
+    **{f"#{number}": f"classifier_{number}.joblib" for number in CLASSIFIED},
+    "baseline": "classifier_baseline.joblib",
+}
+
+#: The scores of :class:`SemanticScores` kept per test sequence, for the paired comparisons.
+PER_SEQUENCE = ("pq", "map", "macro_f1", "mcov")
+
+#: Columns of the detection table the models do not read (``track_id`` stays: ``fit`` reads the instances there).
+_NOT_INPUT = ("uuid",)
+
+
+def classified_settings(needed):
+    """``[(name, source, pipeline, params)]``: the clusterings whose clusters are classified, in the table's order.
+
+    The settings of :data:`CLASSIFIED` (their run's results in ``needed`` by key, the paper's otherwise), then
+    the strongest offline baseline of the run by mean test PQ (none when the baselines did not run).
+    """
+    found = []
+    for number in CLASSIFIED:
+        pipeline, params, source = tracked_setting(number, needed.get(str(number)))
+        found.append((f"#{number}", source, pipeline, params))
+    best = strongest_offline_baseline(needed.get("baselines"))
+    if best is not None:
+        name, result = best
+        found.append((name, "tuned baseline", baseline_pipeline(name).set_params(**result.params), result.params))
+    return found
+
+
+def strongest_offline_baseline(baselines):
+    """``(name, result)`` of the offline baseline with the highest test PQ, or None (no baselines, no PQ)."""
+    scored = [
+        (name, result)
+        for name, result in (baselines or {}).items()
+        if result.instance_test is not None and name != SLIDING_BASELINE and name in SKLEARN_BASELINES
+    ]
+    return max(scored, key=lambda item: item[1].instance_test.pq, default=None)
+
+
+def classifier_model(pipeline):
+    """The pipeline with its clusterer wrapped in a :class:`ClusterClassifier` (stage 0 unchanged)."""
+    steps = [(name, clone(step)) for name, step in pipeline.steps[:-1]]
+    clusterer = clone(pipeline.steps[-1][1])
+    model = clone(pipeline)
+    model.steps = [*steps, ("classify", ClusterClassifier(clusterer, frame_length=CLASSIFICATION_FRAME_S))]
+    return model
+
+
+def point_model():
+    """The point-wise classifier after the FCS and filter input of the baselines (#3's stage 0)."""
+    model = experiment_pipeline(BASELINE_INPUT)
+    model.steps[-1] = ("classify", PointClassifier())
+    return model
+
+
+def training_table(sequence):
+    """One training sequence's detections as the classifiers read them (every column but the uuid)."""
+    data = sequence.scenes.data
+    return data[[c for c in data.columns if c not in _NOT_INPUT]]
+
+
+def classified_sequence(sequence, model, clusterer):
+    """One test sequence classified by the fitted ``model``: the arrays its scores need.
+
+    ``clusterer`` (an unfitted pipeline, or None for the point-wise classifier) gives the clusters before the
+    classifier, for the background share before.
+    """
+    data = sequence.scenes.data
+    X = data[[c for c in data.columns if c not in (*_NOT_INPUT, "label_id")]]
+    found = model[-1].predict_instances(model[:-1].transform(X))
+    return {
+        "id": sequence.id,
+        "classes_true": road_user_class(data["label_id"]),
+        "instances_true": np.asarray(sequence.scenes.target, dtype=np.int64),
+        "times": data["timestamp"].to_numpy(dtype=np.float64) * 1e-6,
+        "classes_pred": found["class"].to_numpy(),
+        "instances_pred": found["instance"].to_numpy(),
+        "confidence": found["confidence"].to_numpy(),
+        "clusters": None if clusterer is None else np.asarray(clone(clusterer).fit_predict(X)),
+    }
+
+
+def run_classification(env, key, needed):
+    """Train the classifier on each setting's training clusters, score it on the test half; the point-wise too.
+
+    Returns ``(ClassificationResult, summary, models)``, ``models`` the fitted pipelines to save, by file name.
+    """
+    start = time.perf_counter()
+    tables = env.sequences.map(training_table, env.train, executor=env.executor)
+    X_train = pd.concat(tables, ignore_index=True)
+    y_train = road_user_class(X_train["label_id"])
+    X_train = X_train.drop(columns=["label_id"])
+    rows, lines, models = {}, [], {}
+    jobs = [
+        (name, source, classifier_model(pipeline), pipeline, params)
+        for name, source, pipeline, params in classified_settings(needed)
+    ]
+    jobs.append((POINT_WISE, "FCS and filter, per detection", point_model(), None, {}))
+    for name, source, model, clusterer, params in jobs:
+        model.fit(X_train, y_train)
+        parts = env.sequences.map(classified_sequence, env.test, model, clusterer, executor=env.executor)
+        file = _classifier_file(name, source)
+        rows[name] = _classified_setting(name, source, params, model, parts, file)
+        if file is not None:
+            models[file] = model
+        scores = rows[name].scores
+        lines.append(
+            f"    {name}: class PQ {scores.pq:.3f}, mAP@0.5 {scores.map:.3f}, macro-F1 {scores.macro_f1:.3f}, "
+            f"mCov {scores.mcov:.3f}"
+        )
+    result = ClassificationResult(settings=rows, test_sequences=list(env.test), wall_time_s=time.perf_counter() - start)
+    return result, "\n".join(lines), models
+
+
+def _classifier_file(name, source):
+    """The file the run saves the classifier of ``name`` to: None for the point-wise one and the paper's settings.
+
+    A classifier of the paper's setting (an experiment that did not run) is not saved: ``params.json`` has no such
+    setting to go with it.
+    """
+    if name == POINT_WISE or source.startswith("paper's"):
+        return None
+    return CLASSIFIER_FILES.get(name, CLASSIFIER_FILES["baseline"])
+
+
+def _classified_setting(name, source, params, model, parts, file):
+    """The :class:`ClassifiedSetting` of one fitted model from its test sequences' arrays."""
+    pooled = {k: np.concatenate([p[k] for p in parts]) for k in parts[0] if k not in ("id", "clusters")}
+    groups = np.concatenate([np.full(len(p["times"]), p["id"]) for p in parts])
+    scores = _scores(pooled, groups)
+    per_sequence = {k: [] for k in PER_SEQUENCE}
+    for part in parts:
+        one = _scores(part, np.full(len(part["times"]), part["id"]))
+        for k in PER_SEQUENCE:
+            per_sequence[k].append(float(getattr(one, k)))
+    before = None
+    if parts[0]["clusters"] is not None:
+        before = _background_share(pooled, np.concatenate([p["clusters"] for p in parts]), groups)
+    return ClassifiedSetting(
+        name=name,
+        setting_source=source,
+        params=params,
+        scores=scores,
+        per_sequence=per_sequence,
+        background_share_before=before,
+        background_share_after=_background_share(pooled, pooled["instances_pred"], groups),
+        n_training_examples=model[-1].n_training_examples_,
+        classifier_file=file,
+    )
+
+
+def _scores(arrays, groups):
+    found = semantic_scores(
+        arrays["classes_true"],
+        arrays["instances_true"],
+        arrays["classes_pred"],
+        arrays["instances_pred"],
+        arrays["confidence"],
+        times=arrays["times"],
+        groups=groups,
+        frame=CLASSIFICATION_FRAME_S,
+    )
+    per_class = {
+        ROAD_USER_CLASSES[int(code)]: {k: float(v) for k, v in figures.items()}
+        for code, figures in found["per_class"].items()
+        if int(code) in ROAD_USER_CLASSES
+    }
+    return SemanticScores(
+        frame_s=CLASSIFICATION_FRAME_S,
+        **{k: float(found[k]) for k in ("pq", "sq", "rq", "map", "macro_f1", "mcov")},
+        per_class=per_class,
+    )
+
+
+def _background_share(arrays, labels, groups):
+    """Share of the per-frame segments of ``labels`` with no detection of an annotated road user."""
+    share = background_share(
+        arrays["instances_true"], labels, times=arrays["times"], groups=groups, frame=CLASSIFICATION_FRAME_S
+    )
+    return float(share.background_segment_share)
+
+
+__all__ = ["CLASSIFICATION_FRAME_S", "CLASSIFIER_FILES", "POINT_WISE", "classified_settings", "run_classification"]

@@ -1,0 +1,192 @@
+"""The reproduce run's classification step: the classifier on each setting's clusters, its semantic scores."""
+
+import contextlib
+import io
+import json
+
+import numpy as np
+import pytest
+
+from sklearn_radar._cli import main
+from sklearn_radar.classification import road_user_class
+from sklearn_radar.datasets import load_radarscenes
+from sklearn_radar.metrics import semantic_scores
+from sklearn_radar.reproduce._classification import POINT_WISE, strongest_offline_baseline
+from sklearn_radar.reproduce._results import (
+    ClassificationResult,
+    ClassifiedSetting,
+    RunResults,
+    SemanticScores,
+)
+from sklearn_radar.reproduce._sections._classification import answer_lines, markdown
+
+
+@pytest.fixture(scope="module")
+def classified(tiny_folder, tmp_path_factory):
+    """A run of #1, #13, the baselines and the classification step (#3 and #8 take the paper's settings)."""
+    out = tmp_path_factory.mktemp("classification") / "out"
+    with contextlib.redirect_stdout(io.StringIO()):
+        code = main(
+            [
+                "reproduce",
+                "--data",
+                str(tiny_folder),
+                "--out",
+                str(out),
+                "--n-iter",
+                "2",
+                "--experiments",
+                "1,13,baselines,classification",
+            ]
+        )
+    assert code == 0
+    return out
+
+
+def test_the_step_classifies_every_setting_and_the_point_wise_baseline(classified):
+    results = json.loads((classified / "results.json").read_text())
+    assert results["meta"]["completed"] == ["1", "13", "baselines", "classification"]
+    settings = results["classification"]["settings"]
+    best = strongest_offline_baseline(RunResults.read(classified / "results.json").baselines)
+    assert list(settings) == ["#1", "#3", "#8", "#13", best[0], POINT_WISE]
+    sources = {name: entry["setting_source"] for name, entry in settings.items()}
+    assert sources["#1"] == "fixed #1" and sources["#13"] == "tuned #13"
+    assert sources["#3"] == "paper's #3" and sources["#8"] == "paper's #8"
+    assert settings["#13"]["params"] == {
+        **results["experiments"]["13"]["stage1_params"],
+        **results["experiments"]["13"]["params"],
+    }
+    for name, entry in settings.items():
+        scores = entry["scores"]
+        for key in ("pq", "sq", "rq", "map", "macro_f1", "mcov"):
+            assert 0.0 <= scores[key] <= 1.0, (name, key)
+        assert 0.0 <= entry["background_share_after"] <= 1.0
+        assert entry["n_training_examples"] > 0
+        n_test = len(results["classification"]["test_sequences"])
+        assert all(len(values) == n_test for values in entry["per_sequence"].values())
+    assert settings[POINT_WISE]["background_share_before"] is None
+    assert all(settings[name]["background_share_before"] is not None for name in list(settings)[:-1])
+
+
+def test_the_results_read_back_and_the_report_has_the_section(classified):
+    results = RunResults.read(classified / "results.json")
+    assert isinstance(results.classification, ClassificationResult)
+    again = RunResults.from_json_dict(json.loads(json.dumps(results.to_json_dict())))
+    assert again.classification == results.classification
+    report = (classified / "report.md").read_text()
+    assert "## Beyond the paper: classifying the clusters" in report
+    assert "published, real RadarScenes data" in report and "86.97 %" in report
+
+
+def test_the_pooled_scores_are_those_of_the_whole_test_half(classified, tiny_folder):
+    """The step's pooled figures = semantic_scores of the test half at once, with a classifier trained here."""
+    from sklearn_radar.reproduce._classification import classifier_model
+
+    results = RunResults.read(classified / "results.json")
+    entry = results.classification.settings["#1"]
+    test = results.classification.test_sequences
+    every = np.unique(load_radarscenes(tiny_folder).data["sequence"])
+    train = sorted(set(every.tolist()) - set(test))
+    from sklearn_radar.experiments import experiment_pipeline
+
+    pipeline = experiment_pipeline(1).set_params(**entry.params)
+    model = classifier_model(pipeline)
+    train_data = load_radarscenes(tiny_folder, sequences=train).data
+    model.fit(train_data.drop(columns=["uuid", "label_id"]), road_user_class(train_data["label_id"]))
+    test_scenes = load_radarscenes(tiny_folder, sequences=test)
+    data = test_scenes.data
+    found = model[-1].predict_instances(model[:-1].transform(data.drop(columns=["uuid", "label_id"])))
+    assert len(found) == len(data)  # rows in = rows out
+    scores = semantic_scores(
+        road_user_class(data["label_id"]),
+        np.asarray(test_scenes.target),
+        found["class"].to_numpy(),
+        found["instance"].to_numpy(),
+        found["confidence"].to_numpy(),
+        times=data["timestamp"].to_numpy(dtype=np.float64) * 1e-6,
+        groups=data["sequence"].to_numpy(),
+        frame=0.5,
+    )
+    for key in ("pq", "map", "macro_f1", "mcov"):
+        assert getattr(entry.scores, key) == pytest.approx(scores[key], abs=1e-9), key
+
+
+def _setting(name, per_sequence, before=0.5):
+    mean = float(np.mean(per_sequence))
+    scores = SemanticScores(frame_s=0.5, pq=mean, sq=1.0, rq=mean, map=mean, macro_f1=mean, mcov=mean, per_class={})
+    return ClassifiedSetting(
+        name=name,
+        setting_source="tuned",
+        params={},
+        scores=scores,
+        per_sequence={key: list(per_sequence) for key in ("pq", "map", "macro_f1", "mcov")},
+        background_share_before=before,
+        background_share_after=0.1,
+        n_training_examples=10,
+    )
+
+
+def test_the_answer_says_higher_only_beyond_two_standard_errors(classified):
+    """Hand-made per-sequence scores: consistent gains hold, a gain within the spread cannot tell."""
+    results = RunResults.read(classified / "results.json")
+    clear = {"#1": _setting("#1", [0.5, 0.52, 0.48, 0.5]), "#13": _setting("#13", [0.6, 0.61, 0.59, 0.62])}
+    noisy = {"#1": _setting("#1", [0.5, 0.7, 0.3, 0.5]), "#13": _setting("#13", [0.6, 0.2, 0.8, 0.5])}
+    v1 = {name: results.experiments[int(name[1:])].v1_test for name in clear}
+    best_v1 = max(v1, key=v1.get)
+    for settings, expected in (
+        (clear, "yes, it is higher" if best_v1 == "#13" else "no, it is lower"),
+        (noisy, "cannot tell"),
+    ):
+        results.classification = ClassificationResult(settings=settings, test_sequences=[0, 1, 2, 3], wall_time_s=1.0)
+        lines = [line for line in answer_lines(results) if "best test V1" in line]
+        assert len(lines) == 2 and all(expected in line for line in lines), lines
+    assert markdown(results)[1] == "## Beyond the paper: classifying the clusters"
+
+
+def test_the_strongest_offline_baseline_skips_the_causal_one(classified):
+    results = RunResults.read(classified / "results.json")
+    name, result = strongest_offline_baseline(results.baselines)
+    assert "sliding" not in name
+    offline = {n: r.instance_test.pq for n, r in results.baselines.items() if "sliding" not in n}
+    assert result.instance_test.pq == max(offline.values())
+    assert strongest_offline_baseline(None) is None
+
+
+def test_the_run_saves_each_tuned_settings_classifier_for_the_cluster_command(classified, tiny_folder, tmp_path):
+    """Saved beside params.json, listed there and in run.json; `cluster --classifier` applies it (devkit classes)."""
+    from sklearn_radar.classification import load_classifier
+
+    results = RunResults.read(classified / "results.json")
+    settings = results.classification.settings
+    assert settings["#1"].classifier_file == "classifier_1.joblib"
+    assert settings["#13"].classifier_file == "classifier_13.joblib"
+    assert settings["#8"].classifier_file is None  # the paper's setting: no params.json entry to go with it
+    assert settings[POINT_WISE].classifier_file is None
+    saved = sorted(p.name for p in classified.glob("*.joblib"))
+    assert saved == sorted(results.saved_classifiers())
+    params = json.loads((classified / "params.json").read_text())
+    assert params["experiments"]["13"]["classifier"] == "classifier_13.joblib"
+    marker = json.loads((classified / "run.json").read_text())
+    assert set(saved) <= set(marker["files"])
+    model = load_classifier(classified / "classifier_13.joblib")
+    assert model[-1].n_training_examples_ == settings["#13"].n_training_examples
+    out = tmp_path / "predictions.json"
+    with contextlib.redirect_stdout(io.StringIO()):
+        code = main(
+            [
+                "cluster",
+                "--data",
+                str(tiny_folder),
+                "--classifier",
+                str(classified / "classifier_13.joblib"),
+                "--out",
+                str(out),
+            ]
+        )
+    assert code == 0
+    document = json.loads(out.read_text())
+    assert document["new_label_names"]["5"] == "STATIC"  # the devkit's class numbering, not NOISE / CLUSTERED
+    entries = {key: value for key, value in document.items() if isinstance(value, dict) and len(value) > 20}
+    (predictions,) = entries.values()
+    data = load_radarscenes(tiny_folder).data
+    assert set(predictions) == set(data["uuid"].astype(str)) and len(predictions) == len(data)
