@@ -15,6 +15,9 @@ PUBLISHED = (
     ("RadarGNN, TUMFTM (semantic-segmentation F1; its mAP 56.5 is bird's-eye-view boxes)", None, 77.1, None),
 )
 
+#: Fewer test sequences than this make the paired per-sequence check weak (its standard error rests on few values).
+FEW_SEQUENCES = 5
+
 #: The scores the answer to the paper's question is given in: the published one, and the one that counts objects.
 ANSWERED_BY = (("map", "mAP@0.5"), ("pq", "class PQ"))
 
@@ -130,9 +133,14 @@ def _verdict(ours: ClassifiedSetting, theirs: ClassifiedSetting, rival, score, s
     if se is None:
         return f"{head}; one test sequence cannot tell a difference from the spread between sequences."
     words = {HOLDS: "yes, it is higher", DOES_NOT_HOLD: "no, it is lower"}.get(said, "cannot tell (within the noise)")
+    weak = (
+        f"; {len(differences)} test sequences make a weak check: the `--full` data have 8"
+        if unit == "test sequences" and len(differences) < FEW_SEQUENCES
+        else ""
+    )
     return (
         f"{head}: {words} (mean paired difference over the {len(differences)} {unit} {mean:+.3f} \u00b1 {se:.3f} "
-        f"standard error; it counts beyond {N_STANDARD_ERRORS:g} standard errors)."
+        f"standard error; it counts beyond {N_STANDARD_ERRORS:g} standard errors{weak})."
     )
 
 
