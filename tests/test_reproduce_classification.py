@@ -18,7 +18,7 @@ from sklearn_radar.reproduce._results import (
     RunResults,
     SemanticScores,
 )
-from sklearn_radar.reproduce._sections._classification import answer_lines, markdown
+from sklearn_radar.reproduce._sections._classification import _verdict, answer_lines, markdown
 
 
 @pytest.fixture(scope="module")
@@ -190,3 +190,53 @@ def test_the_run_saves_each_tuned_settings_classifier_for_the_cluster_command(cl
     (predictions,) = entries.values()
     data = load_radarscenes(tiny_folder).data
     assert set(predictions) == set(data["uuid"].astype(str)) and len(predictions) == len(data)
+
+
+@pytest.fixture(scope="module")
+def classified_twice(tiny_folder, tmp_path_factory):
+    """#8, #13, the baselines and the classification step, each search repeated twice."""
+    out = tmp_path_factory.mktemp("classification_repeats") / "out"
+    with contextlib.redirect_stdout(io.StringIO()):
+        code = main(
+            [
+                "reproduce",
+                "--data",
+                str(tiny_folder),
+                "--out",
+                str(out),
+                "--n-iter",
+                "2",
+                "--repeats",
+                "2",
+                "--experiments",
+                "1,8,13,baselines,classification",
+            ]
+        )
+    assert code == 0
+    return RunResults.read(out / "results.json")
+
+
+def test_with_repeats_each_repeats_setting_is_classified(classified_twice):
+    from sklearn_radar.reproduce._classification import classified_settings
+
+    results = classified_twice
+    settings = results.classification.settings
+    assert settings["#1"].repeats is None  # the fixed expert setting runs once
+    assert settings[POINT_WISE].repeats is None
+    for name in ("#8", "#13", strongest_offline_baseline(results.baselines)[0]):
+        assert len(settings[name].repeats) == 2, name
+        assert settings[name].repeats[0] == settings[name].scores
+    needed = {"8": results.experiments[8], "13": results.experiments[13], "baselines": results.baselines}
+    pipelines = dict((name, p) for name, _, p, _ in classified_settings(needed))
+    second_8 = results.experiments[8].repeats[1].params
+    stage1 = pipelines["#13"][1][-1].stage1.get_params()
+    assert all(
+        stage1[key.removeprefix("cluster__")] == value for key, value in second_8.items() if key.startswith("cluster__")
+    )  # repeat 2 of #13 merges repeat 2 of #8's clusters
+    table = "\n".join(markdown(results))
+    pq_8 = [s.pq for s in settings["#8"].repeats]
+    assert f"{np.mean(pq_8):.3f} \u00b1 {np.std(pq_8, ddof=1):.3f}" in table
+    said = _verdict(settings["#8"], settings["#13"], "#13", "pq", "class PQ")
+    assert "over the 2 repeats" in said  # both repeated alike: paired by repeat
+    said = _verdict(settings["#8"], settings["#1"], "#1", "pq", "class PQ")
+    assert f"over the {len(results.classification.test_sequences)} test sequences" in said

@@ -30,9 +30,9 @@ from sklearn.base import clone
 from ..classification import ROAD_USER_CLASSES, ClusterClassifier, PointClassifier, road_user_class
 from ..experiments import BASELINE_INPUT, SKLEARN_BASELINES, SLIDING_BASELINE, baseline_pipeline, experiment_pipeline
 from ..metrics import background_share, semantic_scores
-from ._constants import CLASSIFIED
+from ._constants import BEST_STAGE1, CLASSIFIED
 from ._results import ClassificationResult, ClassifiedSetting, SemanticScores
-from ._tracking import tracked_setting
+from ._tracking import run_setting_pipeline, tracked_setting
 
 #: Frame of the semantic scores and of the classifier's segments, s (as the object-level scores').
 CLASSIFICATION_FRAME_S = 0.5
@@ -56,20 +56,38 @@ _NOT_INPUT = ("uuid",)
 
 
 def classified_settings(needed):
-    """``[(name, source, pipeline, params)]``: the clusterings whose clusters are classified, in the table's order.
+    """``[(name, source, pipelines, params)]``: the clusterings whose clusters are classified, in the table's order.
 
     The settings of :data:`CLASSIFIED` (their run's results in ``needed`` by key, the paper's otherwise), then
     the strongest offline baseline of the run by mean test PQ (none when the baselines did not run).
+    ``pipelines`` holds one pipeline per repeat of the search (repeat ``k`` of #13 on repeat ``k`` of #8, as the
+    run built it); ``params`` is the kept setting, the first repeat's.
     """
     found = []
     for number in CLASSIFIED:
-        pipeline, params, source = tracked_setting(number, needed.get(str(number)))
-        found.append((f"#{number}", source, pipeline, params))
+        result = needed.get(str(number))
+        pipeline, params, source = tracked_setting(number, result)
+        found.append((f"#{number}", source, [pipeline, *_later_repeats(number, result, needed)], params))
     best = strongest_offline_baseline(needed.get("baselines"))
     if best is not None:
         name, result = best
-        found.append((name, "tuned baseline", baseline_pipeline(name).set_params(**result.params), result.params))
+        pipelines = [baseline_pipeline(name).set_params(**r.params) for r in result.repeats or [result]]
+        found.append((name, "tuned baseline", pipelines, result.params))
     return found
+
+
+def _later_repeats(number, result, needed):
+    """The pipelines of repeats 2, 3, ... of experiment ``number``'s search (none for a single run)."""
+    if result is None or not result.repeats:
+        return []
+    stage1s = [result.stage1_params] * len(result.repeats)
+    best = needed.get(str(BEST_STAGE1))
+    if result.stage1_params is not None and best is not None and len(best.repeats or []) == len(result.repeats):
+        stage1s = [{k: v for k, v in r.params.items() if k.startswith("cluster__")} for r in best.repeats]
+    return [
+        run_setting_pipeline(number, r.params, stage1)
+        for r, stage1 in zip(result.repeats[1:], stage1s[1:], strict=True)
+    ]
 
 
 def strongest_offline_baseline(baselines):
@@ -136,22 +154,25 @@ def run_classification(env, key, needed):
     y_train = road_user_class(X_train["label_id"])
     X_train = X_train.drop(columns=["label_id"])
     rows, lines, models = {}, [], {}
-    jobs = [
-        (name, source, classifier_model(pipeline), pipeline, params)
-        for name, source, pipeline, params in classified_settings(needed)
-    ]
-    jobs.append((POINT_WISE, "FCS and filter, per detection", point_model(), None, {}))
-    for name, source, model, clusterer, params in jobs:
-        model.fit(X_train, y_train)
-        parts = env.sequences.map(classified_sequence, env.test, model, clusterer, executor=env.executor)
+    jobs = [(name, source, pipelines, params) for name, source, pipelines, params in classified_settings(needed)]
+    jobs.append((POINT_WISE, "FCS and filter, per detection", [None], {}))
+    for name, source, pipelines, params in jobs:
         file = _classifier_file(name, source)
-        rows[name] = _classified_setting(name, source, params, model, parts, file)
-        if file is not None:
-            models[file] = model
+        repeats = []
+        for pipeline in pipelines:
+            model = point_model() if pipeline is None else classifier_model(pipeline)
+            model.fit(X_train, y_train)
+            parts = env.sequences.map(classified_sequence, env.test, model, pipeline, executor=env.executor)
+            repeats.append(_classified_setting(name, source, params, model, parts, file))
+            if file is not None and len(repeats) == 1:
+                models[file] = model
+        rows[name] = repeats[0]
+        if len(repeats) > 1:
+            rows[name].repeats = [r.scores for r in repeats]
         scores = rows[name].scores
         lines.append(
             f"    {name}: class PQ {scores.pq:.3f}, mAP@0.5 {scores.map:.3f}, macro-F1 {scores.macro_f1:.3f}, "
-            f"mCov {scores.mcov:.3f}"
+            f"mCov {scores.mcov:.3f}" + (f" (first of {len(repeats)} repeats)" if len(repeats) > 1 else "")
         )
     result = ClassificationResult(settings=rows, test_sequences=list(env.test), wall_time_s=time.perf_counter() - start)
     return result, "\n".join(lines), models

@@ -1125,6 +1125,9 @@ class ClassifiedSetting(_JsonRecord):
         The classifier's training examples: segments, or detections for the point-wise classifier.
     classifier_file : str or None, default=None
         The saved classifier, in the run's folder.
+    repeats : list of SemanticScores or None, default=None
+        With ``--repeats``: the scores of the classifier on the clusters of each repeat's setting (the first is
+        ``scores``); None for a single run, the fixed #1 and the point-wise classifier.
     """
 
     name: str
@@ -1136,6 +1139,7 @@ class ClassifiedSetting(_JsonRecord):
     background_share_after: float
     n_training_examples: int
     classifier_file: str | None = None
+    repeats: list[SemanticScores] | None = None
 
 
 @dataclass(**_RECORD)

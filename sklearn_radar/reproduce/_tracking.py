@@ -36,15 +36,20 @@ def tracked_setting(number, result):
     """
     if result is None:
         return experiment_pipeline(number), paper_params(number), f"paper's #{number}"
-    from .._cluster_command import setting_pipeline  # here: the cluster command imports the reproduce package
-
-    setting = {"experiment": number, "params": result.params, "stage1_params": result.stage1_params}
     params = {**(result.stage1_params or {}), **result.params}
     return (
-        setting_pipeline(setting, "results"),
+        run_setting_pipeline(number, result.params, result.stage1_params),
         params,
         f"{'tuned' if get_experiment(number).tuned else 'fixed'} #{number}",
     )
+
+
+def run_setting_pipeline(number, params, stage1_params):
+    """The pipeline of a setting of experiment ``number`` the run found (as ``params.json`` saves it)."""
+    from .._cluster_command import setting_pipeline  # here: the cluster command imports the reproduce package
+
+    setting = {"experiment": number, "params": params, "stage1_params": stage1_params}
+    return setting_pipeline(setting, "results")
 
 
 def streamable(pipeline):

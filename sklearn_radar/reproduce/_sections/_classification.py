@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._results import ClassifiedSetting, RunResults
+from .._results import ClassifiedSetting, RunResults, repeated_scores
 from ._base import Section, format_params
 from ._comparison import DOES_NOT_HOLD, HOLDS, N_STANDARD_ERRORS, paired_verdict
 
@@ -14,6 +14,9 @@ PUBLISHED = (
     ("Liu et al., T-IV 2022 (PointNet++ / gMLP, then clustering)", 86.97, None, 89.53),
     ("RadarGNN, TUMFTM (semantic-segmentation F1; its mAP 56.5 is bird's-eye-view boxes)", None, 77.1, None),
 )
+
+#: Fewer test sequences than this make the paired per-sequence check weak (its standard error rests on few values).
+FEW_SEQUENCES = 5
 
 #: The scores the answer to the paper's question is given in: the published one, and the one that counts objects.
 ANSWERED_BY = (("map", "mAP@0.5"), ("pq", "class PQ"))
@@ -43,7 +46,8 @@ def markdown(results: RunResults) -> list[str]:
         "classifier's confidence; COCO's 101-point interpolation; the mean over classes), macro-F1 over the "
         "detections (background counted as a class) and the class-agnostic mCov. Background-only segments: the "
         "share of segments with no detection of a road user, of the clustering (before) and of what the "
-        "classifier keeps (after).",
+        "classifier keeps (after). With repeats, a cell gives the mean \u00b1 sd over the classifiers of each "
+        "repeat's setting (the other columns are the first repeat's).",
         "",
         "| classified clusters of | clustering's test V1 | clustering's test PQ | class PQ | mAP@0.5 | macro-F1 "
         "| mCov | background-only segments before / after | training examples |",
@@ -51,12 +55,11 @@ def markdown(results: RunResults) -> list[str]:
     ]
     for name, row in rows.items():
         v1, pq = clustering_scores(results, name)
-        s = row.scores
         before = "-" if row.background_share_before is None else f"{100 * row.background_share_before:.1f} %"
+        pq_cell, map_cell, f1_cell, mcov_cell = (_repeated(row, key) for key in ("pq", "map", "macro_f1", "mcov"))
         lines.append(
-            f"| {name} ({row.setting_source}) | {_cell(v1)} | {_cell(pq)} | {s.pq:.3f} | {100 * s.map:.1f} % | "
-            f"{100 * s.macro_f1:.1f} % | {100 * s.mcov:.1f} % | {before} / "
-            f"{100 * row.background_share_after:.1f} % | {row.n_training_examples:,} |"
+            f"| {name} ({row.setting_source}) | {_cell(v1)} | {_cell(pq)} | {pq_cell} | {map_cell} | {f1_cell} | "
+            f"{mcov_cell} | {before} / {100 * row.background_share_after:.1f} % | {row.n_training_examples:,} |"
         )
     for source, map_percent, f1_percent, mcov_percent in PUBLISHED:
         lines.append(
@@ -81,15 +84,15 @@ def markdown(results: RunResults) -> list[str]:
 
 
 def clustering_scores(results: RunResults, name):
-    """(test V1, test PQ) of the clustering named ``name`` (``"#8"`` or a baseline), as the run scored it; Nones."""
+    """(test V1, test PQ) of the clustering ``name`` (``"#8"`` or a baseline), means over the repeats; or Nones."""
     if name.startswith("#") and name[1:].isdigit():
         result = results.experiments.get(int(name[1:]))
     else:
         result = (results.baselines or {}).get(name)
     if result is None:
         return None, None
-    pq = None if result.instance_test is None else result.instance_test.pq
-    return result.v1_test, pq
+    pq = repeated_scores(result, "pq")
+    return float(np.mean(repeated_scores(result, "v1"))), float(np.mean(pq)) if pq else None
 
 
 def answer_lines(results: RunResults) -> list[str]:
@@ -106,7 +109,7 @@ def answer_lines(results: RunResults) -> list[str]:
         best = max(scored, key=scored.get)
         for score, score_label in ANSWERED_BY:
             rivals = {name: row for name, row in rows.items() if name != best}
-            rival = max(rivals, key=lambda name: getattr(rivals[name].scores, score))
+            rival = max(rivals, key=lambda name: np.mean(_values(rivals[name], score)))
             lines.append(
                 f"- Does the clustering with the best test {label} ({best}) give the best classifier by "
                 f"{score_label}? {_verdict(rows[best], rivals[rival], rival, score, score_label)}"
@@ -115,19 +118,44 @@ def answer_lines(results: RunResults) -> list[str]:
 
 
 def _verdict(ours: ClassifiedSetting, theirs: ClassifiedSetting, rival, score, score_label):
-    """The paired per-test-sequence comparison of one score, by the report's rule (two standard errors)."""
-    mine = getattr(ours.scores, score)
-    other = getattr(theirs.scores, score)
-    differences = np.subtract(ours.per_sequence[score], theirs.per_sequence[score])
+    """The paired comparison of one score by the report's rule (two standard errors).
+
+    Paired by repeat (repeat k against repeat k) when both were repeated alike, else by test sequence (the same
+    sequences for both).
+    """
+    mine, other = _values(ours, score), _values(theirs, score)
+    if len(mine) > 1 and len(mine) == len(other):
+        differences, unit = np.subtract(mine, other), "repeats"
+    else:
+        differences, unit = np.subtract(ours.per_sequence[score], theirs.per_sequence[score]), "test sequences"
     said, mean, se = paired_verdict(differences)
-    head = f"{score_label} {mine:.3f} against {other:.3f} for the best other, {rival}"
+    head = f"{score_label} {np.mean(mine):.3f} against {np.mean(other):.3f} for the best other, {rival}"
     if se is None:
         return f"{head}; one test sequence cannot tell a difference from the spread between sequences."
     words = {HOLDS: "yes, it is higher", DOES_NOT_HOLD: "no, it is lower"}.get(said, "cannot tell (within the noise)")
-    return (
-        f"{head}: {words} (per test sequence, the mean paired difference over the {len(differences)} test sequences "
-        f"{mean:+.3f} \u00b1 {se:.3f} standard error; it counts beyond {N_STANDARD_ERRORS:g} standard errors)."
+    weak = (
+        f"; {len(differences)} test sequences make a weak check: the `--full` data have 8"
+        if unit == "test sequences" and len(differences) < FEW_SEQUENCES
+        else ""
     )
+    return (
+        f"{head}: {words} (mean paired difference over the {len(differences)} {unit} {mean:+.3f} \u00b1 {se:.3f} "
+        f"standard error; it counts beyond {N_STANDARD_ERRORS:g} standard errors{weak})."
+    )
+
+
+def _values(row: ClassifiedSetting, score):
+    """The score of each repeat (one value for a single run)."""
+    return [float(getattr(scores, score)) for scores in row.repeats or [row.scores]]
+
+
+def _repeated(row: ClassifiedSetting, score):
+    """``"0.392"`` / ``"31.1 %"``, or mean \u00b1 sd over the repeats."""
+    values = _values(row, score)
+    scale, unit, digits = (1, "", 3) if score == "pq" else (100, " %", 1)
+    if len(values) == 1:
+        return f"{scale * values[0]:.{digits}f}{unit}"
+    return f"{scale * np.mean(values):.{digits}f} \u00b1 {scale * np.std(values, ddof=1):.{digits}f}{unit}"
 
 
 def _per_class(row: ClassifiedSetting, score):
