@@ -24,19 +24,24 @@ from sklearn_radar.reproduce._sections._classification import _verdict, answer_l
 @pytest.fixture(scope="module")
 def classified(tiny_folder, tmp_path_factory):
     """A run of #1, #13, the baselines and the classification step (#3 and #8 take the paper's settings)."""
-    out = tmp_path_factory.mktemp("classification") / "out"
+    return _reproduced(tiny_folder, tmp_path_factory.mktemp("classification") / "out", "1,13,baselines,classification")
+
+
+def _reproduced(folder, out, experiments, *options):
+    """``out`` after a quiet ``sklearn-radar reproduce`` of ``experiments`` on ``folder`` (2 iterations)."""
     with contextlib.redirect_stdout(io.StringIO()):
         code = main(
             [
                 "reproduce",
                 "--data",
-                str(tiny_folder),
+                str(folder),
                 "--out",
                 str(out),
                 "--n-iter",
                 "2",
                 "--experiments",
-                "1,13,baselines,classification",
+                experiments,
+                *options,
             ]
         )
     assert code == 0
@@ -196,23 +201,7 @@ def test_the_run_saves_each_tuned_settings_classifier_for_the_cluster_command(cl
 def classified_twice(tiny_folder, tmp_path_factory):
     """#8, #13, the baselines and the classification step, each search repeated twice."""
     out = tmp_path_factory.mktemp("classification_repeats") / "out"
-    with contextlib.redirect_stdout(io.StringIO()):
-        code = main(
-            [
-                "reproduce",
-                "--data",
-                str(tiny_folder),
-                "--out",
-                str(out),
-                "--n-iter",
-                "2",
-                "--repeats",
-                "2",
-                "--experiments",
-                "1,8,13,baselines,classification",
-            ]
-        )
-    assert code == 0
+    _reproduced(tiny_folder, out, "1,8,13,baselines,classification", "--repeats", "2")
     return RunResults.read(out / "results.json")
 
 
