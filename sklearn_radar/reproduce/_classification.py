@@ -51,8 +51,8 @@ CLASSIFIER_FILES = {
 #: The scores of :class:`SemanticScores` kept per test sequence, for the paired comparisons.
 PER_SEQUENCE = ("pq", "map", "macro_f1", "mcov")
 
-#: Columns of the detection table the models do not read (``track_id`` stays: ``fit`` reads the instances there).
-_NOT_INPUT = ("uuid",)
+#: Columns of the detection table the models do not read.
+_NOT_INPUT = ("uuid", "label_id")
 
 
 def classified_settings(needed):
@@ -116,21 +116,35 @@ def point_model():
     return model
 
 
-def training_table(sequence):
-    """One training sequence's detections as the classifiers read them (every column but the uuid)."""
-    data = sequence.scenes.data
+def model_input(data):
+    """A detection table as the models read it: every column but the uuid and the ground-truth ``label_id``.
+
+    ``track_id`` stays: ``fit`` reads the instances there (prediction does not).
+    """
     return data[[c for c in data.columns if c not in _NOT_INPUT]]
 
 
-def classified_sequence(sequence, model, clusterer):
+def training_table(sequence):
+    """One training sequence: its :func:`model_input` and its detections' road-user classes."""
+    data = sequence.scenes.data
+    return model_input(data), road_user_class(data["label_id"])
+
+
+def classified_sequence(sequence, model):
     """One test sequence classified by the fitted ``model``: the arrays its scores need.
 
-    ``clusterer`` (an unfitted pipeline, or None for the point-wise classifier) gives the clusters before the
-    classifier, for the background share before.
+    ``clusters`` are the labels the classifier classified (None for the point-wise classifier, which has none),
+    for the background share before it.
     """
     data = sequence.scenes.data
-    X = data[[c for c in data.columns if c not in (*_NOT_INPUT, "label_id")]]
-    found = model[-1].predict_instances(model[:-1].transform(X))
+    working = model[:-1].transform(model_input(data))
+    classifier = model[-1]
+    clusters = None
+    if isinstance(classifier, ClusterClassifier):
+        clusters = np.asarray(clone(classifier.clusterer).fit_predict(working))
+        found = classifier.predict_instances_of(working, clusters)
+    else:
+        found = classifier.predict_instances(working)
     return {
         "id": sequence.id,
         "classes_true": road_user_class(data["label_id"]),
@@ -139,7 +153,7 @@ def classified_sequence(sequence, model, clusterer):
         "classes_pred": found["class"].to_numpy(),
         "instances_pred": found["instance"].to_numpy(),
         "confidence": found["confidence"].to_numpy(),
-        "clusters": None if clusterer is None else np.asarray(clone(clusterer).fit_predict(X)),
+        "clusters": clusters,
     }
 
 
@@ -150,9 +164,8 @@ def run_classification(env, key, needed):
     """
     start = time.perf_counter()
     tables = env.sequences.map(training_table, env.train, executor=env.executor)
-    X_train = pd.concat(tables, ignore_index=True)
-    y_train = road_user_class(X_train["label_id"])
-    X_train = X_train.drop(columns=["label_id"])
+    X_train = pd.concat([X for X, _ in tables], ignore_index=True)
+    y_train = np.concatenate([y for _, y in tables])
     rows, lines, models = {}, [], {}
     jobs = [(name, source, pipelines, params) for name, source, pipelines, params in classified_settings(needed)]
     jobs.append((POINT_WISE, "FCS and filter, per detection", [None], {}))
@@ -162,7 +175,7 @@ def run_classification(env, key, needed):
         for pipeline in pipelines:
             model = point_model() if pipeline is None else classifier_model(pipeline)
             model.fit(X_train, y_train)
-            parts = env.sequences.map(classified_sequence, env.test, model, pipeline, executor=env.executor)
+            parts = env.sequences.map(classified_sequence, env.test, model, executor=env.executor)
             repeats.append(_classified_setting(name, source, params, model, parts, file))
             if file is not None and len(repeats) == 1:
                 models[file] = model
