@@ -58,7 +58,8 @@ def markdown(results: RunResults) -> list[str]:
         before = "-" if row.background_share_before is None else f"{100 * row.background_share_before:.1f} %"
         pq_cell, map_cell, f1_cell, mcov_cell = (_repeated(row, key) for key in ("pq", "map", "macro_f1", "mcov"))
         lines.append(
-            f"| {name} ({row.setting_source}) | {_cell(v1)} | {_cell(pq)} | {pq_cell} | {map_cell} | {f1_cell} | "
+            f"| {name}, {_source(name, row.setting_source)} | {_v1_cell(v1)} | {_cell(pq)} | {pq_cell} | {map_cell} | "
+            f"{f1_cell} | "
             f"{mcov_cell} | {before} / {100 * row.background_share_after:.1f} % | {row.n_training_examples:,} |"
         )
     for source, map_percent, f1_percent, mcov_percent in PUBLISHED:
@@ -164,6 +165,16 @@ def _per_class(row: ClassifiedSetting, score):
 
 def _cell(value):
     return "-" if value is None else f"{value:.3f}"
+
+
+def _v1_cell(value):
+    """V1 in percent, as the report's other tables give it."""
+    return "-" if value is None else f"{100 * value:.2f} %"
+
+
+def _source(name, source):
+    """Where the setting comes from, without repeating the experiment's number: ``"tuned"`` for ``"tuned #8"``."""
+    return source.removesuffix(f" {name}")
 
 
 def _percent(value):
