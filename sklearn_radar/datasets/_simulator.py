@@ -90,6 +90,7 @@ DIFFICULTY_PRESETS = {
         "road_user_share": 1.0,
         "stop_and_go": 0.0,
         "annotation_margin": np.inf,
+        "glint": 0.0,
     },
     "realistic": {
         "odometry_speed_scale": 0.005,
@@ -115,6 +116,7 @@ DIFFICULTY_PRESETS = {
         "road_user_share": 1.0,
         "stop_and_go": 0.0,
         "annotation_margin": np.inf,
+        "glint": 0.0,
     },
 }
 #: Issue 32's preset: the realistic one with RadarScenes' traffic (fewer, longer-lived road users; see the user
@@ -126,10 +128,11 @@ DIFFICULTY_PRESETS["radarscenes"] = {
     "object_detection_probability": 0.9,
     "road_user_share": 0.6,
     "stop_and_go": 0.3,
-    "annotation_margin": 0.2,
+    "glint": 0.75,
 }
-#: The knobs that issue 32 added: off in "easy" and in "realistic" (so both stay as they were), on in "radarscenes".
-ISSUE_32_KNOBS = ("road_user_share", "stop_and_go", "annotation_margin")
+#: The knobs that issue 32 added: off in "easy" and in "realistic" (so both stay as they were); "radarscenes" turns
+#: on all but ``annotation_margin``, whose box labels drop the glinted detections (see the simulator guide).
+ISSUE_32_KNOBS = ("road_user_share", "stop_and_go", "annotation_margin", "glint")
 
 
 @validate_params(
@@ -420,7 +423,9 @@ def _check_knobs(difficulty, knobs):
     for name, value in (knobs or {}).items():
         if name not in values:
             raise ValueError(f"knobs: unknown knob {name!r}; the knobs are {', '.join(sorted(values))}")
-        if name in ("object_detection_probability", "wheel_micro_doppler", "road_user_share", "stop_and_go") and not (
+        if name in (
+            "object_detection_probability", "wheel_micro_doppler", "road_user_share", "stop_and_go", "glint"
+        ) and not (
             isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_)) and 0 <= value <= 1
         ):
             raise ValueError(f"knobs: {name} must be in [0, 1], got {value!r}")
@@ -765,6 +770,9 @@ def _one_object(index, user, sensor, rng, knobs=None, extra=None, signature=None
         # RadarScenes annotates moving road users only: a standing one is static background, without a track id.
         standing = user.standing(t[scan])
         label, obj = np.where(standing, STATIC_LABEL, label), np.where(standing, -1, obj)
+    if knobs["glint"] > 0:
+        # Last: glint moves the angle estimate, not the reflecting point, its Doppler or whether it is seen.
+        azimuth = _glint(azimuth, r, user, knobs["glint"], signature)
     truth = _truth(scan[keep], r[keep], azimuth[keep], vr[keep], rcs[keep], label[keep], obj[keep])
     n = int(keep.sum())
     world = {
@@ -781,6 +789,21 @@ def _one_object(index, user, sensor, rng, knobs=None, extra=None, signature=None
         "width": np.full(n, user.width),
     }
     return truth, world
+
+
+def _glint(azimuth, r, user, share, rng):
+    """Angle glint: a ``share`` of the detections' azimuths wander by about the object's angular extent.
+
+    Where several scattering centres of one object fall into the same range-Doppler cell, their echoes interfere
+    and the angle estimate of the cell leaves the line of any of them, by up to the object's angular extent and
+    beyond (glint; Skolnik, "Introduction to Radar Systems", 3rd ed., sec. 4.4).  The error is normal with a
+    standard deviation of half the extent, ``hypot(length, width) / r`` rad.
+    """
+    hit = rng.random(len(azimuth)) < share
+    extent = np.hypot(user.length, user.width) / np.maximum(r[hit], 1.0)
+    out = azimuth.copy()
+    out[hit] += rng.normal(0.0, 0.5, int(hit.sum())) * extent
+    return out
 
 
 def _aspect(sensor, scan, cx, cy, heading):

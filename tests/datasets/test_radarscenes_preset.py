@@ -1,4 +1,4 @@
-"""The "radarscenes" preset and the knobs of issue 32: road_user_share, stop_and_go, annotation_margin."""
+"""The "radarscenes" preset and the knobs of issue 32: road_user_share, stop_and_go, annotation_margin, glint."""
 
 import numpy as np
 import pandas as pd
@@ -23,6 +23,7 @@ from sklearn_radar.datasets._simulator import (
     DIFFICULTY_PRESETS,
     ISSUE_32_KNOBS,
     _box_annotation,
+    _glint,
     _object_detections,
     _scan_schedule,
     _sensor_states,
@@ -39,10 +40,12 @@ def _easy(knobs=None, seed=4, n=2, duration=10.0):
 def test_radarscenes_is_realistic_with_fewer_longer_lived_road_users_and_the_new_knobs():
     realistic = DIFFICULTY_PRESETS["realistic"]
     changed = {name for name in realistic if realistic[name] != RADARSCENES[name]}
-    assert changed == {"traffic", "occlusion", "object_detection_probability", *ISSUE_32_KNOBS}
+    on = set(ISSUE_32_KNOBS) - {"annotation_margin"}
+    assert changed == {"traffic", "occlusion", "object_detection_probability", *on}
     assert RADARSCENES["traffic"] < realistic["traffic"] and RADARSCENES["occlusion"] < realistic["occlusion"]
-    assert RADARSCENES["road_user_share"] < 1 and RADARSCENES["stop_and_go"] > 0
-    assert np.isfinite(RADARSCENES["annotation_margin"]) and not np.isfinite(EASY["annotation_margin"])
+    assert RADARSCENES["road_user_share"] < 1 and RADARSCENES["stop_and_go"] > 0 and RADARSCENES["glint"] > 0
+    # The box annotator stays off: with glint it would drop a third of the annotated detections.
+    assert not np.isfinite(RADARSCENES["annotation_margin"]) and not np.isfinite(EASY["annotation_margin"])
 
 
 def test_radarscenes_preset_is_seeded():
@@ -62,6 +65,9 @@ def test_radarscenes_preset_is_seeded():
         ("annotation_margin", -0.2),
         ("annotation_margin", float("nan")),
         ("annotation_margin", "0.2"),
+        ("glint", 1.5),
+        ("glint", -0.5),
+        ("glint", False),
     ],
 )
 def test_invalid_issue_32_knobs_raise_a_value_error_naming_the_knob(name, value):
@@ -215,3 +221,29 @@ def test_box_annotation_changes_labels_only_both_ways():
     assert (was & ~now).sum() > 0  # own detections measured outside the box became background
     assert (~was & now).sum() > 0  # background measured inside a box joined its object
     assert (boxed.data["label_id"][~now] == STATIC_LABEL).all()
+
+
+# ---------------------------------------------------------------------------------------------------------------
+# glint
+# ---------------------------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("share", [0.3, 1.0])
+def test_glint_moves_a_share_of_the_azimuths_by_half_the_angular_extent(share):
+    user = RoadUser(kind="car", length=4.0, width=3.0, road=_straight_road(), s0=0.0, speed=10.0, d0=0.0)
+    azimuth, r = np.full(40_000, 0.1), np.full(40_000, 10.0)
+    moved = _glint(azimuth, r, user, share, np.random.default_rng(0)) - azimuth
+    assert (moved != 0).mean() == pytest.approx(share, abs=0.01)
+    # Extent hypot(4, 3) / 10 m = 0.5 rad, so a standard deviation of 0.25 rad: hand-computed.
+    assert moved[moved != 0].std() == pytest.approx(0.25, rel=0.03)
+    assert abs(moved[moved != 0].mean()) < 0.01
+    np.testing.assert_array_equal(azimuth, 0.1)  # the input is left alone
+
+
+def test_glint_moves_the_object_azimuths_and_nothing_else():
+    plain, glinted = _easy(), _easy({"glint": 1.0})
+    same = ["timestamp", "sensor_id", "range_sc", "vr", "rcs", "label_id", "track_id"]
+    pd.testing.assert_frame_equal(plain.data[same], glinted.data[same])
+    annotated = plain.target >= 0
+    moved = plain.data["azimuth_sc"].to_numpy() != glinted.data["azimuth_sc"].to_numpy()
+    assert moved[annotated].mean() > 0.99
+    # Background moves only where it copies an object detection's ray: the multipath ghosts (4 % of them).
+    assert moved[~annotated].sum() < 0.1 * annotated.sum()
