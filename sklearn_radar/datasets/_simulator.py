@@ -133,6 +133,8 @@ DIFFICULTY_PRESETS["radarscenes"] = {
 #: The knobs that issue 32 added: off in "easy" and in "realistic" (so both stay as they were); "radarscenes" turns
 #: on all but ``annotation_margin``, whose box labels drop the glinted detections (see the simulator guide).
 ISSUE_32_KNOBS = ("road_user_share", "stop_and_go", "annotation_margin", "glint")
+#: The knobs that are shares or probabilities, in [0, 1].
+UNIT_INTERVAL_KNOBS = ("object_detection_probability", "wheel_micro_doppler", "road_user_share", "stop_and_go", "glint")
 
 
 @validate_params(
@@ -423,9 +425,7 @@ def _check_knobs(difficulty, knobs):
     for name, value in (knobs or {}).items():
         if name not in values:
             raise ValueError(f"knobs: unknown knob {name!r}; the knobs are {', '.join(sorted(values))}")
-        if name in (
-            "object_detection_probability", "wheel_micro_doppler", "road_user_share", "stop_and_go", "glint"
-        ) and not (
+        if name in UNIT_INTERVAL_KNOBS and not (
             isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_)) and 0 <= value <= 1
         ):
             raise ValueError(f"knobs: {name} must be in [0, 1], got {value!r}")
