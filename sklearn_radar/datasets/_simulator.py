@@ -318,7 +318,7 @@ def make_scenes(
           noise pushed out of the box (0.1-0.5 m across at 20-50 m) is
           background, and a ghost, spray or clutter detection inside it
           belongs to the object.  Off (``inf``) in every preset: with
-          ``glint`` it drops a third of the annotated detections, far below
+          ``glint`` it drops about half of the annotated detections, far below
           RadarScenes' 530 per road user (the simulator guide).
         * ``glint``: in [0, 1], the share of a road user's detections whose
           azimuth estimate wanders by about the object's angular extent
@@ -807,8 +807,8 @@ def _glint(azimuth, r, user, share, rng):
 
     Where several scattering centres of one object fall into the same range-Doppler cell, their echoes interfere
     and the angle estimate of the cell leaves the line of any of them, by up to the object's angular extent and
-    beyond (glint; Skolnik, "Introduction to Radar Systems", 3rd ed., sec. 4.4).  The error is normal with a
-    standard deviation of half the extent, ``hypot(length, width) / r`` rad.
+    beyond (glint; Skolnik, "Introduction to Radar Systems", 3rd ed., sec. 4.4).  The error is normal, its
+    standard deviation half the angular extent ``hypot(length, width) / r`` (rad).
     """
     hit = rng.random(len(azimuth)) < share
     extent = np.hypot(user.length, user.width) / np.maximum(r[hit], 1.0)
