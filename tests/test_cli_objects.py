@@ -11,10 +11,10 @@ from sklearn_radar.datasets import load_radarscenes, make_scenes, write_radarsce
 from sklearn_radar.experiments import object_pipeline
 
 STAGE1 = {
-    "filter__vr_threshold": 0.5,
     "cluster__eps_xyv": 1.2,
     "cluster__vr_scale": 2.0,
     "cluster__min_samples": 3,
+    "cluster__vr_min": 0.5,
 }
 STAGE2 = {
     "merge__eps_d": 1.5,

@@ -44,10 +44,11 @@ def test_both_repeats_search_both_stages_and_the_saved_settings_rescore(objects_
     assert len(objects["repeats"]) == 2 and [r["seed"] for r in objects["repeats"]] == [0, 1]
     assert len(objects["stage1_search"]["convergence"]) == 2 and len(objects["search"]["convergence"]) == 2
     assert set(objects["stage1_params"]) == {
-        "filter__vr_threshold",
         "cluster__eps_xyv",
         "cluster__vr_scale",
         "cluster__min_samples",
+        "cluster__alpha_r",
+        "cluster__vr_min",
     }
     assert {key.split("__")[0] for key in objects["params"]} == {"merge"}
     for record in objects["repeats"]:

@@ -11,7 +11,7 @@ set up for panoptic quality, from the object-level ablation).
 """
 
 from ._baselines import BASELINE_INPUT, SKLEARN_BASELINES, SLIDING_BASELINE, baseline_pipeline
-from ._objects import GATE_RULE, OBJECT_EXPERIMENT, object_pipeline, object_search_space
+from ._objects import OBJECT_EXPERIMENT, object_pipeline, object_search_space
 from ._paper import (
     PAPER_EXPERIMENTS,
     PIPELINE_COLUMNS,
@@ -26,7 +26,6 @@ from ._paper import (
 
 __all__ = [
     "BASELINE_INPUT",
-    "GATE_RULE",
     "OBJECT_EXPERIMENT",
     "PAPER_EXPERIMENTS",
     "PIPELINE_COLUMNS",

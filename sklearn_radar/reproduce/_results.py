@@ -854,7 +854,7 @@ class ObjectRepeat(_JsonRecord):
     seed : int
         The run's seed plus the repeat's index; each search draws from its own stream of it (``search_seed``).
     stage1_params, params : dict
-        The kept stage-1 (``filter__``, ``cluster__``) and stage-2 (``merge__``) settings.
+        The kept stage-1 (``cluster__``) and stage-2 (``merge__``) settings.
     v1_test : float
         Radar V-measure on the test half, 0-1 (offline).
     n_clusters_test : int
@@ -881,7 +881,7 @@ class ObjectRepeat(_JsonRecord):
 class ObjectExperimentResult(_JsonRecord):
     """Beyond the paper: the object experiment (``objects``), tuned for PQ whatever the run's objective.
 
-    Stage 1 (the Doppler gate, Eq. 5 with a fixed N_min) is searched first, then
+    Stage 1 (#8) is searched first, then
     stage 2 (Eq. 6 velocity merging) on it (:func:`~sklearn_radar.experiments.object_pipeline`); the kept setting
     is scored on the test half offline and causally.
 
