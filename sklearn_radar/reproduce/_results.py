@@ -881,9 +881,9 @@ class ObjectRepeat(_JsonRecord):
 class ObjectExperimentResult(_JsonRecord):
     """Beyond the paper: the object experiment (``objects``), tuned for PQ whatever the run's objective.
 
-    Stage 1 (#8) is searched first, then
-    stage 2 (Eq. 6 velocity merging) on it (:func:`~sklearn_radar.experiments.object_pipeline`); the kept setting
-    is scored on the test half offline and causally.
+    Stage 1 (#8) is searched first, then stage 2 (#12's Eq. 6 velocity merging) on it
+    (:func:`~sklearn_radar.experiments.object_pipeline`); the kept setting is scored on the test half offline and
+    causally.
 
     Attributes
     ----------

@@ -25,7 +25,7 @@ def markdown(results: RunResults) -> list[str]:
         "## Beyond the paper: the framework set up for objects",
         "",
         "The object experiment is the paper's #12 on #8 (FCS, the Doppler-density filter at 0.10 m/s and 1.4 m, "
-        "Eq. 5 with N_min(r) and eps_t = 0.25 s, then Eq. 6 velocity merging) tuned for PQ: the object-level "
+        "Eq. 5 with N_min(r) and eps_t = 0.25 s, then Eq. 6 velocity merging): the object-level "
         "ablation (`benchmarks/ablation_object_level.py`, user guide 'Counting objects') found no change of the "
         "framework's stage-1 choices that raises panoptic quality beyond the noise. It is tuned for PQ, whatever "
         "the run's objective, in two "
