@@ -48,6 +48,7 @@ from __future__ import annotations
 
 import argparse
 import ast
+import copy
 import json
 import math
 import re
@@ -104,18 +105,7 @@ class MinClusterSize(ClusterMixin, BaseEstimator):
         clustered = labels >= 0
         if self.causal:
             t = X["t"].to_numpy() if hasattr(X, "columns") else np.asarray(X)[:, 3]
-            rows = np.flatnonzero(clustered)
-            order = rows[np.lexsort((t[rows], labels[rows]))]
-            ordered = labels[order]
-            starts = np.r_[0, np.flatnonzero(np.diff(ordered)) + 1]
-            times = t[order]
-            new_time = np.r_[True, (ordered[1:] != ordered[:-1]) | (times[1:] != times[:-1])]
-            time_group = np.cumsum(new_time) - 1
-            time_ends = np.r_[np.flatnonzero(new_time)[1:] - 1, len(order) - 1]
-            cluster_run = np.cumsum(np.r_[True, ordered[1:] != ordered[:-1]]) - 1
-            # Detections of one scan time count together: each sees its cluster up to the end of its time.
-            seen = time_ends[time_group] - starts[cluster_run] + 1
-            small = order[seen < self.min_cluster_size]
+            small = _unconfirmed(labels, t, self.min_cluster_size)
         else:
             ids, counts = np.unique(labels[clustered], return_counts=True)
             small = np.flatnonzero(clustered & np.isin(labels, ids[counts < self.min_cluster_size]))
@@ -125,6 +115,21 @@ class MinClusterSize(ClusterMixin, BaseEstimator):
 
     def fit_predict(self, X, y=None):
         return self.fit(X).labels_
+
+
+def _unconfirmed(labels, t, min_size):
+    """Rows whose cluster has fewer than ``min_size`` detections up to their time (t, s); one scan time counts whole."""
+    rows = np.flatnonzero(labels >= 0)
+    if len(rows) == 0:
+        return rows
+    order = rows[np.lexsort((t[rows], labels[rows]))]
+    ordered, times = labels[order], t[order]
+    new_cluster = np.r_[True, ordered[1:] != ordered[:-1]]
+    new_time = new_cluster | np.r_[False, times[1:] != times[:-1]]
+    index = np.arange(len(order))
+    cluster_start = np.maximum.accumulate(np.where(new_cluster, index, 0))
+    time_end = np.r_[np.flatnonzero(new_time)[1:] - 1, len(order) - 1][np.cumsum(new_time) - 1]
+    return order[time_end - cluster_start + 1 < min_size]
 
 
 #: The reference setting's search space (#8's, as in experiments.search_space(8)).
@@ -178,6 +183,12 @@ def _gated(**params):
     return Pipeline([("gate", PointDopplerGate()), ("cluster", RadarDBSCAN(**{"metric": "xyv", **params}))])
 
 
+def _renamed(dimension, name):
+    dimension = copy.copy(dimension)
+    dimension.name = name
+    return dimension
+
+
 def _with(space, **dimensions):
     space = dict(space)
     for key, dimension in dimensions.items():
@@ -206,6 +217,15 @@ def variants():
         "merge__eps_v": Real(0.2, 6.0, name="merge__eps_v"),
         "merge__eps_t2": Real(0.1, 1.0, name="merge__eps_t2"),
         "merge__min_samples": Integer(1, 3, name="merge__min_samples"),
+    }
+    velocity = {**merge, "merge__eps_phi": Real(0.05, 1.5, name="merge__eps_phi")}
+    # The merger sits inside MinClusterSize: the same ranges, one level deeper.
+    min_size = {
+        **{
+            key.replace("merge__", "merge__merger__"): _renamed(d, key.replace("merge__", "merge__merger__"))
+            for key, d in velocity.items()
+        },
+        "merge__min_cluster_size": Integer(1, 300, prior="log-uniform", name="merge__min_cluster_size"),
     }
     sequence_dbscan, sequence_hdbscan, sliding = (SKLEARN_BASELINES[name][1] for name in _BASELINE_NAMES)
     vr_gate = Real(0.0, 1.5, name="cluster__cluster_vr_min")
@@ -243,7 +263,7 @@ def variants():
             "merge_vel",
             _stage0(),
             None,
-            {**merge, "merge__eps_phi": Real(0.05, 1.5, name="merge__eps_phi")},
+            velocity,
             after="F0",
             fixed={"mode": "velocity"},
         ),
@@ -253,28 +273,13 @@ def variants():
             _gated(eps_t=0.25, vr_min=-np.inf),
             _with(gate_space, cluster__eps_t=_EPS_T, cluster__cluster_vr_min=vr_gate),
         ),
-        Variant(
-            "merge_vel+min_size",
-            _stage0(),
-            None,
-            {
-                **{f"merge__merger__{k.split('__')[1]}": v for k, v in merge.items()},
-                "merge__merger__eps_phi": Real(0.05, 1.5, name="merge__merger__eps_phi"),
-                "merge__min_cluster_size": Integer(1, 300, prior="log-uniform", name="merge__min_cluster_size"),
-            },
-            after="F0",
-            merged=_pruned_merger(causal=False),
-        ),
+        Variant("merge_vel+min_size", _stage0(), None, min_size, after="F0", merged=_pruned_merger(causal=False)),
         Variant("F0 causal", _stage0(causal=True), _cluster(causal=True), f0),
         Variant(
             "merge_vel+min_size causal",
             _stage0(causal=True),
             None,
-            {
-                **{f"merge__merger__{k.split('__')[1]}": v for k, v in merge.items()},
-                "merge__merger__eps_phi": Real(0.05, 1.5, name="merge__merger__eps_phi"),
-                "merge__min_cluster_size": Integer(1, 300, prior="log-uniform", name="merge__min_cluster_size"),
-            },
+            min_size,
             after="F0 causal",
             merged=_pruned_merger(causal=True),
         ),
@@ -521,8 +526,10 @@ def main(argv=None):
         wanted |= {"F0", *BASELINES}
         if wanted & set(CAUSAL):
             wanted |= set(CAUSAL_BASELINES)
-    for _ in range(2):  # stage 2 needs its stage 1, which may need its own
-        wanted |= {v.after for v in every if v.name in wanted and v.after}
+    needed = {v.after for v in every if v.name in wanted and v.after} - wanted  # stage 2 needs its stage 1
+    while needed:
+        wanted |= needed
+        needed = {v.after for v in every if v.name in needed and v.after} - wanted
     unknown = wanted - set(known)
     if unknown:
         parser.error(f"unknown variant(s) {sorted(unknown)}; known: {known}")
