@@ -5,7 +5,9 @@
   :func:`~sklearn_radar.instance_target`);
 * :func:`consecutive_labels` applies it to cluster roots, keeping -1 (noise);
 * :func:`roots_to_rows` turns per-subset roots (positions within a subset of
-  rows) into global row numbers, the step that joins per-sequence results.
+  rows) into global row numbers, the step that joins per-sequence results;
+* :func:`drop_small_clusters` makes the rows of small clusters noise, by
+  their whole size or by their size so far (a track confirmation rule).
 """
 
 from __future__ import annotations
@@ -89,3 +91,42 @@ def roots_to_rows(rows, local_roots, out) -> None:
     """
     found = local_roots >= 0
     out[rows[found]] = rows[local_roots[found]]
+
+
+def drop_small_clusters(roots, min_size, t=None) -> np.ndarray:
+    """``roots`` with every row of a cluster of fewer than ``min_size`` rows made -1 (noise).
+
+    Parameters
+    ----------
+    roots : ndarray of int, shape (n,)
+        Any cluster key per row, negative for noise.
+    min_size : int
+        The smallest cluster kept, in rows; 1 keeps every cluster.
+    t : ndarray of float, shape (n,), default=None
+        Time of each row, s.  None: a cluster's size is its whole number of rows.  Given: a row counts the rows
+        of its cluster up to its own time (rows of the same time count whole), so a cluster's first rows are
+        noise until it has ``min_size`` (a track confirmation rule, causal).
+
+    Returns
+    -------
+    roots : ndarray of int64, shape (n,)
+        A copy.
+    """
+    roots = np.array(roots, dtype=np.int64)
+    clustered = np.flatnonzero(roots >= 0)
+    if min_size <= 1 or len(clustered) == 0:
+        return roots
+    if t is None:
+        _, inverse, counts = np.unique(roots[clustered], return_inverse=True, return_counts=True)
+        roots[clustered[counts[inverse.ravel()] < min_size]] = -1
+        return roots
+    t = np.asarray(t, dtype=np.float64)
+    order = clustered[np.lexsort((t[clustered], roots[clustered]))]  # by cluster, then time
+    keys, times = roots[order], t[order]
+    new_cluster = np.r_[True, keys[1:] != keys[:-1]]
+    new_time = new_cluster | np.r_[False, times[1:] != times[:-1]]
+    position = np.arange(len(order))
+    cluster_start = np.maximum.accumulate(np.where(new_cluster, position, 0))
+    last_of_time = np.r_[np.flatnonzero(new_time)[1:] - 1, len(order) - 1][np.cumsum(new_time) - 1]
+    roots[order[last_of_time - cluster_start + 1 < min_size]] = -1
+    return roots

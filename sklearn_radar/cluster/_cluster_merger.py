@@ -11,7 +11,7 @@ from sklearn.base import BaseEstimator, ClusterMixin, _fit_context, clone
 from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
 from sklearn.utils.validation import check_memory
 
-from .._labels import consecutive_labels
+from .._labels import consecutive_labels, drop_small_clusters
 from .._schema import MERGER_READS, STAGE1_READS
 from .._validation import read_columns, sequence_slices
 from ._merge_kernels import (
@@ -103,11 +103,24 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
         guard rails; the gate removes them without changing which
         detections may be core.  ``stage1_labels_`` and ``merges_`` are
         not gated.
+    min_cluster_size : int, default=1
+        Smallest merged cluster kept, in detections (HDBSCAN's
+        ``min_cluster_size``); the detections of a smaller one become noise.
+        1 (the default) keeps every cluster, as in the paper.  Beyond the
+        paper: it is the one change that raised object-level quality in the
+        ablation of the user guide's "Counting objects".
+    causal : bool, default=False
+        How ``min_cluster_size`` counts.  False: a merged cluster's whole
+        size.  True: a detection counts the detections of its cluster up to
+        its own time (those of the same time included), so a cluster's first
+        detections stay noise until it has ``min_cluster_size`` (a track
+        confirmation rule).  The merging is causal either way.
 
     Attributes
     ----------
     labels_ : ndarray of shape (n_detections,)
-        Merged cluster per row, -1 for noise (including clusters removed by ``cluster_vr_min``); consecutive ids.
+        Merged cluster per row, -1 for noise (including clusters removed by ``cluster_vr_min`` and
+        ``min_cluster_size``); consecutive ids.
     stage1_labels_ : ndarray of shape (n_detections,)
         The stage-1 clusters.
     merges_ : ndarray of shape (n_merges, 3)
@@ -149,6 +162,8 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
         "stage1": [HasMethods(["fit"]), None],
         "memory": [None, str, HasMethods(["cache"])],
         "cluster_vr_min": [Interval(Real, 0, None, closed="left"), None],
+        "min_cluster_size": [Interval(Integral, 1, None, closed="left")],
+        "causal": ["boolean"],
     }
 
     def __init__(
@@ -163,6 +178,8 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
         stage1=None,
         memory=None,
         cluster_vr_min=None,
+        min_cluster_size=1,
+        causal=False,
     ):
         self.mode = mode
         self.eps_d = eps_d
@@ -174,6 +191,8 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
         self.stage1 = stage1
         self.memory = memory
         self.cluster_vr_min = cluster_vr_min
+        self.min_cluster_size = min_cluster_size
+        self.causal = causal
 
     @_fit_context(prefer_skip_nested_validation=False)
     def fit(self, X, y=None):
@@ -213,7 +232,9 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
             roots[rows] = sequence_roots
             merges += [(sequence[rows[0]], a, b) for a, b in sequence_merges]
         self.stage1_labels_ = stage1_labels
-        self.labels_ = consecutive_labels(_gate_static_clusters(roots, c["v_r"], self.cluster_vr_min))
+        roots = _gate_static_clusters(roots, c["v_r"], self.cluster_vr_min)
+        roots = drop_small_clusters(roots, self.min_cluster_size, c["t"] if self.causal else None)
+        self.labels_ = consecutive_labels(roots)
         self.merges_ = np.array(merges, dtype=np.float64).reshape(-1, 3)
         return self
 
