@@ -25,6 +25,7 @@ class ObjectIds:
     def __init__(self):
         self.root = {}  # stage-1 id -> object id
         self.first_us = {}  # object id -> time of its first detection, us
+        self.size = {}  # object id -> its detections so far (as merged so far)
 
     def add(self, labels, timestamp_us):
         """Register the stage-1 ids seen for the first time."""
@@ -42,7 +43,19 @@ class ObjectIds:
             if root == lost:
                 self.root[label] = keep
         self.first_us[keep] = min(self.first_us[keep], self.first_us.pop(lost))
+        self.size[keep] = self.size.get(keep, 0) + self.size.pop(lost, 0)
         return (timestamp_us, keep, lost, reason)
+
+    def count(self, object_ids):
+        """Add the detections of a scan (their object ids, -1 for noise) to their objects' sizes."""
+        found, counts = np.unique(object_ids[object_ids >= 0], return_counts=True)
+        for object_id, n in zip(found.tolist(), counts.tolist(), strict=True):
+            self.size[object_id] = self.size.get(object_id, 0) + n
+
+    def confirmed(self, object_ids, min_size):
+        """Whether each object id (-1: noise) has at least ``min_size`` detections so far."""
+        size = self.size
+        return np.array([i >= 0 and size.get(i, 0) >= min_size for i in object_ids.tolist()], dtype=bool)
 
     def of(self, labels):
         """Object id of each stage-1 label (-1 for noise)."""
@@ -58,6 +71,7 @@ class ObjectIds:
         alive = set(self.root.values())
         for object_id in [o for o in self.first_us if o not in alive]:
             del self.first_us[object_id]
+            self.size.pop(object_id, None)
 
 
 @dataclass
@@ -179,14 +193,18 @@ class ObjectTable:
         for k, object_id in enumerate(ids.tolist()):
             self.records[object_id] = tuple(column[k] for column in columns)
 
-    def listed(self, sequence, now_us, oldest_us, first_us):
-        """The ObjectList of the objects updated at or after ``oldest_us`` (us); forgets the older ones."""
+    def listed(self, sequence, now_us, oldest_us, first_us, listable=None):
+        """The ObjectList of the objects updated at or after ``oldest_us`` (us); forgets the older ones.
+
+        ``listable``: a function of an object id that says whether to list it (None: every object).
+        """
         for object_id in [o for o, record in self.records.items() if record[-1] < oldest_us]:
             del self.records[object_id]
-        if not self.records:
+        shown = [o for o in self.records if listable is None or listable(o)]
+        if not shown:
             return empty_object_list()
-        ids = np.fromiter(self.records, dtype=np.int64, count=len(self.records))
-        values = list(zip(*self.records.values(), strict=True))
+        ids = np.array(shown, dtype=np.int64)
+        values = list(zip(*(self.records[o] for o in shown), strict=True))
         figures = {name: np.array(column) for name, column in zip(FIGURES, values, strict=True)}
         first = np.array([first_us[i] for i in ids.tolist()], dtype=np.int64)
         return ObjectList(

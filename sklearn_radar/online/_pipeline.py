@@ -30,6 +30,10 @@ class ScanResult:
         Stage-1 cluster of each detection (-1: noise), as the offline causal stage 1 gives it.
     object_ids : ndarray of int64, shape (n_detections,)
         Persistent object id of each detection (-1: noise), after the merges decided at this scan.
+    confirmed : ndarray of bool, shape (n_detections,)
+        Whether the detection's object has at least ClusterMerger's ``min_cluster_size`` detections so far (this
+        scan's and the merges decided at it included): the track confirmation rule.  ``object_ids >= 0`` when
+        ``min_cluster_size`` is 1 or there is no stage 2.
     keep : ndarray of bool, shape (n_detections,)
         False where the filter (Eq. 1) removed the detection; True for every row without a filter.
     objects : ObjectList
@@ -49,6 +53,7 @@ class ScanResult:
 
     labels: np.ndarray
     object_ids: np.ndarray
+    confirmed: np.ndarray
     keep: np.ndarray
     objects: ObjectList
     aliases: list
@@ -91,6 +96,16 @@ class OnlinePipeline:
     The stage-1 labels equal the causal pipeline's detection for detection,
     and the object ids resolved through the stage-2 aliases give its merged
     clusters.  Memory is bounded: every window keeps a fixed span of time.
+
+    **Confirmation.**  With ClusterMerger's ``min_cluster_size`` above 1 a
+    detection is :attr:`ScanResult.confirmed` once its object has that many
+    detections so far, and the object list holds confirmed objects only.
+    The count is what is known at the scan (object ids, so stage-1
+    meetings included): a stage-2 merge decided later adds the merged
+    cluster's past detections only from then on.  The causal pipeline
+    (``merge__causal=True``) applies the same rule to its final clusters:
+    the stage-1 labels resolved through the stage-2 joins, with that rule,
+    equal its labels.
 
     **Object ids.**  A new stage-1 cluster is a new object whose id is its
     stage-1 id; ids are never reused.  When clusters merge (stage-1 clusters
@@ -136,6 +151,7 @@ class OnlinePipeline:
         self._frame = frame
         self._filter_params = filter_
         self._merger = merger
+        self._min_size = 1 if merger is None else int(merger.min_cluster_size)
         self._stage1 = ScanStream(stage1)
         self._eps_t = float(stage1.eps_t)
         self._sequences = {}
@@ -160,8 +176,13 @@ class OnlinePipeline:
 
         return cls(setting_pipeline(load_params(path, experiment), path))
 
+    @property
+    def min_cluster_size(self):
+        """int: The confirmation count, stage 2's ``min_cluster_size`` (1 without stage 2)."""
+        return self._min_size
+
     def causal_pipeline(self):
-        """The offline pipeline whose labels this stream gives: ``causal=True`` on the filter and on stage 1.
+        """The offline pipeline whose labels this stream gives: ``causal=True`` on the filter, stage 1 and stage 2.
 
         Returns
         -------
@@ -174,7 +195,7 @@ class OnlinePipeline:
                 causal.set_params(**{f"{name}__causal": True})
             elif isinstance(step, ClusterMerger):
                 stage1 = clone(step.stage1) if step.stage1 is not None else RadarDBSCAN()
-                causal.set_params(**{f"{name}__stage1": stage1.set_params(causal=True)})
+                causal.set_params(**{f"{name}__stage1": stage1.set_params(causal=True), f"{name}__causal": True})
         return causal
 
     def update(self, scan, objects=True):
@@ -237,9 +258,12 @@ class OnlinePipeline:
         merges, joins = state.merge.decide(float(t[0]), window_start)
         for a, b in joins:
             aliases.append(self._ids.merge(a, b, us, "stage2"))
+        object_ids = self._ids.of(labels)
+        self._ids.count(object_ids)
         result = ScanResult(
             labels=labels,
-            object_ids=self._ids.of(labels),
+            object_ids=object_ids,
+            confirmed=self._ids.confirmed(object_ids, self._min_size),
             keep=keep,
             objects=self._objects(state, sequence, us, float(t[0]), labels, aliases)
             if objects
@@ -284,13 +308,15 @@ class OnlinePipeline:
         else:
             state.objects.update(np.zeros(0, dtype=np.int64), {}, gone)
         oldest_us = now_us - round(self._eps_t * 1e6)
-        return state.objects.listed(sequence, now_us, oldest_us, self._ids.first_us)
+        size, min_size = self._ids.size, self._min_size
+        listable = None if min_size <= 1 else (lambda object_id: size.get(object_id, 0) >= min_size)
+        return state.objects.listed(sequence, now_us, oldest_us, self._ids.first_us, listable)
 
 
 def _empty_result(aliases, merges, joins):
     """A ScanResult without detections."""
-    none = np.zeros(0, dtype=np.int64)
-    return ScanResult(none, none, np.zeros(0, dtype=bool), empty_object_list(), aliases, merges, joins)
+    none, no = np.zeros(0, dtype=np.int64), np.zeros(0, dtype=bool)
+    return ScanResult(none, none, no, no, empty_object_list(), aliases, merges, joins)
 
 
 def _stages(pipeline):

@@ -8,6 +8,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from .._labels import drop_small_clusters
 from ..datasets import load_radarscenes
 from ._objects import ObjectList
 from ._pipeline import OnlinePipeline
@@ -55,14 +56,16 @@ def replay(online, data, objects=False):
     Returns
     -------
     replayed : dict
-        ``labels`` (stage 1), ``reported`` (the object ids as given at each scan), ``object_ids`` (final:
-        every alias resolved to its surviving id), ``keep``,
+        ``labels`` (stage 1), ``reported`` (the object ids as given at each scan), ``confirmed`` (as given at
+        each scan), ``object_ids`` (final: every alias resolved to its surviving id, and with stage 2's
+        ``min_cluster_size`` the causal confirmation rule applied to them, as the causal pipeline does), ``keep``,
         ``latency`` and ``cpu`` (wall and thread CPU time per scan, s), ``aliases`` and ``objects`` (a
         DataFrame, or None).
     """
     columns = {name: data[name].to_numpy() for name in data.columns if name not in ("uuid", "track_id")}
     n = len(data)
     labels, reported, keep = np.full(n, -1), np.full(n, -1), np.zeros(n, dtype=bool)
+    confirmed = np.zeros(n, dtype=bool)
     latency, cpu, aliases, frames = [], [], [], []
     for rows in scan_order(data):
         scan = {name: values[rows] for name, values in columns.items()}
@@ -71,6 +74,7 @@ def replay(online, data, objects=False):
         latency.append(time.perf_counter() - start)
         cpu.append(time.thread_time() - start_cpu)
         labels[rows], reported[rows], keep[rows] = result.labels, result.object_ids, result.keep
+        confirmed[rows] = result.confirmed
         aliases += result.aliases
         if objects and len(result.objects):
             frame = result.objects.to_frame()
@@ -79,10 +83,12 @@ def replay(online, data, objects=False):
     aliases += online.finish().aliases
     survivor = _survivors(aliases)
     final = np.array([survivor(i) if i >= 0 else -1 for i in reported.tolist()], dtype=np.int64)
+    final = drop_small_clusters(final, online.min_cluster_size, data["timestamp"].to_numpy())
     table = pd.concat(frames, ignore_index=True) if frames else None
     return {
         "labels": labels,
         "reported": reported,
+        "confirmed": confirmed,
         "object_ids": final,
         "keep": keep,
         "latency": np.array(latency),

@@ -298,3 +298,27 @@ def test_the_windows_keep_a_bounded_span_of_time():
     for name, bound in bounds.items():
         assert max(spans[name]) <= bound + 1e-9, name
         assert max(spans[name]) > 0.5 * bound, name  # the check sees windows that do fill
+
+
+def test_confirmation_rule_equals_offline_causal():
+    """min_cluster_size 10: the stage-2 clusters with the rule applied are the causal pipeline's labels."""
+    from sklearn_radar._labels import drop_small_clusters
+
+    data = make_scenes(n_sequences=3, duration=5.0, random_state=12, difficulty="realistic").data
+    online = OnlinePipeline(experiment_pipeline(12, params={**TUNED[12], "merge__min_cluster_size": 10}))
+    assert online.min_cluster_size == 10
+    labels, _, _, _, joins = replay(online, data)
+    offline = online.causal_pipeline().fit_predict(data)
+    confirmed = drop_small_clusters(stage2_resolution(labels, joins), 10, data["timestamp"].to_numpy())
+    assert_same_partition(confirmed, offline)
+    assert 0 < np.sum(offline >= 0) < np.sum(labels >= 0)  # the rule removed detections, not all
+
+
+def test_a_track_is_confirmed_at_its_min_cluster_size_th_detection():
+    """Three detections per scan, min_cluster_size 7: the third scan confirms it, and only then is it listed."""
+    stage1 = RadarDBSCAN(metric="xy", eps_xy=1.0, min_samples=2, vr_min=0.1)
+    online = OnlinePipeline(make_pipeline(FrameTransform(), ClusterMerger(stage1=stage1, min_cluster_size=7)))
+    results = [online.update(target_scan(t, 2.0 + 5.0 * t, y=5.0)) for t in (0.0, 0.05, 0.1, 0.15)]
+    assert [r.confirmed.tolist() for r in results] == [[False] * 3, [False] * 3, [True] * 3, [True] * 3]
+    assert [len(r.objects) for r in results] == [0, 0, 1, 1]
+    assert all(np.all(r.object_ids == results[0].object_ids[0]) for r in results)  # the id is given at once
