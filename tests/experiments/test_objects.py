@@ -51,17 +51,29 @@ def test_stage2_runs_on_the_tuned_stage1_and_keeps_8s_setting_elsewhere(scenes):
 def test_causal_sets_every_stage(scenes):
     pipe = object_pipeline(2, causal=True)
     assert pipe.named_steps["filter"].causal and pipe.named_steps["merge"].stage1.causal
+    assert pipe.named_steps["merge"].causal and not object_pipeline(2).named_steps["merge"].causal
     assert object_pipeline(1, causal=True).named_steps["cluster"].causal
     offline = object_pipeline(2).fit_predict(scenes.data)
     causal = pipe.fit_predict(scenes.data)
     assert offline.shape == causal.shape and not np.array_equal(offline, causal)
 
 
-def test_search_spaces_are_the_papers():
+def test_search_spaces_are_the_papers_and_a_minimum_cluster_size():
     for stage, number in ((1, 8), (2, 12)):
         space = object_search_space(stage)
         assert set(space) <= set(object_pipeline(stage).get_params())
-        assert space == search_space(number)
+        papers = {key: dimension for key, dimension in space.items() if key != "merge__min_cluster_size"}
+        assert papers == search_space(number)
+    size = object_search_space(2)["merge__min_cluster_size"]
+    assert (size.low, size.high) == (1, 300)  # 1 is off: the search can choose the paper's #12
+    assert "merge__min_cluster_size" not in search_space(12)
+
+
+def test_min_cluster_size_prunes_the_merged_clusters(scenes):
+    plain = object_pipeline(2, stage1_params=STAGE1).fit_predict(scenes.data)
+    pruned = object_pipeline(2, stage1_params=STAGE1, params={"merge__min_cluster_size": 30}).fit_predict(scenes.data)
+    ids, counts = np.unique(plain[plain >= 0], return_counts=True)
+    np.testing.assert_array_equal(pruned >= 0, np.isin(plain, ids[counts >= 30]))
 
 
 @pytest.mark.parametrize(
