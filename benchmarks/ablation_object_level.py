@@ -21,11 +21,11 @@ gate ``vr_min`` and eps_t fixed at 0.25 s.  The factors (one at a time against F
 * ``fixed_nmin``: alpha_r = 0 (fixed N_min) instead of Eq. 2;
 * ``merge_cont`` / ``merge_vel``: stage 2 (continuation / Eq. 6 velocity merging) on F0's tuned stage 1;
 * ``merge_vel+min_size``: ``merge_vel`` with every merged cluster of fewer than a tuned number of detections
-  made noise (HDBSCAN's ``min_cluster_size``); its causal form counts a cluster's detections up to each one's
-  time (a track confirmation rule), on ``F0 causal``, F0 with every stage causal;
+  made noise (ClusterMerger's ``min_cluster_size``, as HDBSCAN's); its causal form counts a cluster's detections
+  up to each one's time (``causal=True``, a track confirmation rule), on ``F0 causal``, F0 with every stage causal;
 * ``combined``: eps_t tuned and the point gate together, with the cluster-level gate;
-* ``objects`` / ``objects causal``: the object experiment (``experiments.object_pipeline``) as ``reproduce``
-  runs it, offline and causally.
+* ``objects`` / ``objects causal``: the object experiment (``experiments.object_pipeline``: #12 on #8 with a
+  tuned ``min_cluster_size``) as ``reproduce`` runs it, offline and causally (tuned causally).
 
 Run (the issue's scale: 5 seeds, every data set, 6 x 20 s; hours on 2 cores), or the user guide's tables
 (``--data easy``, ``realistic`` and ``radarscenes`` in three processes, about an hour)::
@@ -48,7 +48,6 @@ from __future__ import annotations
 
 import argparse
 import ast
-import copy
 import json
 import math
 import re
@@ -57,7 +56,7 @@ import time
 from dataclasses import dataclass, field
 
 import numpy as np
-from sklearn.base import BaseEstimator, ClusterMixin, TransformerMixin, clone
+from sklearn.base import BaseEstimator, TransformerMixin, clone
 from sklearn.pipeline import Pipeline
 
 from sklearn_radar import ClusterMerger, DopplerDensityFilter, FrameTransform, RadarDBSCAN
@@ -86,50 +85,6 @@ class PointDopplerGate(TransformerMixin, BaseEstimator):
         if "keep" in X.columns:
             keep &= X["keep"].to_numpy() != 0
         return X.assign(keep=keep)
-
-
-class MinClusterSize(ClusterMixin, BaseEstimator):
-    """``merger``'s clusters, with every cluster of fewer than ``min_cluster_size`` detections made noise.
-
-    Offline the size is the cluster's whole; ``causal=True`` counts only the cluster's detections up to each one's
-    time, so a track's first ``min_cluster_size - 1`` detections stay noise (a track confirmation rule).
-    """
-
-    def __init__(self, merger=None, min_cluster_size=1, causal=False):
-        self.merger = merger
-        self.min_cluster_size = min_cluster_size
-        self.causal = causal
-
-    def fit(self, X, y=None):
-        labels = clone(self.merger).fit(X).labels_.copy()
-        clustered = labels >= 0
-        if self.causal:
-            t = X["t"].to_numpy() if hasattr(X, "columns") else np.asarray(X)[:, 3]
-            small = _unconfirmed(labels, t, self.min_cluster_size)
-        else:
-            ids, counts = np.unique(labels[clustered], return_counts=True)
-            small = np.flatnonzero(clustered & np.isin(labels, ids[counts < self.min_cluster_size]))
-        labels[small] = -1
-        self.labels_ = labels
-        return self
-
-    def fit_predict(self, X, y=None):
-        return self.fit(X).labels_
-
-
-def _unconfirmed(labels, t, min_size):
-    """Rows whose cluster has fewer than ``min_size`` detections up to their time (t, s); one scan time counts whole."""
-    rows = np.flatnonzero(labels >= 0)
-    if len(rows) == 0:
-        return rows
-    order = rows[np.lexsort((t[rows], labels[rows]))]
-    ordered, times = labels[order], t[order]
-    new_cluster = np.r_[True, ordered[1:] != ordered[:-1]]
-    new_time = new_cluster | np.r_[False, times[1:] != times[:-1]]
-    index = np.arange(len(order))
-    cluster_start = np.maximum.accumulate(np.where(new_cluster, index, 0))
-    time_end = np.r_[np.flatnonzero(new_time)[1:] - 1, len(order) - 1][np.cumsum(new_time) - 1]
-    return order[time_end - cluster_start + 1 < min_size]
 
 
 #: The reference setting's search space (#8's, as in experiments.search_space(8)).
@@ -183,12 +138,6 @@ def _gated(**params):
     return Pipeline([("gate", PointDopplerGate()), ("cluster", RadarDBSCAN(**{"metric": "xyv", **params}))])
 
 
-def _renamed(dimension, name):
-    dimension = copy.copy(dimension)
-    dimension.name = name
-    return dimension
-
-
 def _with(space, **dimensions):
     space = dict(space)
     for key, dimension in dimensions.items():
@@ -219,14 +168,7 @@ def variants():
         "merge__min_samples": Integer(1, 3, name="merge__min_samples"),
     }
     velocity = {**merge, "merge__eps_phi": Real(0.05, 1.5, name="merge__eps_phi")}
-    # The merger sits inside MinClusterSize: the same ranges, one level deeper.
-    min_size = {
-        **{
-            key.replace("merge__", "merge__merger__"): _renamed(d, key.replace("merge__", "merge__merger__"))
-            for key, d in velocity.items()
-        },
-        "merge__min_cluster_size": Integer(1, 300, prior="log-uniform", name="merge__min_cluster_size"),
-    }
+    min_size = {**velocity, "merge__min_cluster_size": object_search_space(2)["merge__min_cluster_size"]}
     sequence_dbscan, sequence_hdbscan, sliding = (SKLEARN_BASELINES[name][1] for name in _BASELINE_NAMES)
     vr_gate = Real(0.0, 1.5, name="cluster__cluster_vr_min")
     return [
@@ -303,8 +245,7 @@ _BASELINE_NAMES = (
 def _pruned_merger(causal):
     def merged(stage1_params):
         stage1 = clone(_cluster(causal=causal)).set_params(**stage1_params)[-1]
-        merger = ClusterMerger(stage1=stage1, mode="velocity")
-        return Pipeline([("merge", MinClusterSize(merger, causal=causal))])
+        return Pipeline([("merge", ClusterMerger(stage1=stage1, mode="velocity", causal=causal))])
 
     return merged
 
