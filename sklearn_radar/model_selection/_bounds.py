@@ -15,6 +15,8 @@ NATURAL_ENDS = {
     "gate": (0.0,),
     "cluster_vr_min": (0.0,),
     "min_samples": (1,),
+    # 1: ClusterMerger's rule off; 2: HDBSCAN's smallest cluster.
+    "min_cluster_size": (1, 2),
 }
 
 

@@ -38,5 +38,14 @@ def test_integers_at_an_end_and_natural_limits_not_counted():
     assert bounds_reached({"a__vr_min": 0.0}, SPACE, natural={}) == ["a__vr_min"]
 
 
+def test_a_minimum_cluster_size_of_one_or_two_is_its_own_limit():
+    space = {"merge__min_cluster_size": Integer(1, 300, prior="log-uniform"), "c__min_cluster_size": Integer(2, 40)}
+    assert bounds_reached({"merge__min_cluster_size": 1, "c__min_cluster_size": 2}, space) == []  # off; HDBSCAN's 2
+    assert bounds_reached({"merge__min_cluster_size": 300, "c__min_cluster_size": 40}, space) == [
+        "merge__min_cluster_size",
+        "c__min_cluster_size",
+    ]
+
+
 def test_parameters_without_a_dimension_are_ignored():
     assert bounds_reached({"b__eps": 3.0}, SPACE) == []
