@@ -24,6 +24,8 @@ gate ``vr_min`` and eps_t fixed at 0.25 s.  The factors (one at a time against F
   made noise (ClusterMerger's ``min_cluster_size``, as HDBSCAN's); its causal form counts a cluster's detections
   up to each one's time (``causal=True``, a track confirmation rule), on ``F0 causal``, F0 with every stage causal;
 * ``combined``: eps_t tuned and the point gate together, with the cluster-level gate;
+* ``SequenceHDBSCAN narrow`` / ``SlidingDBSCAN narrow``: the baselines over their ranges before they were
+  widened (the best baseline is the better of both forms);
 * ``objects`` / ``objects causal``: the object experiment (``experiments.object_pipeline``: #12 on #8 with a
   tuned ``min_cluster_size``) as ``reproduce`` runs it, offline and causally (tuned causally).
 
@@ -230,7 +232,29 @@ def variants():
         Variant("SequenceDBSCAN", _stage0(), Pipeline([("cluster", SequenceDBSCAN())]), sequence_dbscan),
         Variant("SequenceHDBSCAN", _stage0(), Pipeline([("cluster", SequenceHDBSCAN())]), sequence_hdbscan),
         Variant("SlidingDBSCAN", _stage0(causal=True), Pipeline([("cluster", SlidingDBSCAN())]), sliding),
+        Variant(
+            "SequenceHDBSCAN narrow",
+            _stage0(),
+            Pipeline([("cluster", SequenceHDBSCAN())]),
+            {**sequence_hdbscan, **_NARROW_SCALES},
+        ),
+        Variant(
+            "SlidingDBSCAN narrow",
+            _stage0(causal=True),
+            Pipeline([("cluster", SlidingDBSCAN())]),
+            {**sliding, **_NARROW_SCALES, "cluster__min_samples": _NARROW_MIN_SAMPLES},
+        ),
     ]
+
+
+#: The baselines' ranges before they were widened (vr_scale from 0.05, t_scale from 0.1 m/s, vr_min to 3 m/s,
+#: min_samples from 2): with 20 iterations a wider range can tune worse, so the best baseline is the better of both.
+_NARROW_SCALES = {
+    "cluster__vr_scale": Real(0.05, 50.0, prior="log-uniform", name="cluster__vr_scale"),
+    "cluster__t_scale": Real(0.1, 100.0, prior="log-uniform", name="cluster__t_scale"),
+    "cluster__vr_min": Real(0.1, 3.0, name="cluster__vr_min"),
+}
+_NARROW_MIN_SAMPLES = Integer(2, 40, prior="log-uniform", name="cluster__min_samples")
 
 
 #: The baselines' search spaces are reproduce's (``experiments.SKLEARN_BASELINES``), widened until no tuned setting
@@ -263,9 +287,9 @@ def _object_variants(name, causal):
     ]
 
 
-BASELINES = ("SequenceDBSCAN", "SequenceHDBSCAN")
+BASELINES = ("SequenceDBSCAN", "SequenceHDBSCAN", "SequenceHDBSCAN narrow")
 #: The causal ones: their best is what the causal variants are compared with.
-CAUSAL_BASELINES = ("SlidingDBSCAN",)
+CAUSAL_BASELINES = ("SlidingDBSCAN", "SlidingDBSCAN narrow")
 #: Variants that decide from the past only (compared with the causal baselines).
 CAUSAL = (
     "objects causal (stage 1)",
