@@ -248,7 +248,8 @@ def variants():
 
 
 #: The baselines' ranges before they were widened (vr_scale from 0.05, t_scale from 0.1 m/s, vr_min to 3 m/s,
-#: min_samples from 2): with 20 iterations a wider range can tune worse, so the best baseline is the better of both.
+#: min_samples from 2): a check that the wider ranges do not tune worse within 20 iterations (the best baseline is
+#: the better of both forms).
 _NARROW_SCALES = {
     "cluster__vr_scale": Real(0.05, 50.0, prior="log-uniform", name="cluster__vr_scale"),
     "cluster__t_scale": Real(0.1, 100.0, prior="log-uniform", name="cluster__t_scale"),
