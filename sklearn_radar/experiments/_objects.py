@@ -110,21 +110,21 @@ def object_pipeline(stage=2, *, params=None, stage1_params=None, causal=False, m
 def object_search_space(stage):
     """The object experiment's search space of ``stage``: #8's (stage 1), #12's and a minimum cluster size (stage 2).
 
-    ==========================  ============  ========  ====================  =====
-    key                         range         unit      prior                 stage
-    ==========================  ============  ========  ====================  =====
-    ``cluster__eps_xyv``        [0.2, 3.0]    m         uniform               1
-    ``cluster__vr_scale``       [0.3, 20]     m/s       log-uniform           1
-    ``cluster__min_samples``    [1.5, 8.0]    points    uniform (N_min,50)    1
-    ``cluster__alpha_r``        [0, 1]        -         uniform               1
-    ``cluster__vr_min``         [0, 1.5]      m/s       uniform               1
-    ``merge__eps_d``            [0.2, 3.0]    m         uniform               2
-    ``merge__eps_phi``          [0.05, 1.5]   rad       uniform               2
-    ``merge__eps_v``            [0.2, 6.0]    m/s       uniform               2
-    ``merge__eps_t2``           [0.1, 1.0]    s         uniform               2
-    ``merge__min_samples``      {1, 2, 3}     clusters  integer               2
-    ``merge__min_cluster_size`` [1, 300]      points    log-uniform (integer) 2
-    ==========================  ============  ========  ====================  =====
+    ===========================  ===========  ========  =====================  =====
+    key                          range        unit      prior                  stage
+    ===========================  ===========  ========  =====================  =====
+    ``cluster__eps_xyv``         [0.2, 3.0]   m         uniform                1
+    ``cluster__vr_scale``        [0.3, 20]    m/s       log-uniform            1
+    ``cluster__min_samples``     [1.5, 8.0]   points    uniform (N_min,50)     1
+    ``cluster__alpha_r``         [0, 1]       -         uniform                1
+    ``cluster__vr_min``          [0, 1.5]     m/s       uniform                1
+    ``merge__eps_d``             [0.2, 3.0]   m         uniform                2
+    ``merge__eps_phi``           [0.05, 1.5]  rad       uniform                2
+    ``merge__eps_v``             [0.2, 6.0]   m/s       uniform                2
+    ``merge__eps_t2``            [0.1, 1.0]   s         uniform                2
+    ``merge__min_samples``       {1, 2, 3}    clusters  integer                2
+    ``merge__min_cluster_size``  [1, 300]     points    log-uniform (integer)  2
+    ===========================  ===========  ========  =====================  =====
 
     The paper's ranges (:func:`search_space` of 8 and 12): wider ones overfit the search's budget.  The minimum
     cluster size reaches from off (1) to a few seconds of one road user's detections.
