@@ -29,12 +29,16 @@ gate ``vr_min`` and eps_t fixed at 0.25 s.  The factors (one at a time against F
 * ``objects`` / ``objects causal``: the object experiment (``experiments.object_pipeline``: #12 on #8 with a
   tuned ``min_cluster_size``) as ``reproduce`` runs it, offline and causally (tuned causally).
 
-Run (the issue's scale: 5 seeds, every data set, 6 x 20 s; hours on 2 cores), or the user guide's tables
-(``--data easy``, ``realistic`` and ``radarscenes`` in three processes, about an hour)::
+Run (the issue's scale: 5 seeds, every data set, 6 x 20 s; hours on 2 cores), or the user guide's tables (per
+preset, in parallel processes, about 40 minutes each on 2 cores; ``--from-logs`` joins their output)::
 
     python benchmarks/ablation_object_level.py --seeds 0 1 2 3 4 --n-iter 40
     python benchmarks/ablation_object_level.py --data realistic --n-sequences 4 --n-iter 20 \
-        --variants fixed_nmin merge_vel merge_vel+min_size "merge_vel+min_size causal" "objects causal"
+        --variants F0 SequenceDBSCAN SequenceHDBSCAN SlidingDBSCAN --only
+    python benchmarks/ablation_object_level.py --data realistic --n-sequences 4 --n-iter 20 \
+        --variants objects "objects causal" "SequenceHDBSCAN narrow" "SlidingDBSCAN narrow" --only
+    python benchmarks/ablation_object_level.py --data realistic --n-sequences 4 --n-iter 20 \
+        --variants wide eps_t point_gate no_filter gate_only box xy fixed_nmin merge_cont merge_vel --only
 
 ``--variants`` picks a subset (``--only``: without F0 and the baselines), ``--quick`` runs a small smoke
 configuration, ``--from-logs`` prints the tables from the output of earlier runs (for example of seeds or
