@@ -106,9 +106,8 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
     min_cluster_size : int, default=1
         Smallest merged cluster kept, in detections (HDBSCAN's
         ``min_cluster_size``); the detections of a smaller one become noise.
-        1 (the default) keeps every cluster, as in the paper.  Beyond the
-        paper: it is the one change that raised object-level quality in the
-        ablation of the user guide's "Counting objects".
+        1 (the default) keeps every cluster, as in the paper; beyond it, see
+        the user guide's "Counting objects".
     causal : bool, default=False
         How ``min_cluster_size`` counts.  False: a merged cluster's whole
         size.  True: a detection counts the detections of its cluster up to
