@@ -141,7 +141,7 @@ def accuracy(args):
     settings = {
         "max_iter=100 (scikit-learn's default)": {},
         "max_iter=50": {"max_iter": 50},
-        "max_iter=30 (the default here)": {"max_iter": 30},
+        "max_iter=30, no early stopping (the default here)": {"max_iter": 30, "early_stopping": False},
         "max_iter=20, learning_rate=0.25": {"max_iter": 20, "learning_rate": 0.25},
         "early_stopping=True": {"early_stopping": True},
     }
