@@ -221,7 +221,7 @@ def variants():
             _gated(eps_t=0.25, vr_min=-np.inf),
             _with(gate_space, cluster__eps_t=_EPS_T, cluster__cluster_vr_min=vr_gate),
         ),
-        Variant("merge_vel+min_size", _stage0(), None, min_size, after="F0", merged=_pruned_merger(causal=False)),
+        Variant("merge_vel+min_size", _stage0(), None, min_size, after="F0", fixed={"mode": "velocity"}),
         Variant("F0 causal", _stage0(causal=True), _cluster(causal=True), f0),
         Variant(
             "merge_vel+min_size causal",
@@ -229,7 +229,7 @@ def variants():
             None,
             min_size,
             after="F0 causal",
-            merged=_pruned_merger(causal=True),
+            fixed={"mode": "velocity", "causal": True},
         ),
         *_object_variants("objects", causal=False),
         *_object_variants("objects causal", causal=True),
@@ -262,21 +262,13 @@ _NARROW_SCALES = {
 _NARROW_MIN_SAMPLES = Integer(2, 40, prior="log-uniform", name="cluster__min_samples")
 
 
-#: The baselines' search spaces are reproduce's (``experiments.SKLEARN_BASELINES``), widened until no tuned setting
-#: stopped at a bound: per-sequence DBSCAN, per-sequence HDBSCAN, DBSCAN over a sliding past window.
+#: The baselines' search spaces are reproduce's (``experiments.SKLEARN_BASELINES``, widened where a tuned setting
+#: stopped at a bound): per-sequence DBSCAN, per-sequence HDBSCAN, DBSCAN over a sliding past window.
 _BASELINE_NAMES = (
     "sklearn DBSCAN per sequence (x, y, v_r, t) with Doppler gate",
     "sklearn HDBSCAN per sequence (x, y, v_r, t) with Doppler gate",
     SLIDING_BASELINE,
 )
-
-
-def _pruned_merger(causal):
-    def merged(stage1_params):
-        stage1 = clone(_cluster(causal=causal)).set_params(**stage1_params)[-1]
-        return Pipeline([("merge", ClusterMerger(stage1=stage1, mode="velocity", causal=causal))])
-
-    return merged
 
 
 def _object_variants(name, causal):
@@ -306,7 +298,8 @@ CAUSAL = (
 
 
 def _merger(variant, stage1_params):
-    stage1 = clone(_cluster()).set_params(**stage1_params)[-1]
+    """Stage 2 on the tuned stage 1, with the variant's fixed merger parameters (``causal``: both stages)."""
+    stage1 = clone(_cluster(causal=variant.fixed.get("causal", False))).set_params(**stage1_params)[-1]
     return Pipeline([("merge", ClusterMerger(stage1=stage1, **variant.fixed))])
 
 
