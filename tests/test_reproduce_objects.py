@@ -83,3 +83,19 @@ def test_verdict_needs_repeats_and_a_difference_beyond_two_standard_errors():
     # Differences +0.05, -0.03, +0.01: mean 0.01, se 0.023: within the noise.
     assert "cannot tell (within the noise)" in verdict([0.55, 0.47, 0.51], [0.50, 0.50, 0.50], "B")
     assert verdict([0.40, 0.41], [0.50, 0.50], "B").endswith("lower.")
+
+
+def test_the_section_says_when_the_baselines_were_tuned_for_another_objective(objects_report, monkeypatch):
+    import dataclasses
+    from types import SimpleNamespace
+
+    from sklearn_radar.reproduce._sections import _objects
+
+    results = RunResults.read(objects_report / "results.json")
+    baseline = ("a baseline", SimpleNamespace(repeats=None, instance_test=SimpleNamespace(pq=0.2), v1_test=0.5))
+    monkeypatch.setattr(_objects, "_best_baselines", lambda results: (baseline, None))
+    assert results.meta.objective == "v1"
+    said = "The baselines were tuned for V1"
+    assert any(said in line for line in _objects.markdown(results))
+    pq_run = dataclasses.replace(results, meta=dataclasses.replace(results.meta, objective="pq"))
+    assert not any(said in line for line in _objects.markdown(pq_run))

@@ -51,6 +51,11 @@ def markdown(results: RunResults) -> list[str]:
             lines.append(f"- {mode}: " + verdict(ours, repeated_scores(baseline[1], "pq"), baseline[0]))
     if offline is None and causal is None:
         lines.append("The baselines did not run, so there is nothing to compare with (`--experiments ...,baselines`).")
+    elif results.meta.objective != "pq":
+        lines.append(
+            "- The baselines were tuned for V1, the run's objective, and the object experiment for PQ, so this "
+            "comparison favours the object experiment; `--objective pq` tunes both for PQ."
+        )
     return lines
 
 
