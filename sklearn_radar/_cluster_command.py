@@ -13,13 +13,12 @@ from sklearn.base import BaseEstimator, clone
 from sklearn.utils._param_validation import Interval, StrOptions, validate_params
 
 from ._executor import connect_executor
-from ._files import check_ours_to_replace
+from ._files import atomic_write, check_ours_to_replace
 from ._schema import LABELS, STATIC_LABEL
 from .classification._classes import CLASS_OF_LABEL, DEVKIT_CLASS_INDEX, DEVKIT_CLASS_NAMES, IGNORED
 from .datasets import load_radarscenes
 from .datasets._radarscenes import _read_sensors_json, _read_sequences_json, _resolve_data_dir
 from .experiments import OBJECT_EXPERIMENT, experiment_pipeline, get_experiment, object_pipeline
-from .reproduce._io import atomic_write
 
 #: Our two "classes" in the devkit's per-point prediction file: clustered or noise.
 CLASS_NAMES = {0: "NOISE", 1: "CLUSTERED"}

@@ -274,7 +274,7 @@ def test_write_predictions_refuses_a_foreign_file(tmp_path):
 
 def test_a_file_appearing_during_the_write_is_kept(tmp_path):
     from sklearn_radar._cluster_command import check_predictions_file
-    from sklearn_radar.reproduce._io import atomic_write
+    from sklearn_radar._files import atomic_write
 
     out = tmp_path / "p.json"
 

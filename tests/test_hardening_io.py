@@ -119,7 +119,7 @@ def test_simulate_honours_the_umask(tmp_path, umask, capsys):
 
 
 def test_cluster_predictions_and_reproduce_files_honour_the_umask(small_folder, tmp_path, umask, capsys):
-    from sklearn_radar.reproduce._io import atomic_write_text, check_writable
+    from sklearn_radar._files import atomic_write_text, check_writable
 
     params = tmp_path / "params.json"
     params.write_text(json.dumps({"best": "8", "experiments": {"8": _setting()}}))

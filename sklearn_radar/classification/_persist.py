@@ -32,7 +32,7 @@ from sklearn.utils._param_validation import validate_params
 from sklearn.utils.validation import check_is_fitted
 
 from .. import __version__
-from .._files import check_ours_to_replace
+from .._files import atomic_write, check_ours_to_replace
 from ._cluster_classifier import ClusterClassifier
 
 __all__ = ["ClassifierVersionWarning", "load_classifier", "save_classifier"]
@@ -81,8 +81,6 @@ def save_classifier(classifier, path):
     FileExistsError
         If ``path`` is another file (it is kept).
     """
-    from ..reproduce._io import atomic_write
-
     kind = _checked_model(classifier, "classifier")
     check_classifier_file(path)
     buffer = io.BytesIO()

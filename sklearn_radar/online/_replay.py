@@ -163,7 +163,7 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None, classif
         ``n_road_users`` (objects classified as a road user in some frame).
     """
     from .._cluster_command import _params_setting, check_predictions_file, write_predictions
-    from ..reproduce._io import atomic_write
+    from .._files import atomic_write
 
     setting, pipeline = _params_setting(params, experiment, classifier)
     model = None

@@ -4,8 +4,8 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from .._files import atomic_write_text
 from ._context import RunContext
-from ._io import atomic_write_text
 from ._results import RunResults
 from ._sections import SECTIONS
 

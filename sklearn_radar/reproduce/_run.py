@@ -40,6 +40,14 @@ from sklearn.utils._param_validation import HasMethods, Interval, StrOptions, va
 
 from .. import __version__
 from .._executor import connect_executor
+from .._files import (
+    atomic_write_text,
+    check_writable,
+    remove_empty_folders,
+    remove_stale_temporaries,
+    sha256,
+    temporary_prefix,
+)
 from ..classification import save_classifier
 from ..datasets._simulator import DIFFICULTY_PRESETS
 from ..experiments import SKLEARN_BASELINES, get_experiment
@@ -56,18 +64,7 @@ from ._constants import (
     TRACKING,
 )
 from ._context import RunContext
-from ._io import (
-    RUN_TOOL,
-    atomic_write_text,
-    check_run_folder,
-    check_writable,
-    previous_run_files,
-    remove_empty_folders,
-    remove_stale_temporaries,
-    run_marker,
-    sha256,
-    temporary_prefix,
-)
+from ._io import RUN_TOOL, check_run_folder, previous_run_files, run_marker
 from ._progress import DATA, REPORT, RunProgress, duration, uncompiled_kernels
 from ._report import write_report
 from ._results import Budget, DataMeta, RunMeta, RunResults

@@ -9,9 +9,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ..._files import atomic_write
 from .._constants import BEST_STAGE1, FRAME_NAMES, SOURCE_PAPER
 from .._context import RunContext
-from .._io import atomic_write
 from .._results import ExperimentResult, GridTable, RunResults, repeated_scores
 
 #: Markdown of a section: its lines, each starting a new line of report.md; [] leaves the section out.
