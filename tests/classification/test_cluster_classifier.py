@@ -224,7 +224,7 @@ def test_predict_instances_of_a_pipeline_is_its_last_steps_on_the_transformed_ro
     # A classifier itself: its own method.
     working = model[:-1].transform(raw)
     pd.testing.assert_frame_equal(predict_instances(model[-1], working), model[-1].predict_instances(working))
-    with pytest.raises(ValueError, match="last step must have predict_instances.*FunctionTransformer"):
+    with pytest.raises(ValueError, match=r"last step must have predict_instances.*FunctionTransformer"):
         predict_instances(make_pipeline(FunctionTransformer()).fit(X), X)
 
 
