@@ -93,6 +93,7 @@ PARAM_VALIDATION_FUNCTION_LIST = [
     "sklearn_radar.metrics.tracking_scores",
     "sklearn_radar.model_selection.make_bayes_search",
     "sklearn_radar.model_selection.sequence_train_test_split",
+    "sklearn_radar.online.iter_scans",
     "sklearn_radar.preprocessing.doppler_density_keep",
     "sklearn_radar.preprocessing.neighbor_counts",
     "sklearn_radar.reproduce.cluster_radarscenes",
