@@ -28,6 +28,7 @@ from sklearn_radar.classification import (
     ClusterClassifier,
     PointClassifier,
     cluster_features,
+    predict_instances,
     road_user_class,
 )
 from sklearn_radar.datasets import make_scenes
@@ -94,12 +95,15 @@ print(scores.round(3).to_string())
 # The semantic instance-segmentation scores count road users per 0.5 s frame
 # (:func:`~sklearn_radar.metrics.semantic_scores`): class PQ and mAP@0.5 need a
 # predicted instance of the right class with IoU > 0.5 against an annotated one;
-# mCov is the class-agnostic coverage of the annotated instances.
+# mCov is the class-agnostic coverage of the annotated instances.  A pipeline
+# passes on ``predict`` but not the classifier's own ``predict_instances``:
+# :func:`~sklearn_radar.classification.predict_instances` runs the pipeline's
+# other steps, then it.
 times = test.data["timestamp"].to_numpy() * 1e-6
 
 
 def instance_scores_of(pipeline):
-    found = pipeline[-1].predict_instances(pipeline[:-1].transform(test.data))
+    found = predict_instances(pipeline, test.data)
     return semantic_scores(
         y_test,
         test.target,

@@ -21,7 +21,8 @@ for detection (see :ref:`user-guide-online`).
 # Experiment #13 of the paper: FCS, the filter, stage 1 at experiment #8's
 # setting and the continuation merge.  Any pipeline of these steps, or a
 # ``params.json`` of ``sklearn-radar reproduce``
-# (:meth:`~sklearn_radar.online.OnlinePipeline.from_params`), will do.
+# (:meth:`~sklearn_radar.online.OnlinePipeline.from_params`), will do; its
+# repr shows the offline pipeline it streams.
 import time
 
 import matplotlib.pyplot as plt
@@ -33,35 +34,31 @@ from sklearn.metrics import adjusted_rand_score
 from sklearn_radar.datasets import make_scenes
 from sklearn_radar.experiments import experiment_pipeline
 from sklearn_radar.metrics import tracking_scores
-from sklearn_radar.online import OnlinePipeline
+from sklearn_radar.online import OnlinePipeline, iter_scans
 
 scenes = make_scenes(n_sequences=1, duration=15.0, random_state=0)
 data = scenes.data
 online = OnlinePipeline(experiment_pipeline(13))
+print(online)
 
 # %%
 # Feed the scans one by one
 # -------------------------
-# Each call gets one scan (here a dict of the raw columns of its rows) and
+# :func:`~sklearn_radar.online.iter_scans` gives the scans of the recorded
+# table in arrival order (each timestamp's rows, its sensors together), as
+# ``sklearn-radar stream`` replays them.  Each call gets one scan and
 # returns, per detection, the stage-1 label, the object id and whether the
 # filter kept it, plus the object list.  The time per call is the latency a
 # vehicle would see.
 timestamp = data["timestamp"].to_numpy()
-order = np.argsort(timestamp, kind="stable")
-scans = np.split(order, np.flatnonzero(np.diff(timestamp[order])) + 1)
-columns = {
-    name: data[name].to_numpy()
-    for name in data.columns
-    if name not in ("uuid", "track_id")
-}
-
 labels = np.full(len(data), -1)
 object_ids = np.full(len(data), -1)
 aliases, joins, latency, n_objects = [], [], [], []
-for rows in scans:
+for scan in iter_scans(data):
     start = time.perf_counter()
-    result = online.update({name: values[rows] for name, values in columns.items()})
+    result = online.update(scan)
     latency.append(time.perf_counter() - start)
+    rows = scan.index  # the table has a RangeIndex: the index gives the rows
     labels[rows], object_ids[rows] = result.labels, result.object_ids
     aliases += result.aliases
     joins += result.joins  # stage-2 joins (the accepted pairs at min_samples 1)
@@ -73,7 +70,7 @@ latency = (
     np.array(latency[1:]) * 1e3
 )  # ms; the first call, which loads the kernels, is left out
 print(
-    f"{len(scans)} scans, {len(data) / len(scans):.1f} detections per scan, "
+    f"{len(n_objects)} scans, {len(data) / len(n_objects):.1f} detections per scan, "
     f"latency median {np.median(latency):.3f} ms, "
     f"99th percentile {np.percentile(latency, 99):.3f} ms; {len(aliases)} aliases"
 )

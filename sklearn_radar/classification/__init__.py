@@ -1,8 +1,10 @@
 """Road-user classification: the stage after clustering (semantic instance segmentation).
 
 The RadarScenes road-user classes and their mapping from ``label_id``
-(:func:`road_user_class`), the features of a cluster (:func:`cluster_features`),
-the classifier of clusters (:class:`ClusterClassifier`), its files
+(:func:`road_user_class`) and to the devkit's numbering (:func:`devkit_class_index`),
+the features of a cluster (:func:`cluster_features`), the classifier of clusters
+(:class:`ClusterClassifier`) and its road users in a pipeline
+(:func:`predict_instances`), its files
 (:func:`save_classifier`, :func:`load_classifier`) and the baseline that
 classifies single detections instead (:class:`PointClassifier`).
 """
@@ -14,10 +16,12 @@ from ._classes import (
     DEVKIT_CLASS_NAMES,
     IGNORED,
     ROAD_USER_CLASSES,
+    devkit_class_index,
     road_user_class,
 )
 from ._cluster_classifier import ClusterClassifier
 from ._features import CLUSTER_FEATURES, cluster_features
+from ._instances import predict_instances
 from ._persist import ClassifierVersionWarning, load_classifier, save_classifier
 from ._point_classifier import POINT_FEATURES, PointClassifier
 
@@ -34,7 +38,9 @@ __all__ = [
     "ClusterClassifier",
     "PointClassifier",
     "cluster_features",
+    "devkit_class_index",
     "load_classifier",
+    "predict_instances",
     "road_user_class",
     "save_classifier",
 ]

@@ -41,6 +41,7 @@ __all__ = [
     "DEVKIT_CLASS_NAMES",
     "IGNORED",
     "ROAD_USER_CLASSES",
+    "devkit_class_index",
     "road_user_class",
 ]
 
@@ -85,6 +86,8 @@ DEVKIT_CLASS_NAMES = {
 DEVKIT_CLASS_INDEX = {0: 0, 1: 4, 2: 3, 3: 1, 4: 2, BACKGROUND: 5}
 
 _LOOKUP = np.array([CLASS_OF_LABEL[label] for label in range(len(LABELS))], dtype=np.int64)
+#: DEVKIT_CLASS_INDEX as a lookup indexed by ``code - BACKGROUND``.
+_DEVKIT_LOOKUP = np.array([DEVKIT_CLASS_INDEX[code] for code in range(BACKGROUND, len(ROAD_USER_CLASSES))])
 
 
 @validate_params({"label_id": ["array-like"]}, prefer_skip_nested_validation=True)
@@ -129,3 +132,59 @@ def road_user_class(label_id):
             f"({int(bad.sum())} value(s) out of range)"
         )
     return _LOOKUP[values.astype(np.int64, copy=False)]
+
+
+@validate_params({"classes": ["array-like"]}, prefer_skip_nested_validation=True)
+def devkit_class_index(classes):
+    """The RadarScenes devkit's ``ClassificationLabel`` value of each road-user class code.
+
+    The classifiers predict the codes of :func:`road_user_class`; the devkit
+    numbers the same classes otherwise (:data:`DEVKIT_CLASS_INDEX`):
+
+    ====  ================  ==============================
+    code  class             devkit ``ClassificationLabel``
+    ====  ================  ==============================
+    0     car               CAR 0
+    1     large vehicle     LARGE_VEHICLE 4
+    2     two-wheeler       TWO_WHEELER 3
+    3     pedestrian        PEDESTRIAN 1
+    4     pedestrian group  PEDESTRIAN_GROUP 2
+    -1    background        STATIC 5
+    ====  ================  ==============================
+
+    Parameters
+    ----------
+    classes : array-like of int, shape (n_detections,)
+        Road-user class codes, -1 (background and noise) to 4, as
+        :meth:`ClusterClassifier.predict` returns them.
+
+    Returns
+    -------
+    devkit_classes : ndarray of int64, shape (n_detections,)
+        The devkit's class index of each: background is STATIC (5), the
+        devkit's class of every detection that is no road user.
+
+    Raises
+    ------
+    ValueError
+        If a value is not a code -1 to 4 (ignored, -2, has no devkit class:
+        the devkit maps ANIMAL and OTHER to None).
+
+    Examples
+    --------
+    >>> from sklearn_radar.classification import devkit_class_index
+    >>> devkit_class_index([0, 1, 2, 3, 4, -1]).tolist()
+    [0, 4, 3, 1, 2, 5]
+    """
+    values = np.asarray(classes)
+    if values.dtype.kind == "f" and np.all(np.isfinite(values)) and np.all(values == np.round(values)):
+        values = values.astype(np.int64)
+    if values.dtype.kind not in "iu":
+        raise ValueError(f"classes must hold integer road-user class codes -1 to 4, got dtype {values.dtype}")
+    bad = (values < BACKGROUND) | (values >= len(ROAD_USER_CLASSES))
+    if bad.any():
+        raise ValueError(
+            f"classes must hold road-user class codes -1 to 4, got {values[bad][0]!r} ({int(bad.sum())} value(s); "
+            "ignored detections, -2, have no devkit class)"
+        )
+    return _DEVKIT_LOOKUP[values.astype(np.int64, copy=False) - BACKGROUND]

@@ -19,7 +19,7 @@ from ._classes import BACKGROUND, IGNORED
 from ._features import _check_labels, frame_index, segment_features
 from ._reading import columns_at, time_columns
 from ._targets import segment_targets
-from ._wrapped import check_class_target, class_proba, fit_classifier, instance_column_of
+from ._wrapped import check_class_target, class_proba, fit_classifier, instance_column_of, macro_f1_score
 
 
 class ClusterClassifier(BaseEstimator):
@@ -58,6 +58,35 @@ class ClusterClassifier(BaseEstimator):
     settings: the paper's V-measure does not count them) are the background
     examples.
 
+    **Class codes.**  ``y``, :meth:`predict` and ``classes_`` use the codes
+    of :func:`~sklearn_radar.classification.road_user_class`, which number
+    the classes otherwise than the RadarScenes devkit's
+    ``ClassificationLabel``;
+    :func:`~sklearn_radar.classification.devkit_class_index` converts them
+    (the table is :data:`~sklearn_radar.classification.DEVKIT_CLASS_INDEX`,
+    the names :data:`~sklearn_radar.classification.DEVKIT_CLASS_NAMES`):
+
+    ====  ================  ==============================
+    code  class             devkit ``ClassificationLabel``
+    ====  ================  ==============================
+    0     car               CAR 0
+    1     large vehicle     LARGE_VEHICLE 4
+    2     two-wheeler       TWO_WHEELER 3
+    3     pedestrian        PEDESTRIAN 1
+    4     pedestrian group  PEDESTRIAN_GROUP 2
+    -1    background        STATIC 5
+    -2    ignored           none (ANIMAL, OTHER)
+    ====  ================  ==============================
+
+    Code -2 appears in ``y`` only: it is never predicted.
+
+    **In a pipeline.**  A :class:`~sklearn.pipeline.Pipeline` passes on
+    :meth:`predict`, :meth:`predict_proba` and :meth:`score` but not
+    :meth:`predict_instances`:
+    ``predict_instances(pipeline, X)``
+    (:func:`~sklearn_radar.classification.predict_instances`) gives the
+    road users of a pipeline that ends in this classifier.
+
     Parameters
     ----------
     clusterer : estimator with ``fit_predict``, default=None
@@ -91,6 +120,7 @@ class ClusterClassifier(BaseEstimator):
     ----------
     classes_ : ndarray of int64
         The class codes it predicts, sorted; always includes -1 (background).
+        The codes of the table above, not the devkit's.
     classifier_ : classifier
         The fitted clone of ``classifier``, on the training segments.  When
         they hold a single class (or no segment exists), a
@@ -128,9 +158,11 @@ class ClusterClassifier(BaseEstimator):
     It is not a scikit-learn classifier in the sense of
     :func:`~sklearn.base.is_classifier`: its classes are fixed integer codes
     with a background (-1) that it also assigns to noise, and ``y`` alone
-    does not determine the target (the instances do too).  Score it with
-    scorers that call :meth:`predict`, e.g. ``"f1_macro"`` against the class
-    codes, or with the instance scores on :meth:`predict_instances`.
+    does not determine the target (the instances do too).  :meth:`score` is
+    the point-wise macro-F1, not a classifier's accuracy; scorers that call
+    :meth:`predict` (``"accuracy"``, ``"f1_macro"``) work against the class
+    codes, and :func:`~sklearn_radar.metrics.make_semantic_scorer` gives the
+    instance scores of :meth:`predict_instances`.
 
     Examples
     --------
@@ -229,6 +261,31 @@ class ClusterClassifier(BaseEstimator):
         clustered = rows >= 0
         proba[clustered] = segment_proba[rows[clustered]]
         return proba
+
+    def score(self, X, y):
+        """Point-wise macro-F1 of :meth:`predict` on X against the class codes ``y``.
+
+        :func:`~sklearn_radar.metrics.pointwise_macro_f1` (background
+        included): the F1 over detections of each class present in ``y`` or
+        in the prediction, averaged, the detections whose true class is
+        ignored (-2) left out.  A search or ``cross_validate`` without
+        ``scoring``, and ``Pipeline.score``, use it.  Details in the
+        :ref:`user guide <user-guide-classification>`.
+
+        Parameters
+        ----------
+        X : DataFrame or array-like of shape (n_detections, n_columns)
+            Working detections, as for :meth:`predict`.
+        y : array-like of int, shape (n_detections,)
+            True road-user class of each detection, as for :meth:`fit`.
+
+        Returns
+        -------
+        score : float
+            Macro-F1, dimensionless, in [0, 1]; 1 when every detection gets
+            its class.
+        """
+        return macro_f1_score(self, X, y)
 
     def predict_instances(self, X):
         """The road users in X: a class, an instance id and a confidence per detection.

@@ -16,7 +16,7 @@ from .._schema import POINT_FEATURE_READS
 from .._validation import read_columns
 from ..cluster import RadarDBSCAN
 from ._classes import BACKGROUND, IGNORED
-from ._wrapped import check_class_target, class_proba, fit_classifier
+from ._wrapped import check_class_target, class_proba, fit_classifier, macro_f1_score
 
 __all__ = ["POINT_FEATURES", "PointClassifier"]
 
@@ -71,6 +71,9 @@ class PointClassifier(BaseEstimator):
     ----------
     classes_ : ndarray of int64
         The class codes it predicts, sorted; always includes -1 (background).
+        The codes of :func:`~sklearn_radar.classification.road_user_class`,
+        not the devkit's: see :class:`ClusterClassifier` for the table and
+        :func:`~sklearn_radar.classification.devkit_class_index`.
     classifier_ : classifier
         The fitted clone of ``classifier`` (a
         :class:`~sklearn.dummy.DummyClassifier` of the one class, with a
@@ -175,6 +178,25 @@ class PointClassifier(BaseEstimator):
         """
         proba, _ = self._proba(X)
         return proba
+
+    def score(self, X, y):
+        """Point-wise macro-F1 of :meth:`predict` on X against the codes ``y`` (as :meth:`ClusterClassifier.score`).
+
+        Parameters
+        ----------
+        X : DataFrame or array-like of shape (n_detections, n_columns)
+            Working detections, as for :meth:`predict`.
+        y : array-like of int, shape (n_detections,)
+            True road-user class of each detection, as for :meth:`fit`
+            (detections of class -2, ignored, are left out).
+
+        Returns
+        -------
+        score : float
+            Macro-F1 over the classes (background included), dimensionless,
+            in [0, 1].
+        """
+        return macro_f1_score(self, X, y)
 
     def predict_instances(self, X):
         """The road users in X: a class, an instance id and a confidence per detection.

@@ -12,6 +12,7 @@ from sklearn.dummy import DummyClassifier
 from sklearn.ensemble import HistGradientBoostingClassifier
 from sklearn.utils import check_array, column_or_1d
 
+from ..metrics import pointwise_macro_f1
 from ._classes import BACKGROUND, IGNORED
 
 #: The wrapped classifier's settings when none is given.  30 boosting iterations instead of scikit-learn's 100:
@@ -35,6 +36,13 @@ def default_classifier():
         With :data:`DEFAULT_CLASSIFIER_PARAMS`.
     """
     return HistGradientBoostingClassifier(**DEFAULT_CLASSIFIER_PARAMS)
+
+
+def macro_f1_score(estimator, X, y):
+    """``score`` of both classifiers: point-wise macro-F1 of ``estimator.predict(X)`` against the codes ``y``."""
+    predicted = estimator.predict(X)
+    y = check_class_target(y, len(predicted), f"{type(estimator).__name__}.score")
+    return float(pointwise_macro_f1(y, predicted))
 
 
 def check_class_target(y, n, where):

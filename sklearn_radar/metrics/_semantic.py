@@ -625,9 +625,9 @@ def _true_instances(X, instance_column, groups, classes):
 
 def _predicted_instances(estimator, X):
     """``estimator.predict_instances(X)``; of a pipeline's last step after its other steps' ``transform``."""
-    if hasattr(estimator, "predict_instances"):
-        return estimator.predict_instances(X)
-    return estimator[-1].predict_instances(estimator[:-1].transform(X))
+    from ..classification import predict_instances  # the classifiers import this package
+
+    return predict_instances(estimator, X)
 
 
 def _semantic_score(estimator, X, y, metric, frame, instance_column):

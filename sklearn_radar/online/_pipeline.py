@@ -131,15 +131,28 @@ class OnlinePipeline:
         ``eps_t`` must be set (the window) and ``cluster_vr_min`` of both
         stages None (the gate judges whole clusters): a ValueError otherwise.
 
+    Attributes
+    ----------
+    experiment : int, str or None
+        The saved experiment :meth:`from_params` built it from (its number,
+        or ``"objects"``); None when built from a pipeline.
+
+    See Also
+    --------
+    iter_scans : the scans of a detection table, in the order to feed them.
+
     Examples
     --------
     >>> from sklearn_radar.datasets import make_scenes
     >>> from sklearn_radar.experiments import experiment_pipeline
-    >>> from sklearn_radar.online import OnlinePipeline
+    >>> from sklearn_radar.online import OnlinePipeline, iter_scans
     >>> scenes = make_scenes(n_sequences=1, duration=2.0, random_state=0)
-    >>> online = OnlinePipeline(experiment_pipeline(13))
-    >>> data = scenes.data.sort_values("timestamp", kind="stable")
-    >>> for _, scan in data.groupby(["timestamp", "sensor_id"], sort=True):
+    >>> online = OnlinePipeline(experiment_pipeline(1))
+    >>> online
+    OnlinePipeline(pipeline=Pipeline(steps=[('frame', FrameTransform(frame='car')),
+                                            ('filter', DopplerDensityFilter()),
+                                            ('cluster', RadarDBSCAN())]))
+    >>> for scan in iter_scans(scenes.data):
     ...     result = online.update(scan)
     >>> result.labels.shape == (len(scan),)
     True
@@ -147,6 +160,7 @@ class OnlinePipeline:
 
     def __init__(self, pipeline):
         self.pipeline = pipeline
+        self.experiment = None
         frame, filter_, stage1, merger = _stages(pipeline)
         self._frame = frame
         self._filter_params = filter_
@@ -165,16 +179,27 @@ class OnlinePipeline:
         ----------
         path : str or path-like
             ``params.json`` written by ``sklearn-radar reproduce``.
-        experiment : int, default=None
-            Which saved experiment; None: the run's best.
+        experiment : int or "objects", default=None
+            Which saved experiment; None: the one ``sklearn-radar
+            reproduce`` marked as the run's best.
 
         Returns
         -------
         online : OnlinePipeline
+            Its :attr:`experiment` is the experiment taken (the best's
+            number when ``experiment`` is None).
         """
         from .._cluster_command import load_params, setting_pipeline
 
-        return cls(setting_pipeline(load_params(path, experiment), path))
+        setting = load_params(path, experiment)
+        online = cls(setting_pipeline(setting, path))
+        online.experiment = setting["experiment"]
+        return online
+
+    def __repr__(self):
+        """``OnlinePipeline(pipeline=...)`` with the pipeline's repr, as scikit-learn shows an estimator."""
+        head = f"{type(self).__name__}(pipeline="
+        return head + repr(self.pipeline).replace("\n", "\n" + " " * len(head)) + ")"
 
     @property
     def min_cluster_size(self):

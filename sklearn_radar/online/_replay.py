@@ -12,6 +12,7 @@ from .._labels import drop_small_clusters
 from ..datasets import load_radarscenes
 from ._objects import ObjectList
 from ._pipeline import OnlinePipeline
+from ._scans import scan_order
 
 #: The first line of an object-list CSV this package writes: how a file is recognised as ours.
 OBJECTS_HEADER = ",".join(["timestamp", *ObjectList.__dataclass_fields__])
@@ -40,14 +41,6 @@ def _why_not_replaceable(out):
     with open(out, "rb") as stream:
         ours = stream.read(len(head)) == head
     return None if ours else "exists and is not an object list written by sklearn-radar"
-
-
-def scan_order(data):
-    """Row positions of each scan (one timestamp of one sequence, its sensors together), in timestamp order."""
-    timestamp, sequence = data["timestamp"].to_numpy(), data["sequence"].to_numpy()
-    order = np.lexsort((sequence, timestamp))
-    cut = np.flatnonzero((np.diff(timestamp[order]) != 0) | (np.diff(sequence[order]) != 0)) + 1
-    return np.split(order, cut)
 
 
 def replay(online, data, objects=False):

@@ -1,5 +1,7 @@
 """The road-user classes and their mapping from RadarScenes label_id, against the devkit's own mapping."""
 
+import re
+
 import numpy as np
 import pytest
 from radar_scenes.labels import ClassificationLabel, Label
@@ -12,6 +14,8 @@ from sklearn_radar.classification import (
     DEVKIT_CLASS_NAMES,
     IGNORED,
     ROAD_USER_CLASSES,
+    ClusterClassifier,
+    devkit_class_index,
     road_user_class,
 )
 
@@ -66,3 +70,38 @@ def test_road_user_class_by_hand():
 def test_road_user_class_refuses_values_that_are_no_label_id(bad):
     with pytest.raises(ValueError, match="label_id"):
         road_user_class(bad)
+
+
+def test_devkit_class_index_of_every_label_is_the_devkits_class():
+    # Reference: the devkit's own enum and translation (radar_scenes.labels), label by label.
+    labels = [label for label, devkit_class in ClassificationLabel.translation_dict().items() if devkit_class]
+    expected = [ClassificationLabel.translation_dict()[label].value for label in labels]
+    codes = road_user_class([label.value for label in labels])
+    assert devkit_class_index(codes).tolist() == expected
+    assert devkit_class_index(codes.astype(np.float64)).dtype == np.int64
+    assert devkit_class_index([]).shape == (0,)
+
+
+@pytest.mark.parametrize("bad", [[-2], [5], [0.5], ["CAR"]])
+def test_devkit_class_index_refuses_codes_it_cannot_map(bad):
+    with pytest.raises(ValueError, match="class codes -1 to 4"):
+        devkit_class_index(bad)
+
+
+#: A row of the code table of ClusterClassifier's docstring: code, class name, devkit name and value (or "none").
+_TABLE_ROW = re.compile(r"^\s*(-?\d)\s{2,}([a-z][a-z -]*?)\s{2,}(?:([A-Z_]+) (\d)|none \(ANIMAL, OTHER\))\s*$")
+
+
+def test_the_class_docstring_shows_each_code_with_the_devkits_class():
+    rows = [match.groups() for match in map(_TABLE_ROW.match, ClusterClassifier.__doc__.splitlines()) if match]
+    shown = {int(code): (name, devkit, value) for code, name, devkit, value in rows}
+    assert len(rows) == len(shown) == 7, rows
+    assert shown.pop(IGNORED) == ("ignored", None, None)
+    for code, (name, devkit, value) in shown.items():
+        assert name == {**ROAD_USER_CLASSES, BACKGROUND: "background"}[code]
+        assert ClassificationLabel[devkit].value == int(value), code
+        assert [ClassificationLabel(int(value)).name] == [DEVKIT_CLASS_NAMES[code]]
+    # Every class the devkit translates a label into is in the table under the code of that label.
+    for label, devkit_class in ClassificationLabel.translation_dict().items():
+        if devkit_class is not None:
+            assert shown[CLASS_OF_LABEL[label.value]][1] == devkit_class.name, label

@@ -13,9 +13,16 @@ from sklearn.ensemble import HistGradientBoostingClassifier
 from sklearn.metrics import f1_score
 from sklearn.model_selection import GroupKFold, cross_validate
 from sklearn.pipeline import make_pipeline
+from sklearn.preprocessing import FunctionTransformer
 
 from sklearn_radar import ClusterMerger, DopplerDensityFilter, FrameTransform, RadarDBSCAN
-from sklearn_radar.classification import ClusterClassifier, cluster_features, road_user_class
+from sklearn_radar.classification import (
+    ClusterClassifier,
+    PointClassifier,
+    cluster_features,
+    predict_instances,
+    road_user_class,
+)
 from sklearn_radar.datasets import make_scenes
 
 ROAD_USERS = [0, 1, 2, 3, 4]
@@ -173,6 +180,52 @@ def test_bad_given_labels_raise(labels, match):
     model = ClusterClassifier(Given(LABELS), Recording()).fit(X, road_user_class(X["label_id"]))
     with pytest.raises(ValueError, match=match):
         model.predict_instances_of(X, labels)
+
+
+def test_score_is_the_pointwise_macro_f1_by_hand():
+    X = _detections()
+    y = road_user_class(X["label_id"])
+    model = ClusterClassifier(Given(LABELS), Recording()).fit(X, y)
+    # Predicted: car for the first 3 rows, background elsewhere (above).  Car: TP 3, FN 2 -> F1 6/8; pedestrian:
+    # TP 0 -> 0; background: 3 true rows, all among the 9 predicted -> F1 6/12.  Mean over the three classes.
+    assert model.score(X, y) == pytest.approx((0.75 + 0.0 + 0.5) / 3)
+    assert model.score(X, y) == pytest.approx(f1_score(y, model.predict(X), average="macro"))
+    # Ignored detections (-2) are left out: the two wall rows of sequence 1 as ANIMAL.  Background: 1 true row,
+    # 7 predicted -> F1 2/8.
+    ignored = y.copy()
+    ignored[[7, 8]] = -2
+    assert model.score(X, ignored) == pytest.approx((0.75 + 0.0 + 0.25) / 3)
+    with pytest.raises(ValueError, match="y has 11 values for 12 detections"):
+        model.score(X, y[:-1])
+
+
+def test_a_pipeline_scores_and_searches_with_the_classifiers_score():
+    X = _detections()
+    y = road_user_class(X["label_id"])
+    model = make_pipeline(FunctionTransformer(), ClusterClassifier(Given(LABELS), Recording())).fit(X, y)
+    assert model.score(X, y) == pytest.approx((0.75 + 0.0 + 0.5) / 3)
+    point = make_pipeline(FunctionTransformer(), PointClassifier(AllCars())).fit(X, y)
+    # Everything predicted car: car F1 2 * 5 / (2 * 5 + 7) (7 false positives); pedestrian and background 0.
+    assert point.score(X, y) == pytest.approx(10 / 17 / 3)
+
+
+def test_predict_instances_of_a_pipeline_is_its_last_steps_on_the_transformed_rows():
+    X = _detections()
+    y = road_user_class(X["label_id"])
+    # The first step supplies the rcs column that the classifier was fitted with.
+    add_rcs = FunctionTransformer(lambda frame: frame.assign(rcs=X["rcs"].to_numpy()))
+    raw = X.drop(columns="rcs")
+    model = make_pipeline(add_rcs, ClusterClassifier(Given(LABELS), Recording())).fit(raw, y)
+    found = predict_instances(model, raw)
+    pd.testing.assert_frame_equal(found, model[-1].predict_instances(model[:-1].transform(raw)))
+    assert found["class"].tolist() == [0, 0, 0] + [-1] * 9  # as by hand above
+    with pytest.raises(ValueError, match="rcs"):
+        model[-1].predict_instances(raw)  # the step that adds rcs was skipped
+    # A classifier itself: its own method.
+    working = model[:-1].transform(raw)
+    pd.testing.assert_frame_equal(predict_instances(model[-1], working), model[-1].predict_instances(working))
+    with pytest.raises(ValueError, match=r"last step must have predict_instances.*FunctionTransformer"):
+        predict_instances(make_pipeline(FunctionTransformer()).fit(X), X)
 
 
 @pytest.fixture(scope="module")

@@ -1,13 +1,16 @@
 """OnlinePipeline: scan by scan, the offline causal pipeline's labels exactly; persistent ids; the object list."""
 
+import json
+
 import numpy as np
 import pandas as pd
 import pytest
-from sklearn.pipeline import make_pipeline
+from sklearn.pipeline import Pipeline, make_pipeline
 
 from sklearn_radar import ClusterMerger, DopplerDensityFilter, FrameTransform, RadarDBSCAN
+from sklearn_radar._cluster_command import load_params
 from sklearn_radar.datasets import make_scenes
-from sklearn_radar.experiments import experiment_pipeline
+from sklearn_radar.experiments import experiment_pipeline, paper_params
 from sklearn_radar.online import OnlinePipeline
 
 
@@ -203,6 +206,40 @@ def test_a_scan_older_than_its_sensor_raises():
 def test_pipelines_that_cannot_stream_are_refused(pipeline, match):
     with pytest.raises(ValueError, match=match):
         OnlinePipeline(pipeline)
+
+
+def test_the_repr_shows_the_pipeline_and_rebuilds_it():
+    pipeline = experiment_pipeline(13, params=TUNED[13])
+    text = repr(OnlinePipeline(pipeline))
+    assert text.startswith("OnlinePipeline(pipeline=Pipeline(steps=[('frame', FrameTransform()),")
+    assert "eps_d=2.5" in text and "unknown_velocity='accept'" in text  # the parameters set
+    namespace = {
+        "OnlinePipeline": OnlinePipeline,
+        "Pipeline": Pipeline,
+        "FrameTransform": FrameTransform,
+        "DopplerDensityFilter": DopplerDensityFilter,
+        "ClusterMerger": ClusterMerger,
+        "RadarDBSCAN": RadarDBSCAN,
+    }
+    rebuilt = eval(text, namespace)  # the repr is Python that rebuilds it
+    assert repr(rebuilt.pipeline.get_params(deep=True)) == repr(pipeline.get_params(deep=True))
+
+
+def test_from_params_records_the_experiment_it_took(tmp_path):
+    stage1 = {key.split("__", 1)[1]: value for key, value in paper_params(8).items()}
+    saved = {
+        "best": "13",
+        "experiments": {
+            "8": {"experiment": 8, "v1_test": 0.4, "params": paper_params(8), "stage1_params": None},
+            "13": {"experiment": 13, "v1_test": 0.5, "params": paper_params(13), "stage1_params": stage1},
+        },
+    }
+    path = tmp_path / "params.json"
+    path.write_text(json.dumps(saved))
+    assert OnlinePipeline.from_params(path, experiment=8).experiment == 8
+    assert OnlinePipeline.from_params(path, experiment=13).experiment == 13
+    assert OnlinePipeline.from_params(path).experiment == load_params(path)["experiment"]  # the run's choice
+    assert OnlinePipeline(experiment_pipeline(8)).experiment is None
 
 
 def target_scan(t_s, x_centre, speed=5.0, y=10.0):
