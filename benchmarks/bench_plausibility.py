@@ -40,11 +40,12 @@ def timed(func, repeat):
 
 
 def tiled_scenes(n_detections, random_state=0):
-    """Simulated detections repeated, each copy a sequence of its own, to at least ``n_detections`` rows."""
+    """Simulated detections repeated, each copy a sequence of its own with uuids of its own, to at least
+    ``n_detections`` rows."""
     base = make_scenes(n_sequences=4, duration=30.0, random_state=random_state).data
     copies = -(-n_detections // len(base))
     step = int(base["sequence"].max()) + 1
-    tiles = [base.assign(sequence=base["sequence"] + k * step) for k in range(copies)]
+    tiles = [base.assign(sequence=base["sequence"] + k * step, uuid=base["uuid"] + f"-{k}") for k in range(copies)]
     return pd.concat(tiles, ignore_index=True).iloc[:n_detections].reset_index(drop=True)
 
 

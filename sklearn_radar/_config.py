@@ -8,7 +8,10 @@ environment variable :data:`ENVIRONMENT_VARIABLE`: set
 ``SKLEARN_RADAR_CHECK_PLAUSIBILITY=0`` before the workers start (it is
 inherited by processes started afterwards), or call
 ``set_config(check_plausibility=False)`` inside the task, e.g. with dask's
-``client.run(sklearn_radar.set_config, check_plausibility=False)``.
+``client.run(sklearn_radar.set_config, check_plausibility=False)``.  A value
+of the variable that is neither on nor off (:data:`ENVIRONMENT_VALUES`) makes
+:func:`get_config` raise a ValueError naming it, until :func:`set_config`
+sets the switch.
 """
 
 from __future__ import annotations
@@ -20,13 +23,29 @@ from sklearn.utils._param_validation import validate_params
 
 #: Environment variable giving the default of ``check_plausibility``: "0", "false", "no" or "off" turn it off.
 ENVIRONMENT_VARIABLE = "SKLEARN_RADAR_CHECK_PLAUSIBILITY"
-_OFF = {"0", "false", "no", "off"}
+#: Its accepted values (any case, surrounding spaces ignored), as the setting they give; unset or empty is on.
+ENVIRONMENT_VALUES = {
+    **dict.fromkeys(("0", "false", "no", "off"), False),
+    **dict.fromkeys(("1", "true", "yes", "on", ""), True),
+}
 
 
-def _default_check_plausibility() -> bool:
-    return os.environ.get(ENVIRONMENT_VARIABLE, "1").strip().lower() not in _OFF
+def _default_check_plausibility():
+    """The setting the environment variable gives; None when its value is not one of :data:`ENVIRONMENT_VALUES`."""
+    return ENVIRONMENT_VALUES.get(os.environ.get(ENVIRONMENT_VARIABLE, "").strip().lower())
 
 
+def _environment_error() -> ValueError:
+    off = ", ".join(repr(value) for value, on in ENVIRONMENT_VALUES.items() if not on)
+    on = ", ".join(repr(value) for value, on in ENVIRONMENT_VALUES.items() if on and value)
+    return ValueError(
+        f"the environment variable {ENVIRONMENT_VARIABLE}={os.environ.get(ENVIRONMENT_VARIABLE, '')!r} (read when "
+        f"sklearn_radar was imported) is neither on nor off: accepted are {off} (the plausibility checks off) and "
+        f"{on} or unset (on), in any case"
+    )
+
+
+#: None: the environment variable held an invalid value at import (get_config raises until set_config sets it).
 _config = {"check_plausibility": _default_check_plausibility()}
 
 
@@ -39,6 +58,13 @@ def get_config() -> dict:
     config : dict
         ``{"check_plausibility": bool}``; a copy, changing it changes nothing.
 
+    Raises
+    ------
+    ValueError
+        If the environment variable ``SKLEARN_RADAR_CHECK_PLAUSIBILITY``
+        held a value that is neither on nor off when sklearn_radar was
+        imported, and :func:`set_config` has not set the switch since.
+
     See Also
     --------
     set_config : change the configuration.
@@ -50,6 +76,8 @@ def get_config() -> dict:
     >>> sklearn_radar.get_config()["check_plausibility"]
     True
     """
+    if _config["check_plausibility"] is None:
+        raise _environment_error()
     return dict(_config)
 
 

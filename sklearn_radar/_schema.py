@@ -542,6 +542,33 @@ SPEED_PATH_MAX_GAP = 0.5
 #: Units an ego speed is found in, as their value for 1 m/s, for naming the likely one.
 SPEED_UNITS = {"km/h": 3.6, "mph": 2.23694}
 
+#: The Doppler ``vr`` of the static world against the ego motion: a raw table is mostly static (RadarScenes and the
+#: simulator: 80-95 % of the detections), and a static target's ``vr`` is ``-v_s . u`` (see "Radial velocity"
+#: above), known from ``ego_vx``, ``ego_yaw_rate``, the mounting and ``azimuth_sc``.  Judged over the detections
+#: whose predicted ``|vr|`` is at least DOPPLER_MIN_PREDICTED (the ego moves), taken from at most DOPPLER_SAMPLE
+#: evenly spaced rows, when at least DOPPLER_MIN_DETECTIONS: when DOPPLER_STATIC_SHARE of them or more have ``vr``
+#: within DOPPLER_BAND (relative) of a speed unit's multiple of the prediction (km/h: 3.6), ``vr`` is in that unit.
+#: In m/s these detections sit at 1 (simulated: 78-84 % of them), in km/h at 3.6 (< 1 % in m/s).
+DOPPLER_MIN_PREDICTED = 2.0
+DOPPLER_SAMPLE = 2**14
+DOPPLER_MIN_DETECTIONS = 100
+DOPPLER_BAND = 0.15
+DOPPLER_STATIC_SHARE = 0.5
+
+#: The ego yaw must follow its rate: odometry integrates ``yaw_seq`` from the yaw rate (RadarScenes, the simulator),
+#: so between consecutive scans at most SPEED_PATH_MAX_GAP apart the change of ``ego_yaw_seq`` (wrapped to
+#: (-pi, pi]) equals ``ego_yaw_rate`` integrated over time.  Their least-squares slope per sequence (jitter in the yaw
+#: averages out) is about 1 (simulated: 1.03-1.06); a yaw in degrees gives 57.3.  Judged over at least YAW_MIN_STEPS
+#: steps and an integrated turn of at least YAW_MIN_TURN rad (a car driving straight says nothing), when the two
+#: correlate (YAW_MIN_CORRELATION; simulated: 0.9), so that a yaw that does not follow the rate at all is not blamed
+#: on a unit; a slope above YAW_MAX_SLOPE is implausible.
+YAW_MIN_STEPS = 50
+YAW_MIN_TURN = 0.05
+YAW_MIN_CORRELATION = 0.5
+YAW_MAX_SLOPE = 5.0
+#: Units an angle is found in, as their value for 1 rad, for naming the likely one.
+ANGLE_UNITS = {"degrees": 180.0 / np.pi}
+
 
 def column_names(columns):
     """Names of a tuple of :class:`Column`."""
@@ -562,7 +589,30 @@ def _cast_column(values, column: Column, table: str):
     if kind in "iu" and values.dtype.kind == "f":
         if not np.all(np.isfinite(values)) or np.any(values != np.round(values)):
             raise ValueError(f"{table}: column {column.name!r} must hold integers, found non-integer values")
+        inexact = inexact_integers(np.max(np.abs(values), initial=0.0), values.dtype, column.name, column.unit)
+        if inexact:
+            raise ValueError(f"{table}: {inexact}")
     return values.astype(column.dtype, copy=False)
+
+
+def inexact_integers(largest, dtype, name, unit):
+    """Why a float ``dtype`` cannot hold integers up to ``largest`` exactly (column ``name``), or None.
+
+    A float of ``p`` mantissa bits holds every integer up to ``2**p`` (float32: 16 777 216, float64: 9e15); beyond,
+    values are rounded to steps of a power of two.  Integer types are exact.
+    """
+    dtype = np.dtype(getattr(dtype, "numpy_dtype", dtype))
+    if dtype.kind != "f":
+        return None
+    exact = 2.0 ** (np.finfo(dtype).nmant + 1)
+    if not largest > exact:  # NaN is refused elsewhere
+        return None
+    step = 2.0 ** (np.floor(np.log2(largest)) - np.finfo(dtype).nmant)
+    return (
+        f"column {name!r} is {dtype}, which holds integers exactly only up to {exact:.0f}; its values reach "
+        f"{largest:.6g} {unit}, where {dtype} steps by {step:.0f} {unit}, so they have been rounded (distinct scans "
+        f"merge). Keep {name} as int64 (as RadarScenes) or float64"
+    )
 
 
 def make_frame(data, columns, table: str) -> pd.DataFrame:
@@ -630,7 +680,8 @@ def instance_target(track_id, sequence=None) -> np.ndarray:
     Raises
     ------
     ValueError
-        If ``sequence`` does not have the shape of ``track_id``.
+        If ``track_id`` is not one-dimensional (e.g. the whole detection
+        table), or ``sequence`` does not have its shape.
 
     Examples
     --------
@@ -640,7 +691,15 @@ def instance_target(track_id, sequence=None) -> np.ndarray:
     >>> instance_target(["a", "a"], sequence=[1, 2]).tolist()
     [0, 1]
     """
-    track_id = np.asarray(track_id, dtype=object).astype(str)
+    kind = "a DataFrame" if isinstance(track_id, pd.DataFrame) else f"a {type(track_id).__name__}"
+    track_id = np.asarray(track_id, dtype=object)
+    if track_id.ndim != 1:
+        raise ValueError(
+            f"instance_target expects track_id as one id per detection (1-D, e.g. data['track_id'] of the detection "
+            f"table), got {kind} of shape "
+            f"{track_id.shape}; for the table use instance_target(data['track_id'], data['sequence'])"
+        )
+    track_id = track_id.astype(str)
     target = np.full(track_id.shape, -1, dtype=np.int64)
     is_object = track_id != ""
     keys = track_id[is_object]

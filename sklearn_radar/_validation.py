@@ -14,8 +14,14 @@ import numpy as np
 import pandas as pd
 from sklearn.utils.validation import validate_data
 
-from ._config import get_config
+from ._config import ENVIRONMENT_VARIABLE, get_config
 from ._schema import (
+    ANGLE_UNITS,
+    DOPPLER_BAND,
+    DOPPLER_MIN_DETECTIONS,
+    DOPPLER_MIN_PREDICTED,
+    DOPPLER_SAMPLE,
+    DOPPLER_STATIC_SHARE,
     MIN_DETECTIONS_PER_SCAN,
     MIN_SCANS_FOR_SPACING,
     PLAUSIBLE_VALUES,
@@ -26,7 +32,12 @@ from ._schema import (
     SPEED_UNITS,
     TIME_UNIT_NAMES,
     WORK_LAYOUT,
+    YAW_MAX_SLOPE,
+    YAW_MIN_CORRELATION,
+    YAW_MIN_STEPS,
+    YAW_MIN_TURN,
     ColumnsRead,
+    inexact_integers,
 )
 
 
@@ -56,16 +67,30 @@ def read_columns(estimator, X, reads: ColumnsRead, *, reset):
         Every column of ``reads``.
     """
     name = type(estimator).__name__
+    dtype = getattr(X, "dtype", None)  # of an array before validation casts it to float64
     X = validated_input(estimator, X, reads, reset=reset)
     if isinstance(X, pd.DataFrame):
         present = [column for column in reads.names if column in X.columns]
         columns = {column: None for column in reads.names}
         columns.update({column: _numeric_column(X[column], column, name) for column in present})
+        _check_exact_times(columns, {column: X[column].dtype for column in present}, name)
         check_plausible(columns, name, sensor=_sensor_of(X))
+        check_unique_ids(X, columns, reads, name)
         return X, columns
     columns = _array_columns(X, reads, name)
+    _check_exact_times(columns, dict.fromkeys(columns, dtype), name)
     check_plausible(columns, name, layout=reads.layout, n_columns=X.shape[1])
     return X, columns
+
+
+def _check_exact_times(columns, dtypes, where):
+    """A µs ``timestamp`` in a float type too narrow for its magnitude (float32 above 16.8 s) has been rounded."""
+    values, dtype = columns.get("timestamp"), dtypes.get("timestamp")
+    if values is None or dtype is None or not len(values):
+        return
+    problem = inexact_integers(np.max(np.abs(values)), dtype, "timestamp", "µs")
+    if problem:
+        raise ValueError(f"{where}: {problem}")
 
 
 def validated_input(estimator, X, reads: ColumnsRead, *, reset):
@@ -103,6 +128,79 @@ def _sensor_of(X):
         return None
     sensor = X["sensor_id"].to_numpy()
     return sensor if sensor.dtype.kind in "iu" else None
+
+
+#: Odd 64-bit multipliers mixing the bits of the columns into one key per row (splitmix64's constants).
+_MIX = (np.uint64(0x9E3779B97F4A7C15), np.uint64(0xBF58476D1CE4E5B9), np.uint64(0x94D049BB133111EB))
+#: Rows whose first column hashes into the lowest 1/2**_BUCKET_BITS are compared: copies of a row share the hash.
+_BUCKET_BITS = 5
+#: Tables of at most this many rows are compared in full.
+_ALL_ROWS = 2**12
+
+
+def check_unique_ids(X, columns, reads, where):
+    """Raise a ValueError when rows of the DataFrame ``X`` repeat a ``uuid`` (unless the checks are switched off).
+
+    Rows are first compared by a 64-bit key of the first three columns
+    read and the sequence (a copied row repeats them; two detections do
+    not), then rows whose keys repeat by uuid.  Tables of at most 4096 rows
+    are compared in full; in a larger one, each row with its neighbour, and
+    the rows whose first column hashes into a fixed 1/32 of the hashes
+    (which holds every copy of each row it holds).  So a table concatenated
+    with itself and rows repeated in place are found, a single row copied
+    elsewhere with probability 1/32.
+
+    Parameters
+    ----------
+    X : DataFrame
+    columns : dict of str to ndarray or None
+        The columns read, float64.
+    reads : ColumnsRead
+    where : str
+        Prefix of the message.
+    """
+    if "uuid" not in X.columns or len(X) < 2 or not get_config()["check_plausibility"]:
+        return
+    names = [name for name in (*reads.required[:3], "sequence") if columns.get(name) is not None]
+    first = columns[names[0]].view(np.uint64)
+    if len(first) <= _ALL_ROWS:
+        rows = np.arange(len(first))
+    else:
+        compared = (first * _MIX[0]) >> np.uint64(64 - _BUCKET_BITS) == 0  # a fixed part of one column's values
+        adjacent = first[1:] == first[:-1]
+        compared[1:] |= adjacent
+        compared[:-1] |= adjacent
+        rows = np.flatnonzero(compared)
+    key = np.zeros(len(rows), dtype=np.uint64)
+    for k, name in enumerate(names):
+        key ^= columns[name][rows].view(np.uint64) * _MIX[k % len(_MIX)]
+        key ^= key >> np.uint64(29)
+    rows = rows[_repeated(key)]
+    if not len(rows):
+        return
+    ids = np.asarray(X["uuid"].to_numpy()[rows]).astype(str)
+    repeated = _repeated(ids)
+    if not repeated.any():
+        return
+    rows, ids = rows[repeated], ids[repeated]
+    pair = rows[ids == ids[0]]
+    problem = (
+        f"column 'uuid' holds {str(ids[0])!r} in rows {pair[0]} and {pair[1]} (at least {len(set(ids.tolist()))} "
+        f"uuid(s) repeat): the table holds duplicate rows (a table concatenated with itself, or rows repeated), which "
+        f"count twice in every neighbourhood, while a uuid names one detection. Keep each row once, e.g. "
+        f"X.drop_duplicates('uuid')"
+    )
+    raise ValueError(plausibility_message(where, [problem]))
+
+
+def _repeated(values):
+    """Mask of the entries of ``values`` (1-D, sortable) that occur more than once."""
+    order = np.argsort(values, kind="stable")
+    same = values[order[1:]] == values[order[:-1]]
+    mask = np.zeros(len(values), dtype=bool)
+    mask[order[1:][same]] = True
+    mask[order[:-1][same]] = True
+    return mask
 
 
 def _refuse_other_frames(X, layout, name):
@@ -249,8 +347,11 @@ def check_plausible(columns, where, *, sequence=None, sensor=None, layout=None, 
     :data:`~sklearn_radar._schema.PLAUSIBLE_VALUES` must lie within it, and
     the time columns ``timestamp`` (µs) and ``t`` (s) must have a median
     spacing of distinct scan times per sequence (and per sensor, where it
-    is known) within :data:`~sklearn_radar._schema.SCAN_SPACING`.  Rows may
-    come in any order.  Nothing is checked when
+    is known) within :data:`~sklearn_radar._schema.SCAN_SPACING`.  When all
+    are, columns present together are compared: the ego speed with the path
+    of the ego positions (``SPEED_PATH_*``), the ego yaw with its rate
+    (``YAW_*``) and ``vr`` with the Doppler of the static world
+    (``DOPPLER_*``).  Rows may come in any order.  Nothing is checked when
     ``sklearn_radar.get_config()["check_plausibility"]`` is False.
 
     Parameters
@@ -290,33 +391,66 @@ def check_plausible(columns, where, *, sequence=None, sensor=None, layout=None, 
         )
         if problem is not None
     ]
-    if not problems:  # the speed is compared with the path only in units that are each plausible
-        problems = [p for p in (_speed_path_problem(columns, sequence, bounds or {}),) if p is not None]
+    if problems:
+        misplaced = _misplaced_columns(columns, sequence, layout) if layout is not None else []
+        raise ValueError(plausibility_message(where, problems, layout, n_columns, misplaced))
+    # One column against another only in units that are each plausible, so that the first message names the cause.
+    problems = _motion_problems(columns, sequence, bounds or {})
     if problems:
         raise ValueError(plausibility_message(where, problems, layout, n_columns))
 
 
-def plausibility_message(where, problems, layout=None, n_columns=None):
-    """The error message for a list of problem descriptions (the first in full, the others listed)."""
-    text = f"{where}: implausible input: {problems[0]}."
+def plausibility_message(where, problems, layout=None, n_columns=None, misplaced=()):
+    """The error message for a list of problem descriptions (the first in full, the others listed).
+
+    For an array (``layout`` given) whose layout looks wrong (several problems, more columns than the layout, or
+    ``misplaced``: descriptions of columns that look like another column), that comes first.
+    """
+    found = f"{problems[0]}."
     if len(problems) > 1:
-        text += (
+        found += (
             f" Also {len(problems) - 1} more: "
             + "; ".join(problems[1:4])
             + ("; and more" if len(problems) > 4 else "")
             + "."
         )
-    if layout is not None:
-        wider = n_columns is not None and n_columns > len(layout.columns)
-        if len(problems) > 1 or wider:
-            verdict = "so the layout (column order) looks wrong"
-        else:
-            verdict = "check the unit, or the layout (column order)"
-        text += (
-            f" X is a plain array of {n_columns} column(s), {verdict}: {_layout_text(layout)}. "
-            f"Pass the detection table as a DataFrame (columns are found by name), or an array in that order."
+    switch = (
+        " If the data is right, sklearn_radar.set_config(check_plausibility=False) turns these checks off (for the "
+        f"command line and worker processes: the environment variable {ENVIRONMENT_VARIABLE}=0)."
+    )
+    if layout is None:
+        return f"{where}: implausible input: {found}{switch}"
+    expected = (
+        f"{_layout_text(layout)}. Pass the detection table as a DataFrame (columns are found by name), or an array "
+        f"in that order."
+    )
+    wider = n_columns is not None and n_columns > len(layout.columns)
+    if misplaced or len(problems) > 1 or wider:
+        evidence = "".join(f" {text}." for text in misplaced)
+        return (
+            f"{where}: implausible input: X is a plain array of {n_columns} column(s), so the layout (column order) "
+            f"looks wrong: {expected}{evidence} Values out of their limits: {found}{switch}"
         )
-    return text + " If the data is right, sklearn_radar.set_config(check_plausibility=False) turns these checks off."
+    return (
+        f"{where}: implausible input: {found} X is a plain array of {n_columns} column(s), check the unit, or the "
+        f"layout (column order): {expected}{switch}"
+    )
+
+
+def _misplaced_columns(columns, sequence, layout):
+    """Columns out of their limits that hold µs timestamps instead (spaced as scans): a column order gone wrong."""
+    rule = SCAN_SPACING["timestamp"]
+    found = []
+    for name, values in columns.items():
+        if values is None or name not in PLAUSIBLE_VALUES or _range_problem(name, values, name) is None:
+            continue
+        medians = median_scan_spacing(values, sequence)[0]
+        if len(medians) and np.all((rule.low <= medians) & (medians <= rule.high)):
+            found.append(
+                f"Column {layout.position(name)}, read as {name!r}, holds values like µs timestamps (up to "
+                f"{values.max():.6g}, distinct values a median {np.median(medians):.3g} apart, as scans are)"
+            )
+    return found
 
 
 def _range_problem(name, values, bound_name):
@@ -369,15 +503,28 @@ def _spacing_problem(name, times, sequence, sensor):
     )
 
 
-def _speed_path_problem(columns, sequence, bounds):
-    """The ego speed integrated over time against the path of the ego positions (SPEED_PATH_RATIO), per sequence."""
+def _motion_problems(columns, sequence, bounds):
+    """One column against another: the ego speed against its path, the yaw against its rate, Doppler against ego."""
     given = {bounds.get(name, name): name for name, values in columns.items() if values is not None}
-    if not {"ego_x_seq", "ego_y_seq", "ego_vx"} <= given.keys() or not {"timestamp", "t"} & given.keys():
-        return None
     time_name = given.get("timestamp", given.get("t"))
-    seconds = columns[time_name] * (1e-6 if "timestamp" in given else 1.0)
-    x, y, speed = (columns[given[name]] for name in ("ego_x_seq", "ego_y_seq", "ego_vx"))
-    path, integrated, sequences = _path_and_integrated_speed(seconds, x, y, speed, sequence)
+    problems = []
+    if time_name is not None and (
+        {"ego_x_seq", "ego_y_seq", "ego_vx"} <= given.keys() or {"ego_yaw_seq", "ego_yaw_rate"} <= given.keys()
+    ):
+        steps = _ScanSteps(columns[time_name] * (1e-6 if "timestamp" in given else 1.0), sequence)
+        problems += [_speed_path_problem(columns, given, time_name, steps), _yaw_problem(columns, given, steps)]
+    problems.append(_doppler_problem(columns, given))
+    return [problem for problem in problems if problem is not None]
+
+
+def _speed_path_problem(columns, given, time_name, steps):
+    """The ego speed integrated over time against the path of the ego positions (SPEED_PATH_RATIO), per sequence."""
+    if not {"ego_x_seq", "ego_y_seq", "ego_vx"} <= given.keys():
+        return None
+    x, y, speed = (columns[given[name]][steps.rows] for name in ("ego_x_seq", "ego_y_seq", "ego_vx"))
+    speed = np.abs(speed)
+    path = steps.per_group(np.hypot(np.diff(x), np.diff(y)))
+    integrated = steps.per_group(0.5 * (speed[1:] + speed[:-1]) * steps.dt)
     judged = np.maximum(path, integrated) >= SPEED_PATH_MIN_PATH
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.where(judged, integrated / path, 1.0)
@@ -386,11 +533,10 @@ def _speed_path_problem(columns, sequence, bounds):
     if not len(bad):
         return None
     k = bad[np.argmax(np.abs(np.log(ratio[bad])))]
-    group = "one sequence" if sequences is None else f"sequence {sequences[k]:g}"
     return (
         f"column {given['ego_vx']!r} integrates to {integrated[k]:.4g} m over time while the ego positions "
-        f"({given['ego_x_seq']!r}, {given['ego_y_seq']!r}) move {path[k]:.4g} m ({group}; ratio {ratio[k]:.3g}, "
-        f"plausible {low:g}-{high:g}): {_speed_cause(ratio[k], given['ego_vx'], time_name)}"
+        f"({given['ego_x_seq']!r}, {given['ego_y_seq']!r}) move {path[k]:.4g} m ({steps.group_name(k)}; ratio "
+        f"{ratio[k]:.3g}, plausible {low:g}-{high:g}): {_speed_cause(ratio[k], given['ego_vx'], time_name)}"
     )
 
 
@@ -404,24 +550,101 @@ def _speed_cause(ratio, speed_name, time_name):
     )
 
 
-def _path_and_integrated_speed(seconds, x, y, speed, sequence):
-    """Per sequence: the path of (x, y) and the integral of ``|speed|`` over consecutive scans (gaps <= MAX_GAP)."""
-    keys = [] if sequence is None else [sequence]
-    rows = _run_starts(seconds, *keys)
-    order = np.lexsort((seconds[rows], *(key[rows] for key in keys)))
-    rows = rows[order]
-    t, px, py, v = seconds[rows], x[rows], y[rows], np.abs(speed[rows])
-    group = np.zeros(len(rows), dtype=np.int64)
-    if keys:
-        group = np.cumsum(np.r_[False, keys[0][rows][1:] != keys[0][rows][:-1]])
-    dt = np.diff(t)
-    step = (group[1:] == group[:-1]) & (dt > 0) & (dt <= SPEED_PATH_MAX_GAP)
-    n_groups = int(group[-1]) + 1 if len(group) else 0
-    path = np.bincount(group[1:][step], weights=np.hypot(np.diff(px), np.diff(py))[step], minlength=n_groups)
-    integrated = np.bincount(group[1:][step], weights=(0.5 * (v[1:] + v[:-1]) * dt)[step], minlength=n_groups)
-    first_of_group = np.r_[True, group[1:] != group[:-1]] if len(group) else np.zeros(0, dtype=bool)
-    sequences = keys[0][rows][first_of_group] if keys else None
-    return path, integrated, sequences
+def _yaw_problem(columns, given, steps):
+    """The change of the ego yaw between scans against its rate integrated over time, per sequence (YAW_*)."""
+    if not {"ego_yaw_seq", "ego_yaw_rate"} <= given.keys():
+        return None
+    yaw, rate = (columns[given[name]][steps.rows] for name in ("ego_yaw_seq", "ego_yaw_rate"))
+    turned = _wrapped(_wrapped(np.diff(yaw), 360.0), 2 * np.pi)  # over a wrap in degrees or in rad
+    integrated = 0.5 * (rate[1:] + rate[:-1]) * steps.dt
+    n_steps = steps.per_group(np.ones_like(turned))
+    covariance, variance = steps.per_group(turned * integrated), steps.per_group(integrated**2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        slope = covariance / variance
+        correlation = covariance / np.sqrt(variance * steps.per_group(turned**2))
+    judged = (n_steps >= YAW_MIN_STEPS) & (steps.per_group(np.abs(integrated)) >= YAW_MIN_TURN)
+    bad = np.flatnonzero(judged & (slope > YAW_MAX_SLOPE) & (correlation >= YAW_MIN_CORRELATION))
+    if not len(bad):
+        return None
+    k = bad[np.argmax(slope[bad])]
+    yaw_name, rate_name = given["ego_yaw_seq"], given["ego_yaw_rate"]
+    degrees = abs(np.log(slope[k] / ANGLE_UNITS["degrees"])) < 0.15
+    cause = (
+        f"{yaw_name} looks like degrees; sklearn-radar (as RadarScenes) uses rad"
+        if degrees
+        else f"their units disagree: check {yaw_name} (rad), {rate_name} (rad/s) and the time"
+    )
+    return (
+        f"column {yaw_name!r} changes {slope[k]:.3g} times as much as {rate_name!r} integrated over time "
+        f"({steps.group_name(k)}; least-squares slope over {n_steps[k]:.0f} steps between scans, correlation "
+        f"{correlation[k]:.2f}, plausible up to {YAW_MAX_SLOPE:g}): {cause}"
+    )
+
+
+def _wrapped(angle, turn):
+    """``angle`` wrapped to [-turn / 2, turn / 2)."""
+    return np.mod(angle + turn / 2, turn) - turn / 2
+
+
+def _doppler_problem(columns, given):
+    """The Doppler of detections against that of a static target, from the ego motion (DOPPLER_*)."""
+    if not {"vr", "azimuth_sc", "sensor_yaw", "ego_vx"} <= given.keys():
+        return None
+    every = max(1, -(-len(columns[given["vr"]]) // DOPPLER_SAMPLE))
+
+    def sample(name):
+        return columns[given[name]][::every] if name in given else 0.0
+
+    angle, yaw_rate = sample("azimuth_sc") + sample("sensor_yaw"), sample("ego_yaw_rate")
+    sensor_vx, sensor_vy = sample("ego_vx") - yaw_rate * sample("sensor_y"), yaw_rate * sample("sensor_x")
+    static = -(sensor_vx * np.cos(angle) + sensor_vy * np.sin(angle))  # m/s: vr of a static target
+    judged = np.abs(static) >= DOPPLER_MIN_PREDICTED
+    n_judged = int(np.count_nonzero(judged))
+    if n_judged < DOPPLER_MIN_DETECTIONS:
+        return None
+    ratio = sample("vr")[judged] / static[judged]
+    share = {
+        unit: float(np.mean(np.abs(ratio / factor - 1.0) <= DOPPLER_BAND))
+        for unit, factor in {"m/s": 1.0, **SPEED_UNITS}.items()
+    }
+    unit = max(SPEED_UNITS, key=share.get)
+    if share[unit] < DOPPLER_STATIC_SHARE:
+        return None
+    return (
+        f"column {given['vr']!r}: {share[unit]:.0%} of {n_judged} detections seen while the ego moves have "
+        f"{SPEED_UNITS[unit]:.3g} times the radial velocity a static target has from the ego motion (ego_vx, "
+        f"ego_yaw_rate, the mounting and azimuth_sc), and {share['m/s']:.0%} that velocity, while most detections of "
+        f"a raw table are static: {given['vr']} looks like {unit}; sklearn-radar (as RadarScenes) uses m/s"
+    )
+
+
+class _ScanSteps:
+    """Consecutive distinct scans per sequence, rows in any order: the steps the ego's motion is integrated over.
+
+    ``rows``: the first row of each run of equal (time, sequence), ordered by sequence, then time; ``dt`` (s)
+    between consecutive ones; a step counts when both lie in one sequence, 0 < dt <= SPEED_PATH_MAX_GAP.
+    """
+
+    def __init__(self, seconds, sequence):
+        keys = [] if sequence is None else [sequence]
+        rows = _run_starts(seconds, *keys)
+        self.rows = rows[np.lexsort((seconds[rows], *(key[rows] for key in keys)))]
+        group = np.zeros(len(self.rows), dtype=np.int64)
+        if keys:
+            group = np.cumsum(np.r_[False, keys[0][self.rows][1:] != keys[0][self.rows][:-1]])
+        self.dt = np.diff(seconds[self.rows])
+        self.step = (group[1:] == group[:-1]) & (self.dt > 0) & (self.dt <= SPEED_PATH_MAX_GAP)
+        self.step_group = group[1:][self.step]
+        self.n_groups = int(group[-1]) + 1 if len(group) else 0
+        first_of_group = np.r_[True, group[1:] != group[:-1]] if len(group) else np.zeros(0, dtype=bool)
+        self.sequences = keys[0][self.rows][first_of_group] if keys else None
+
+    def per_group(self, per_step):
+        """Sum of a value per step (one per consecutive pair of ``rows``) over the counted steps of each sequence."""
+        return np.bincount(self.step_group, weights=per_step[self.step], minlength=self.n_groups)
+
+    def group_name(self, k):
+        return "one sequence" if self.sequences is None else f"sequence {self.sequences[k]:g}"
 
 
 def _run_starts(*columns):

@@ -7,12 +7,14 @@ convention error would; without the checks every one of them ran through silentl
 import importlib.util
 import json
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
 
 import h5py
 import numpy as np
+import pandas as pd
 import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
@@ -20,7 +22,7 @@ from hypothesis import strategies as st
 import sklearn_radar
 from sklearn_radar import ClusterMerger, DopplerDensityFilter, FrameTransform, RadarDBSCAN, config_context
 from sklearn_radar._config import ENVIRONMENT_VARIABLE
-from sklearn_radar._schema import PLAUSIBLE_VALUES, RAW_LAYOUT, SCAN_SPACING
+from sklearn_radar._schema import PLAUSIBLE_VALUES, RADARSCENES_MOUNTING, RAW_LAYOUT, SCAN_SPACING
 from sklearn_radar._validation import check_plausible, median_scan_spacing
 from sklearn_radar.cluster import SequenceDBSCAN, WindowedDBSCAN
 from sklearn_radar.datasets import load_radarscenes, make_scenes, write_radarscenes
@@ -421,3 +423,271 @@ def test_plausible_random_tables_never_raise_and_their_azimuth_in_degrees_always
     X[:, RAW_LAYOUT.position("azimuth_sc")] = np.degrees(X[:, RAW_LAYOUT.position("azimuth_sc")])
     with pytest.raises(ValueError, match=r"'azimuth_sc' .* it looks like degrees"):
         FrameTransform().fit(X)
+
+
+# --------------------------------------------------------------------------
+# Issue 46: units told by one column against another, exact times, duplicate rows, column order, the switch
+# --------------------------------------------------------------------------
+
+
+@pytest.fixture(scope="module")
+def turning():
+    # Both sequences turn (0.43 and 0.60 rad in 3 s): the yaw against its rate is judged.
+    return make_scenes(n_sequences=2, duration=3.0, random_state=1).data
+
+
+@pytest.mark.parametrize("difficulty", ["easy", "realistic", "radarscenes"])
+def test_simulated_data_of_every_preset_passes_the_checks_of_one_column_against_another(difficulty):
+    data = make_scenes(n_sequences=3, duration=10.0, random_state=3, difficulty=difficulty).data
+    FrameTransform().fit(data)
+    FrameTransform().fit(data.iloc[::7])  # a row subset
+    FrameTransform().fit(data[data["label_id"] != 11])  # only the moving road users: not judged as km/h
+
+
+@pytest.mark.parametrize(
+    "unit, factor, message",
+    [("km/h", 3.6, r"3\.6 times"), ("mph", 2.23694, r"2\.24 times")],
+)
+def test_a_doppler_in_another_unit_within_its_limit_is_named(scenes, unit, factor, message):
+    bad = _with(scenes.data, vr=lambda v: v * factor)
+    assert bad["vr"].abs().max() < PLAUSIBLE_VALUES["vr"].high  # the range check alone let it pass
+    with pytest.raises(
+        ValueError,
+        match=rf"column 'vr': \d+% of \d+ detections seen while the ego moves have {message} the radial velocity a "
+        rf"static target has from the ego motion .*vr looks like {unit}; sklearn-radar \(as RadarScenes\) uses m/s",
+    ):
+        FrameTransform().fit(bad)
+    with pytest.raises(ValueError, match=f"vr looks like {unit}"):  # the array path reads it too
+        FrameTransform().fit(bad[list(RAW_LAYOUT.columns)].to_numpy(np.float64))
+    with config_context(check_plausibility=False):
+        FrameTransform().fit(bad)
+
+
+def test_the_doppler_of_a_car_at_rest_is_not_judged(scenes):
+    bad = _with(scenes.data, vr=lambda v: v * 3.6, ego_vx=lambda v: np.zeros_like(v), ego_yaw_rate=np.zeros_like)
+    bad = _with(bad, ego_x_seq=lambda v: np.full_like(v, v[0]), ego_y_seq=lambda v: np.full_like(v, v[0]))
+    FrameTransform().fit(bad)  # no ego motion: the static world has no Doppler to compare with
+
+
+def test_an_ego_yaw_in_degrees_is_named(turning):
+    bad = _with(turning, ego_yaw_seq=np.degrees)
+    with pytest.raises(
+        ValueError,
+        match=r"column 'ego_yaw_seq' changes 5\d\.?\d* times as much as 'ego_yaw_rate' integrated over time "
+        r"\(sequence \d; .*plausible up to 5\): ego_yaw_seq looks like degrees; sklearn-radar \(as RadarScenes\) uses "
+        r"rad",
+    ):
+        FrameTransform().fit(bad)
+    wrapped = _with(turning, ego_yaw_seq=lambda v: np.mod(np.degrees(v) + 170.0, 360.0) - 180.0)  # wraps at 180 deg
+    with pytest.raises(ValueError, match="ego_yaw_seq looks like degrees"):
+        FrameTransform().fit(wrapped)
+
+
+def test_a_yaw_offset_or_a_yaw_in_zero_to_two_pi_is_plausible(turning):
+    FrameTransform().fit(_with(turning, ego_yaw_seq=lambda v: np.mod(v, 2 * np.pi)))
+    FrameTransform().fit(_with(turning, ego_yaw_seq=lambda v: v + 20 * np.pi))
+
+
+def test_load_radarscenes_compares_the_odometry_yaw_with_its_rate(tmp_path):
+    write_radarscenes(make_scenes(n_sequences=1, duration=3.0, random_state=1), tmp_path / "data")
+    h5_file = tmp_path / "data" / "sequence_1" / "radar_data.h5"
+    with h5py.File(h5_file, "r+") as h5:
+        odometry = h5["odometry"][()]
+        odometry["yaw_seq"] = np.degrees(odometry["yaw_seq"])
+        del h5["odometry"]
+        h5.create_dataset("odometry", data=odometry)
+    with pytest.raises(ValueError, match=r"\[odometry\]: implausible input: column 'yaw_seq' changes .*degrees"):
+        load_radarscenes(tmp_path / "data")
+
+
+def test_load_radarscenes_names_a_doppler_in_km_per_hour(written):
+    h5_file = _edit_radar_data(written, "vr", lambda v: v * 3.6)
+    with pytest.raises(ValueError, match=rf"{h5_file} \[radar_data\]: implausible input: column 'vr': .*km/h"):
+        load_radarscenes(written)
+
+
+def _motion_table(rng, n_scans, speed, yaw_rate, moving_share):
+    """A raw table of static detections (and some moving ones) seen by an ego driving on an arc, as odometry says."""
+    spacing = rng.uniform(0.01, 0.08)  # s between scans
+    t = np.arange(n_scans) * spacing
+    rate = np.full(n_scans, yaw_rate) + rng.normal(0, 0.01, n_scans)
+    yaw = rng.uniform(-np.pi, np.pi) + np.r_[0.0, np.cumsum(0.5 * (rate[1:] + rate[:-1]) * np.diff(t))]
+    x = np.r_[0.0, np.cumsum(speed * np.cos(yaw[1:]) * np.diff(t))]
+    y = np.r_[0.0, np.cumsum(speed * np.sin(yaw[1:]) * np.diff(t))]
+    scan = np.repeat(np.arange(n_scans), 20)
+    n = len(scan)
+    mount = rng.integers(1, 5, n)
+    sensor = {k: np.array([RADARSCENES_MOUNTING[i][k] for i in mount]) for k in ("x", "y", "yaw")}
+    azimuth = rng.uniform(-1.0, 1.0, n)
+    angle = azimuth + sensor["yaw"]
+    static = -((speed - rate[scan] * sensor["y"]) * np.cos(angle) + rate[scan] * sensor["x"] * np.sin(angle))
+    moving = rng.random(n) < moving_share
+    vr = np.where(moving, rng.uniform(-30, 30, n), static + rng.normal(0, 0.1, n))
+    columns = {
+        "range_sc": rng.uniform(1, 100, n),
+        "azimuth_sc": azimuth,
+        "vr": vr,
+        "timestamp": np.round(1.5e11 + t[scan] * 1e6),
+        "sensor_x": sensor["x"],
+        "sensor_y": sensor["y"],
+        "sensor_yaw": sensor["yaw"],
+        "ego_x_seq": x[scan],
+        "ego_y_seq": y[scan],
+        "ego_yaw_seq": np.mod(yaw[scan] + np.pi, 2 * np.pi) - np.pi,
+        "ego_vx": np.full(n, speed),
+        "ego_yaw_rate": rate[scan],
+    }
+    return np.column_stack([columns[name] for name in RAW_LAYOUT.columns[:-1]])
+
+
+@settings(max_examples=25, deadline=None)
+@given(
+    seed=st.integers(0, 2**31),
+    speed=st.floats(3.0, 40.0),
+    yaw_rate=st.floats(-0.5, 0.5).filter(lambda rate: abs(rate) > 0.1),
+    moving_share=st.floats(0.0, 0.4),
+)
+def test_plausible_moving_egos_never_raise_and_their_doppler_in_km_per_hour_or_yaw_in_degrees_always_does(
+    seed, speed, yaw_rate, moving_share
+):
+    X = _motion_table(np.random.default_rng(seed), 120, speed, yaw_rate, moving_share)
+    FrameTransform().fit(X)
+    in_km_per_hour = X.copy()
+    in_km_per_hour[:, RAW_LAYOUT.position("vr")] *= 3.6
+    with pytest.raises(ValueError, match="vr looks like km/h"):
+        FrameTransform().fit(in_km_per_hour)
+    in_degrees = X.copy()
+    in_degrees[:, RAW_LAYOUT.position("ego_yaw_seq")] = np.degrees(X[:, RAW_LAYOUT.position("ego_yaw_seq")])
+    with pytest.raises(ValueError, match="ego_yaw_seq looks like degrees"):
+        FrameTransform().fit(in_degrees)
+
+
+@pytest.mark.parametrize("where", ["DataFrame", "array"])
+def test_float32_timestamps_are_refused_naming_the_column(scenes, where):
+    # µs since an epoch (1.6e11) in float32 are rounded to 16384 µs: scans 15 ms apart merge.
+    data = _with(scenes.data, timestamp=lambda v: v.astype(np.float32))
+    X = data if where == "DataFrame" else data[list(RAW_LAYOUT.columns)].to_numpy(np.float32)
+    message = r"FrameTransform: column 'timestamp' is float32, which holds integers exactly only up to 16777216; .*"
+    for switch in (True, False):  # the values are lost, whatever the switch
+        with config_context(check_plausibility=switch), pytest.raises(ValueError, match=message + "int64"):
+            FrameTransform().fit(X)
+
+
+def test_float32_timestamps_small_enough_to_be_exact_pass(scenes):
+    start = scenes.data.groupby("sequence")["timestamp"].transform("min")
+    data = scenes.data.assign(timestamp=(scenes.data["timestamp"] - start).astype(np.float32))  # 3 s < 2**24 µs
+    FrameTransform().fit(data)
+    FrameTransform().fit(data[list(RAW_LAYOUT.columns)].to_numpy(np.float32))
+
+
+def test_a_float32_timestamp_field_of_a_radarscenes_file_is_refused(written):
+    h5_file = written / "sequence_1" / "radar_data.h5"
+    with h5py.File(h5_file, "r+") as h5:
+        array = h5["radar_data"][()]
+        fields = [(name, "<f4" if name == "timestamp" else array.dtype[name]) for name in array.dtype.names]
+        rounded = array.astype(fields)
+        del h5["radar_data"]
+        h5.create_dataset("radar_data", data=rounded)
+    with pytest.raises(ValueError, match=r"\[radar_data\]: column 'timestamp' is float32, which holds integers"):
+        load_radarscenes(written)
+
+
+def test_duplicate_rows_are_refused_naming_the_uuid_and_an_example(scenes, working):
+    data = scenes.data
+    doubled = pd.concat([data, data], ignore_index=True)
+    first = data["uuid"].iloc[0]
+    with pytest.raises(
+        ValueError,
+        match=r"FrameTransform: implausible input: column 'uuid' holds '[0-9a-f]{32}' in rows (\d+) and (\d+) "
+        r"\(at least \d+ uuid\(s\) repeat\): the table holds duplicate rows .*drop_duplicates\('uuid'\)",
+    ) as error:
+        FrameTransform().fit(doubled)
+    rows = [int(row) for row in re.search(r"in rows (\d+) and (\d+)", str(error.value)).groups()]
+    assert rows[1] == rows[0] + len(data)
+    repeated_in_place = data.iloc[np.repeat(np.arange(len(data)), 1 + (np.arange(len(data)) == 1234))]
+    with pytest.raises(ValueError, match=rf"column 'uuid' holds '{repeated_in_place['uuid'].iloc[1234]}' in rows"):
+        FrameTransform().fit(repeated_in_place)
+    for model in (DopplerDensityFilter(), RadarDBSCAN(), ClusterMerger()):  # the working table too
+        with pytest.raises(ValueError, match=f"{type(model).__name__}: implausible input: column 'uuid'"):
+            model.fit(pd.concat([working, working.iloc[:50]]))
+    small = data.iloc[:300]
+    with pytest.raises(ValueError, match=rf"'{small['uuid'].iloc[7]}' in rows 7 and 300"):  # a small table: all rows
+        FrameTransform().fit(pd.concat([small, small.iloc[[7]]], ignore_index=True))
+    with config_context(check_plausibility=False):
+        FrameTransform().fit(doubled)
+    assert first == data["uuid"].iloc[0]
+
+
+def test_unique_uuids_pass_in_subsets_splits_and_shuffles(scenes):
+    data = scenes.data
+    assert data["uuid"].is_unique
+    rng = np.random.default_rng(3)
+    for subset in (data.iloc[::5], data.iloc[rng.permutation(len(data))], data[data["sequence"] == 2]):
+        FrameTransform().fit(subset)
+    moved = data.assign(sequence=data["sequence"] + 10, uuid=data["uuid"] + "b")
+    FrameTransform().fit(pd.concat([data, moved], ignore_index=True))  # equal measurements, other uuids
+
+
+def test_an_array_in_the_wrong_column_order_is_said_to_be_out_of_order_first(scenes):
+    # Issue 46: the first words were "column 'range_sc' holds 1.58e+11 m ... it looks like mm or cm".
+    order = list(RAW_LAYOUT.columns)
+    order[0], order[3] = order[3], order[0]  # timestamp and range_sc swapped
+    X = scenes.data[order].to_numpy(np.float64)
+    with pytest.raises(ValueError) as error:
+        FrameTransform().fit(X)
+    message = str(error.value)
+    assert message.startswith(
+        "FrameTransform: implausible input: X is a plain array of 13 column(s), so the layout (column order) "
+        "looks wrong: a plain array is read by position as the raw detection array, columns ['range_sc', "
+    )
+    timestamps = message.index("Column 0, read as 'range_sc', holds values like µs timestamps (up to 1.58")
+    assert timestamps < message.index("column 'range_sc' holds 1.58") < message.index("looks like mm or cm")
+
+
+def test_a_range_in_mm_is_still_blamed_on_the_unit_first(scenes):
+    X = scenes.data[list(RAW_LAYOUT.columns)].to_numpy(np.float64)
+    X[:, 0] *= 1000.0
+    with pytest.raises(ValueError, match=r"^FrameTransform: implausible input: column 'range_sc' holds \d+.* m .*mm"):
+        FrameTransform().fit(X)
+
+
+def test_a_plausibility_error_names_the_environment_variable_too(working):
+    with pytest.raises(ValueError) as error:
+        DopplerDensityFilter().fit(_with(working, t=lambda v: v * 1e3))
+    assert "sklearn_radar.set_config(check_plausibility=False)" in str(error.value)
+    assert f"{ENVIRONMENT_VARIABLE}=0" in str(error.value)
+
+
+def test_the_command_line_names_the_environment_variable_and_obeys_it(written):
+    _edit_radar_data(written, "azimuth_sc", np.degrees)
+    command = [sys.executable, "-m", "sklearn_radar", "stats", "--data", str(written)]
+    result = subprocess.run(command, capture_output=True, text=True, env={**os.environ, ENVIRONMENT_VARIABLE: "1"})
+    assert result.returncode == 1 and result.stderr.startswith("sklearn-radar: error:")
+    assert f"{ENVIRONMENT_VARIABLE}=0" in result.stderr and len(result.stderr.strip().splitlines()) == 1
+    result = subprocess.run(command, capture_output=True, text=True, env={**os.environ, ENVIRONMENT_VARIABLE: "0"})
+    assert result.returncode == 0, result.stderr
+
+
+@pytest.mark.parametrize("value", ["maybe", "2", "of"])
+def test_an_invalid_environment_variable_is_a_clear_error(written, value):
+    env = {**os.environ, ENVIRONMENT_VARIABLE: value}
+    script = "import sklearn_radar; sklearn_radar.get_config()"
+    result = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True)
+    assert result.returncode == 1
+    last = result.stderr.strip().splitlines()[-1]
+    assert last.startswith(f"ValueError: the environment variable {ENVIRONMENT_VARIABLE}={value!r}")
+    assert "'0', 'false', 'no', 'off'" in last and "'1', 'true', 'yes', 'on' or unset" in last
+    command = [sys.executable, "-m", "sklearn_radar", "stats", "--data", str(written)]
+    result = subprocess.run(command, env=env, capture_output=True, text=True)
+    assert result.returncode == 1 and len(result.stderr.strip().splitlines()) == 1
+    assert result.stderr.startswith(f"sklearn-radar: error: the environment variable {ENVIRONMENT_VARIABLE}=")
+    script = "import sklearn_radar; sklearn_radar.set_config(check_plausibility=True); sklearn_radar.get_config()"
+    assert subprocess.run([sys.executable, "-c", script], env=env).returncode == 0  # set_config settles it
+
+
+@pytest.mark.parametrize("value, expected", [("yes", True), (" OFF ", False), ("False", False), ("on", True)])
+def test_the_environment_variable_accepts_its_words_in_any_case(value, expected):
+    script = "import sklearn_radar; print(sklearn_radar.get_config()['check_plausibility'])"
+    env = {**os.environ, ENVIRONMENT_VARIABLE: value}
+    result = subprocess.run([sys.executable, "-c", script], env=env, capture_output=True, text=True, check=True)
+    assert result.stdout.strip() == str(expected)

@@ -30,6 +30,31 @@ def test_instance_target_of_only_background():
     assert instance_target(["", ""]).tolist() == [-1, -1]
 
 
+@pytest.mark.parametrize("shape", [(4, 23), (4, 1)])
+def test_instance_target_of_a_table_says_what_it_expects(shape):
+    # Issue 46: instance_target(df) returned an (n, 23) array.
+    table = pd.DataFrame(np.full(shape, "a", dtype=object), columns=[f"c{k}" for k in range(shape[1])])
+    with pytest.raises(
+        ValueError,
+        match=rf"instance_target expects track_id as one id per detection \(1-D, e\.g\. data\['track_id'\] .*got a "
+        rf"DataFrame of shape \({shape[0]}, {shape[1]}\); for the table use instance_target\(data\['track_id'\], "
+        r"data\['sequence'\]\)",
+    ):
+        instance_target(table)
+    with pytest.raises(ValueError, match=r"got a ndarray of shape \(2, 2\)"):
+        instance_target(np.array([["a", ""], ["b", "a"]]))
+    assert instance_target(table["c0"]).tolist() == [0, 0, 0, 0]
+
+
+def test_make_frame_refuses_integers_a_float_type_has_rounded():
+    rows = _radar_rows()
+    rows["timestamp"] = np.array([1.58e11, 1.58e11 + 16384, 1.58e11 + 32768], dtype=np.float32)
+    with pytest.raises(ValueError, match=r"detections: column 'timestamp' is float32, .* steps by 16384 µs"):
+        make_frame(rows, RADAR_DATA_COLUMNS, table="detections")
+    rows["timestamp"] = np.array([0.0, 60_000.0, 120_000.0], dtype=np.float32)  # exact below 2**24
+    assert make_frame(rows, RADAR_DATA_COLUMNS, table="detections")["timestamp"].tolist() == [0, 60_000, 120_000]
+
+
 def test_nearest_odometry_index_prefers_the_earlier_row_on_ties():
     index = nearest_odometry_index([0, 5, 10, 14, 15, 16, 100, -3], [0, 10, 20])
     assert index.tolist() == [0, 0, 1, 1, 1, 2, 2, 0]

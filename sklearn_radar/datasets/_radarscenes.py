@@ -115,7 +115,8 @@ def load_radarscenes(path, sequences=None) -> Bunch:
         ``sequences.json`` or its name is not of the form ``sequence_N``,
         if time runs backwards in ``radar_data`` or ``odometry``, and if a
         value is physically implausible (a range in mm, an azimuth in
-        degrees, timestamps in s, a mounting outside the car, ...; the
+        degrees, timestamps in s, a Doppler in km/h, a yaw in degrees, a
+        mounting outside the car, ...; the
         bounds of ``sklearn_radar._schema.PLAUSIBLE_VALUES``, switched off by
         ``sklearn_radar.set_config(check_plausibility=False)``).
 
@@ -271,6 +272,8 @@ def _load_sequence(sequence_dir: Path, number: int, mounting: dict):
     # Only the sensors present: attach_context sizes a lookup table by the largest id.
     present = {k: mounting[k] for k in np.unique(radar["sensor_id"]).tolist()} or mounting
     detections = attach_context(radar, number, odometry_index, odometry, present)
+    doppler = {name: detections[name].to_numpy(dtype=np.float64) for name in _DOPPLER_COLUMNS}
+    check_plausible(doppler, f"{h5_file} [radar_data]")  # vr against the ego motion
     odometry.insert(0, "sequence", np.full(len(odometry), number, dtype=np.int64))
     return detections, odometry
 
@@ -371,8 +374,16 @@ def _check_plausible_radar_data(radar: pd.DataFrame, table: str) -> None:
     check_plausible(columns, table, sensor=radar["sensor_id"].to_numpy())
 
 
-#: The odometry fields under the names of the detection columns whose bounds apply to them.
-_ODOMETRY_BOUNDS = {"vx": "ego_vx", "yaw_rate": "ego_yaw_rate", "x_seq": "ego_x_seq", "y_seq": "ego_y_seq"}
+#: The odometry fields under the names of the detection columns whose bounds and comparisons apply to them.
+_ODOMETRY_BOUNDS = {
+    "vx": "ego_vx",
+    "yaw_rate": "ego_yaw_rate",
+    "x_seq": "ego_x_seq",
+    "y_seq": "ego_y_seq",
+    "yaw_seq": "ego_yaw_seq",
+}
+#: The detection columns the Doppler of the static world is predicted from (and vr).
+_DOPPLER_COLUMNS = ("vr", "azimuth_sc", "sensor_x", "sensor_y", "sensor_yaw", "ego_vx", "ego_yaw_rate")
 
 
 def _check_plausible_odometry(odometry: pd.DataFrame, table: str) -> None:
