@@ -495,8 +495,9 @@ def _say_the_work(run, keys, budget, repeats):
     """The first progress line: the run's work, and that its time is estimated from the work as it goes."""
     n_search = sum(units(key, budget, repeats) for key in keys if STEPS[key].kind in ("stage 1", "stage 2", BASELINES))
     text = (
-        f"the run's work: {len(keys)} steps, {n_search} search iterations in all; the progress lines estimate the "
-        "time left from the rate measured so far for each kind of step"
+        f"the run's work: {counted(len(keys), 'step')}, {counted(n_search, 'search iteration')} in all; the progress "
+        "lines estimate the time left from the rate measured so far for each kind of step (unknown until a step of "
+        "each kind still to come has been timed)"
     )
     uncompiled = uncompiled_kernels()
     if uncompiled:
