@@ -271,7 +271,10 @@ _CLASSIFIER_HELP = (
 )
 
 #: What ``--experiment`` of ``cluster`` and ``stream`` takes.
-_SAVED_EXPERIMENT_HELP = "which saved experiment: a number 1-13 or 'objects' (default: the best)"
+_SAVED_EXPERIMENT_HELP = (
+    "which saved experiment: a number 1-13 or 'objects' (default: the run's best by cross-validated score on the "
+    "training half)"
+)
 
 
 def _saved_experiment(text, flag):
@@ -413,10 +416,12 @@ def _cluster(args) -> int:
 
 
 def _print_applied(verb, summary, args):
-    """``applied experiment #13 of params.json: ...`` and/or ``classified with FILE``."""
+    """``applied experiment #13 of params.json: ...`` (and why, for the file's best) and/or ``classified with FILE``."""
     if summary["experiment"] is not None:
         applied = f"{_named(summary['experiment'])} of {_shown(args.params)}: {_setting(summary['params'])}"
         print(f"{verb} experiment {applied}")
+        if summary.get("chosen"):
+            print(f"  chosen as {summary['chosen']}")
     if args.classifier is not None:
         print(f"classified with {_shown(args.classifier)}")
 

@@ -113,10 +113,14 @@ def test_saved_setting_rescored_on_the_test_half_gives_the_reported_v1(tiny_repo
     assert row in (tiny_report / "report.md").read_text()
 
 
-def test_the_best_saved_setting_is_the_one_with_the_highest_test_v1(tiny_report):
+def test_the_best_saved_setting_is_the_one_with_the_highest_cross_validated_v1(tiny_report):
+    # Never the test score: the kept settings' cross-validated V1 on the training half, as results.json has it.
     saved = json.loads((tiny_report / "params.json").read_text())
-    scores = {key: setting["v1_test"] for key, setting in saved["experiments"].items()}
-    assert saved["best"] == max(scores, key=scores.get)
+    results = json.loads((tiny_report / "results.json").read_text())
+    cv = {key: record["cv_best"] for key, record in results["experiments"].items() if "cv_best" in record}
+    assert saved["best"] == max(cv, key=cv.get)
+    assert saved["experiments"]["objects"]["cv_v1"] is None  # tuned for PQ in a V1 run: not comparable
+    assert saved["experiments"]["1"]["cv_v1"] is None and saved["experiments"]["2"]["cv_v1"] == cv["2"]
 
 
 def test_params_file_drives_the_cluster_command_and_the_devkit_reads_its_output(
@@ -374,8 +378,9 @@ def test_objective_pq_is_searched_reported_and_ranks_the_saved_best(tiny_folder,
     results = json.loads((out / "results.json").read_text())
     saved = json.loads((out / "params.json").read_text())
     assert results["meta"]["objective"] == "pq" and saved["objective"] == "pq"
-    pq = {key: setting["pq_test"] for key, setting in saved["experiments"].items()}
-    assert saved["best"] == max(pq, key=pq.get)
+    cv = {key: record["cv_best"] for key, record in results["experiments"].items() if "cv_best" in record}
+    assert saved["best"] == max(cv, key=cv.get) == "3"  # #1 has no search: no cross-validated PQ
+    assert saved["experiments"]["3"]["cv_pq"] == cv["3"] and saved["experiments"]["1"]["cv_pq"] is None
     # The reported PQ of #3 equals a plain per-frame matcher on the saved setting's test labels.
     scenes = load_radarscenes(tiny_folder)
     test = np.flatnonzero(np.isin(scenes.groups, results["meta"]["data"]["test_sequences"]))
