@@ -97,3 +97,11 @@ def test_every_kind_of_step_has_an_expected_cost():
     from sklearn_radar.reproduce._steps import STEPS
 
     assert {step.kind for step in STEPS.values()} == set(EXPECTED_S_PER_UNIT)
+
+
+def test_a_status_line_names_at_most_three_untimed_kinds(monkeypatch):
+    kinds = ["filter", "scoring", "stage 1", "stage 2", "baselines"]
+    progress, _ = _on_a_clock({kind: (kind, 1) for kind in kinds}, monkeypatch)
+    assert progress.status() == (
+        "run 0 %, 0:00 elapsed, time left unknown (not timed yet: the filter evaluation, scoring and 3 more kinds)"
+    )

@@ -43,6 +43,8 @@ EXPECTED_S_PER_UNIT = {
 }
 #: The weight of a unit of a kind missing from :data:`EXPECTED_S_PER_UNIT`.
 EXPECTED_S_OTHER = 1.0
+#: The most kinds of step a status line names as not timed yet (the rest are counted).
+NAMED_AT_MOST = 3
 #: How the status line names a kind of step.
 KIND_NAMES = {
     "filter": "the filter evaluation",
@@ -247,9 +249,13 @@ class RunProgress:
             untimed = self.untimed()
             if not untimed:
                 return f"{text}, about {duration(self.left())} left"
-            names = ", ".join(KIND_NAMES.get(kind, kind) for kind in untimed)
-            rest = f"; the rest about {duration(self.left(known_only=True))}" if len(untimed) < len(remaining) else ""
-            return f"{text}, time left unknown (not timed yet: {names}{rest})"
+            names = [KIND_NAMES.get(kind, kind) for kind in untimed]
+            if len(names) > NAMED_AT_MOST:
+                names = [*names[: NAMED_AT_MOST - 1], f"{len(names) - NAMED_AT_MOST + 1} more kinds"]
+            named = ", ".join(names[:-1]) + " and " + names[-1] if len(names) > 1 else names[0]
+            known = self.left(known_only=True)
+            rest = f"; the rest about {duration(known)}" if round(known) >= 1 else ""
+            return f"{text}, time left unknown (not timed yet: {named}{rest})"
 
     def search_status(self, key):
         """A ``status`` for :class:`~sklearn_radar.model_selection.ProgressPrinter` of a search of step ``key``.
