@@ -165,17 +165,17 @@ def test_our_prediction_file_equals_the_devkits(tmp_path):
 
 
 @pytest.mark.parametrize(
-    "argv, message",
+    "argv, message, code",
     [
-        (["reproduce", "--data", "/nonexistent/radarscenes"], "/nonexistent/radarscenes"),
-        (["reproduce", "--experiments", "1,42"], "unknown experiment '42'"),
-        (["reproduce", "--out", "/proc/forbidden"], "cannot write to the output folder"),
-        (["reproduce", "--n-iter", "0"], "--n-iter"),
-        (["cluster", "--data", "/nonexistent", "--params", "/nonexistent.json", "--out", "x.json"], "not found"),
+        (["reproduce", "--data", "/nonexistent/radarscenes"], "/nonexistent/radarscenes", 1),
+        (["reproduce", "--experiments", "1,42"], "unknown experiment '42'", 2),  # usage errors exit 2
+        (["reproduce", "--out", "/proc/forbidden"], "cannot write to the output folder", 1),
+        (["reproduce", "--n-iter", "0"], "--n-iter", 2),
+        (["cluster", "--data", "/nonexistent", "--params", "/nonexistent.json", "--out", "x.json"], "not found", 1),
     ],
 )
-def test_bad_input_is_a_one_line_error(argv, message, capsys):
-    assert main(argv) == 1
+def test_bad_input_is_a_one_line_error(argv, message, code, capsys):
+    assert main(argv) == code
     err = capsys.readouterr().err
     assert message in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
 
