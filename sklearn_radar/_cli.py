@@ -14,20 +14,36 @@ from . import __version__
 def main(argv=None) -> int:
     try:
         parser = _parser()
-        args = parser.parse_args(argv)  # --help and --version end here, before any heavy import
+        # --help and --version end here, before any heavy import; a usage error exits 2 with the usage of the
+        # command it concerns (argparse's own parse_args would give the top-level usage for a command's unknown
+        # option).
+        args, unknown = parser.parse_known_args(argv)
+        if unknown:
+            (parser if args.command is None else args.parser).error(f"unrecognized arguments: {' '.join(unknown)}")
         if args.command is None:
-            parser.print_help()
-            return 0
+            parser.print_help(sys.stderr)
+            return USAGE_ERROR
         return _run(args)
     except KeyboardInterrupt:  # Ctrl-C during start-up or a run: a one-line message, not a traceback
         print("sklearn-radar: interrupted", file=sys.stderr)
         return 130
 
 
+#: The exit code of a usage error (a bad option, or options that do not go together), as argparse's.
+USAGE_ERROR = 2
+
+
+class UsageError(ValueError):
+    """A bad option value, or options that do not go together: one line, exit code :data:`USAGE_ERROR`."""
+
+
 def _run(args) -> int:
     """Check every option, import the estimators, then run the command; errors as one line."""
     try:
-        _check_options(args)  # before anything is imported or written
+        try:
+            _check_options(args)  # before anything is imported or written
+        except ValueError as error:
+            raise UsageError(str(error)) from None
         _import_the_estimators()
         code = args.run(args)
         sys.stdout.flush()  # a closed pipe shows here, inside the try, rather than at exit
@@ -36,6 +52,9 @@ def _run(args) -> int:
         # The reader left (``sklearn-radar stats | head -2``): not an error. Nothing more can be written.
         _silence_stdout()
         return 0
+    except UsageError as error:
+        print(f"sklearn-radar: error: {error}", file=sys.stderr)
+        return USAGE_ERROR
     except (ValueError, OSError, ImportError) as error:  # ImportError: dask for --scheduler/--workers, missing
         print(f"sklearn-radar: error: {error}", file=sys.stderr)
         return 1
@@ -118,14 +137,16 @@ def _parser():
         help="re-run the paper's experiments and write a report",
         description="Re-run the experiments #1-#13 of Scheiner et al. (ITSC 2019), the filter evaluation and "
         "scikit-learn baselines; write report.md, results.json, params.json and figures.",
+        epilog=_REPRODUCE_EPILOG,
     )
     reproduce.set_defaults(run=_reproduce, parser=reproduce)
     reproduce.add_argument("--data", help="RadarScenes data folder (default: simulate one)")
     reproduce.add_argument(
         "--out",
         default="sklearn-radar-report",
-        help="output folder (default: sklearn-radar-report); a previous run's files there are replaced, other "
-        "files stay, and a folder holding a file of the same name that no run wrote is refused",
+        help="output folder (default: sklearn-radar-report), apart from --data (not it, inside it or around it); "
+        "a previous run's files there are replaced, other files stay, and a folder holding a file of the same "
+        "name that no run wrote is refused",
     )
     _add_checked(
         reproduce,
@@ -134,11 +155,17 @@ def _parser():
         help="Bayesian-optimisation iterations per experiment (default 10; 100 with --full)",
     )
     _add_checked(
-        reproduce, "--n-jobs", _n_jobs, help="candidates evaluated in parallel (default: one at a time; -1: all cores)"
+        reproduce,
+        "--n-jobs",
+        _n_jobs,
+        metavar="J",
+        help="on one machine: how many candidates (and repeats of a step) are evaluated at once in this process "
+        "(default: 1; -1: all cores); the results do not depend on it",
     )
     reproduce.add_argument(
         "--experiments",
-        help="comma-separated: filter, 1-13 (ranges like 2-9), objects, filter-effect, baselines, tracking",
+        metavar="LIST",
+        help="comma-separated steps to run (default: all): " + ", ".join(_STEP_HELP),
     )
     reproduce.add_argument(
         "--full", action="store_true", help="the paper's budget (100 iterations, 30 random) on ~1M detections"
@@ -165,14 +192,19 @@ def _parser():
         help="what the searches maximise: v1, the paper's radar V-measure, or pq, the panoptic quality of moving "
         "road users per 0.5 s frame (default: v1)",
     )
-    _add_cluster_flags(reproduce)
+    _add_cluster_flags(
+        reproduce,
+        "for work larger than the default run's (--full, a RadarScenes folder); a run it would slow down stays in "
+        "this process and says so",
+    )
     _add_checked(
         reproduce,
         "--n-points",
         _at_least(1),
         metavar="K",
-        help="candidates each search step evaluates at a time (default 1, with or without a cluster); "
-        "the results depend on it, not on where the fits run",
+        help="candidates the Bayesian optimiser proposes per guided search step (default: 1): K above 1 lets K "
+        "cores or workers evaluate a guided step at once, but changes the search and so the results (compare "
+        "runs of equal K); the random first candidates are queued at once whatever K",
     )
 
     cluster = commands.add_parser(
@@ -183,7 +215,7 @@ def _parser():
         "class is the devkit's ClassificationLabel index of its predicted road-user class (CAR 0, PEDESTRIAN 1, "
         "PEDESTRIAN_GROUP 2, TWO_WHEELER 3, LARGE_VEHICLE 4; STATIC 5 for noise and background).",
     )
-    cluster.set_defaults(run=_cluster, parser=cluster)
+    cluster.set_defaults(run=_cluster, parser=cluster, together=_check_setting_options)
     cluster.add_argument("--data", required=True, help="RadarScenes data folder (or its parent)")
     cluster.add_argument("--params", help=_PARAMS_HELP)
     cluster.add_argument("--classifier", metavar="FILE", help=_CLASSIFIER_HELP)
@@ -193,7 +225,7 @@ def _parser():
         help="predictions file to write (JSON); an existing file is replaced only if it is such a predictions file",
     )
     _add_checked(cluster, "--experiment", _saved_experiment, help=_SAVED_EXPERIMENT_HELP)
-    _add_cluster_flags(cluster)
+    _add_cluster_flags(cluster, "each worker reads and clusters whole sequences, for folders of many sequences")
 
     stream = commands.add_parser(
         "stream",
@@ -204,7 +236,7 @@ def _parser():
         "classified after the replay (per 0.5 s frame, not causally) and each detection's class is the devkit's "
         "ClassificationLabel index, as for 'cluster'.",
     )
-    stream.set_defaults(run=_stream, parser=stream)
+    stream.set_defaults(run=_stream, parser=stream, together=_check_setting_options)
     replaced_only = "an existing file is replaced only if it is such"
     for flag, required, text in (
         ("--data", True, "RadarScenes data folder (or its parent)"),
@@ -218,23 +250,29 @@ def _parser():
     return parser
 
 
-def _add_cluster_flags(command):
-    """``--scheduler`` and ``--workers`` (dask.distributed, the ``[distributed]`` extra)."""
+def _add_cluster_flags(command, when):
+    """``--scheduler`` and ``--workers`` (dask.distributed, the ``[distributed]`` extra); ``when``: when to use it."""
     where = command.add_mutually_exclusive_group()
     where.add_argument(
         "--scheduler",
         metavar="ADDRESS",
-        help="run on an existing dask scheduler, e.g. tcp://host:8786 (needs the [distributed] extra)",
+        help="run on an existing dask scheduler, e.g. tcp://host:8786, to use several machines (needs the "
+        "[distributed] extra)",
     )
     _add_checked(
-        where, "--workers", _at_least(1), metavar="N", help="run on a local dask cluster of N worker processes"
+        where,
+        "--workers",
+        _at_least(1),
+        metavar="N",
+        help=f"run on a local dask cluster of N worker processes (needs the [distributed] extra): {when}",
     )
 
 
 def _add_checked(command, flag, check, **kwargs):
     """Add ``flag``, read as text and turned into its value by ``check(text, flag)`` in :func:`_check_options`.
 
-    Not argparse's ``type=``: a bad value is then a one-line error like every other (exit code 1).
+    Not argparse's ``type=``: a bad value is then a one-line error naming the option (exit code 2, as
+    argparse's usage errors), never a usage dump.
     """
     action = command.add_argument(flag, **kwargs)
     action.check = check
@@ -242,11 +280,25 @@ def _add_checked(command, flag, check, **kwargs):
 
 
 def _check_options(args):
-    """Replace each checked option's text by its value; ValueError names the first bad option."""
+    """Replace each checked option's text by its value, then check the options together; ValueError names them."""
     for action in args.parser._actions:
         check = getattr(action, "check", None)
         if check is not None:
             setattr(args, action.dest, check(getattr(args, action.dest), action.option_strings[0]))
+    together = getattr(args, "together", None)
+    if together is not None:
+        together(args)
+
+
+def _check_setting_options(args):
+    """``cluster`` and ``stream``: a setting to apply, ``--experiment`` only with ``--params``, two outputs."""
+    if args.params is None and args.classifier is None:
+        raise ValueError("give --params (a params.json of 'sklearn-radar reproduce'), --classifier, or both")
+    if args.params is None and args.experiment is not None:
+        raise ValueError("--experiment chooses a setting of --params: give --params with it")
+    objects = getattr(args, "objects", None)
+    if objects is not None and os.path.realpath(objects) == os.path.realpath(args.out):
+        raise ValueError(f"--objects and --out name the same file: {_shown(args.out)}")
 
 
 def _at_least(low):
@@ -257,6 +309,25 @@ def _at_least(low):
 
     return check
 
+
+#: The steps ``reproduce --experiments`` takes, as its help lists them (the CLI imports no experiment module).
+_STEP_HELP = (
+    "filter (Tables I and II)",
+    "1-13 (the paper's experiments; ranges like 2-9)",
+    "objects (the object experiment)",
+    "filter-effect",
+    "baselines (scikit-learn clusterers)",
+    "tracking (object ids online)",
+    "classification (the classifier of clusters)",
+)
+
+#: When to use which of ``reproduce``'s options for parallel work.
+_REPRODUCE_EPILOG = (
+    "Parallel work: --n-jobs J uses J cores of this machine (no extra needed); --workers N a local dask "
+    "cluster, worth its start for runs larger than the default one; --scheduler ADDRESS a dask cluster of "
+    "several machines. None of them changes the results. --n-points K above 1 gives a guided search step K "
+    "candidates to evaluate at once, for many cores or workers; it changes the search."
+)
 
 #: ``--params`` of ``cluster`` and ``stream``.
 _PARAMS_HELP = (
@@ -271,7 +342,10 @@ _CLASSIFIER_HELP = (
 )
 
 #: What ``--experiment`` of ``cluster`` and ``stream`` takes.
-_SAVED_EXPERIMENT_HELP = "which saved experiment: a number 1-13 or 'objects' (default: the best)"
+_SAVED_EXPERIMENT_HELP = (
+    "which saved experiment: a number 1-13 or 'objects' (default: the run's best by cross-validated score on the "
+    "training half)"
+)
 
 
 def _saved_experiment(text, flag):
@@ -353,18 +427,24 @@ def _stats(args) -> int:
 
 def _reproduce(args) -> int:
     from .reproduce import reproduce
+    from .reproduce._io import check_apart
     from .reproduce._run import parse_experiments
 
     try:
         parse_experiments(args.experiments)
     except ValueError as error:
-        raise ValueError(f"--experiments: {error}") from None
+        raise UsageError(f"--experiments: {error}") from None
     repeats = args.repeats or (3 if args.full else 1)
     if args.seed + repeats - 1 > SEED_MAX:
-        raise ValueError(
+        raise UsageError(
             f"--seed {args.seed} with {repeats} repeats uses seeds up to {args.seed + repeats - 1}; "
             f"the largest is {SEED_MAX}"
         )
+    if args.data is not None:
+        try:
+            check_apart(args.data, args.out, "--data", "--out")
+        except ValueError as error:
+            raise UsageError(str(error)) from None
     start = time.perf_counter()
     reproduce(
         args.data,
@@ -381,11 +461,32 @@ def _reproduce(args) -> int:
         n_points=args.n_points,
         repeats=args.repeats,
     )
-    print(
-        f"wrote {_shown(args.out)}/report.md, results.json, params.json and figures "
-        f"in {time.perf_counter() - start:.0f} s"
-    )
+    print(f"wrote {_written(args.out)} in {time.perf_counter() - start:.0f} s")
     return 0
+
+
+def _written(out):
+    """``"DIR: report.md, results.json, params.json, 5 figures and 2 classifier files"``: what the run wrote.
+
+    The files its marker (``run.json``) lists, which are those that exist:
+    a run without an experiment writes no ``params.json``.
+    """
+    from .reproduce._io import run_marker
+    from .reproduce._run import RUN_MARKER
+
+    marker = run_marker(os.path.join(out, RUN_MARKER)) or {}
+    names = list(marker.get("files") or {})
+    figures = [name for name in names if name.endswith(".png")]
+    classifiers = [name for name in names if name.endswith(".joblib")]
+    parts = [name for name in names if name not in figures and name not in classifiers]
+    parts += [_counted(len(figures), "figure")] if figures else []
+    parts += [_counted(len(classifiers), "classifier file")] if classifiers else []
+    listed = ", ".join(parts[:-1]) + " and " + parts[-1] if len(parts) > 1 else "".join(parts) or "no file"
+    return f"{_shown(out)}: {listed}"
+
+
+def _counted(n, noun):
+    return f"{n} {noun}" + ("" if n == 1 else "s")
 
 
 def _cluster(args) -> int:
@@ -413,10 +514,12 @@ def _cluster(args) -> int:
 
 
 def _print_applied(verb, summary, args):
-    """``applied experiment #13 of params.json: ...`` and/or ``classified with FILE``."""
+    """``applied experiment #13 of params.json: ...`` (and why, for the file's best) and/or ``classified with FILE``."""
     if summary["experiment"] is not None:
         applied = f"{_named(summary['experiment'])} of {_shown(args.params)}: {_setting(summary['params'])}"
         print(f"{verb} experiment {applied}")
+        if summary.get("chosen"):
+            print(f"  chosen as {summary['chosen']}")
     if args.classifier is not None:
         print(f"classified with {_shown(args.classifier)}")
 

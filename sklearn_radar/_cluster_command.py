@@ -36,8 +36,9 @@ def load_params(path, experiment=None):
     path : str or path-like
         ``params.json`` written by ``sklearn-radar reproduce``.
     experiment : int or "objects", default=None
-        Experiment number, or the object experiment; None: the run's best (highest test score of its
-        objective).
+        Experiment number, or the object experiment; None: the run's best
+        (the highest cross-validated training score of the run's objective,
+        see :ref:`user-guide-command-line`).
 
     Returns
     -------
@@ -54,15 +55,19 @@ def load_params(path, experiment=None):
         If it is not such a file or has no setting for ``experiment``.
     """
     path = Path(path)
+    return _checked_setting(_read_params(path), path, experiment)
+
+
+def _read_params(path):
+    """The parsed ``params.json`` at ``path``; FileNotFoundError, ValueError or OSError name it."""
     try:
-        saved = json.loads(path.read_text(encoding="utf-8"))
+        return json.loads(path.read_text(encoding="utf-8"))
     except FileNotFoundError:
         raise FileNotFoundError(f"parameter file not found: {path}") from None
     except (json.JSONDecodeError, UnicodeDecodeError):
         raise ValueError(f"{path}: not a JSON parameter file written by 'sklearn-radar reproduce'") from None
     except OSError as error:
         raise OSError(f"cannot read the parameter file {path}: {error.strerror or error}") from None
-    return _checked_setting(saved, path, experiment)
 
 
 def _checked_setting(saved, path, experiment):
@@ -77,8 +82,13 @@ def _checked_setting(saved, path, experiment):
     if not isinstance(experiments, dict):
         problem = "is missing" if experiments is None else f"must be an object, got {type(experiments).__name__}"
         raise bad("the key 'experiments'", problem)
+    reason = saved.get("best_reason", _ABSENT)
+    if reason is not _ABSENT and not isinstance(reason, str):
+        raise bad("the key 'best_reason'", f"must be a string, got {_json_type(reason)}")
     if experiment is None:
         chosen = saved.get("best")
+        if chosen is None and isinstance(reason, str):  # the run chose none, and says why
+            raise ValueError(f"{path}: names no best setting ({reason}); choose one by its experiment number")
         if not isinstance(chosen, str) or chosen not in experiments:
             problem = "is missing" if chosen is None else f"names no saved experiment: {chosen!r}"
             raise bad("the key 'best'", problem)
@@ -115,6 +125,8 @@ def _checked_setting(saved, path, experiment):
 
 
 _ABSENT = object()
+#: Why a ``params.json`` without ``best_reason`` names its ``best`` (files of versions before issue 46).
+_UNEXPLAINED_BEST = "the file's 'best', which it does not explain (older versions chose it by the test score)"
 
 
 def _check_stage1_params(value, stage, where):
@@ -185,7 +197,8 @@ def cluster_radarscenes(data, params, out, experiment=None, *, classifier=None, 
     out : str or path-like
         Predictions file to write.
     experiment : int or "objects", default=None
-        Which saved experiment (a number, or the object experiment); None: the best.
+        Which saved experiment (a number, or the object experiment); None:
+        the best (by the cross-validated training score).
     classifier : str or path-like, default=None
         File written by :func:`~sklearn_radar.classification.save_classifier`.
         A whole pipeline from raw detections ending in a ClusterClassifier
@@ -206,7 +219,8 @@ def cluster_radarscenes(data, params, out, experiment=None, *, classifier=None, 
     summary : dict
         ``experiment`` (its number; None without ``params``), ``params``
         and ``stage1_params`` (the setting applied; None without
-        ``params``), ``n_detections``, ``n_clusters`` (with
+        ``params``), ``chosen`` (why the file names it its best, when
+        ``experiment`` is None; else None), ``n_detections``, ``n_clusters`` (with
         ``classifier``: the road users), ``out``, and with ``classifier``
         ``classes`` (detections per devkit class name).
 
@@ -219,7 +233,7 @@ def cluster_radarscenes(data, params, out, experiment=None, *, classifier=None, 
     ValueError
         If neither ``params`` nor ``classifier`` is given, or they disagree.
     """
-    setting, pipeline = _params_setting(params, experiment, classifier)
+    setting, pipeline, chosen = _params_setting(params, experiment, classifier)
     if classifier is not None:
         from ._classifier_setting import classifier_setting, classify_sequence
 
@@ -260,6 +274,7 @@ def cluster_radarscenes(data, params, out, experiment=None, *, classifier=None, 
         "experiment": None if setting is None else setting["experiment"],
         "params": None if setting is None else setting["params"],
         "stage1_params": None if setting is None else setting.get("stage1_params"),
+        "chosen": chosen,
     }
     summary = {**applied, **counts, "out": str(out)}
     if counted is not None:
@@ -268,15 +283,21 @@ def cluster_radarscenes(data, params, out, experiment=None, *, classifier=None, 
 
 
 def _params_setting(params, experiment, classifier):
-    """``(setting, pipeline)`` of ``params`` (both None without it); ValueError when neither file is given."""
+    """``(setting, pipeline, chosen)`` of ``params`` (all None without it); ValueError when neither file is given.
+
+    ``chosen`` says why the file names the setting its best (None when ``experiment`` chose it).
+    """
     if params is None:
         if classifier is None:
             raise ValueError("give --params (a params.json of 'sklearn-radar reproduce'), --classifier, or both")
         if experiment is not None:
             raise ValueError("--experiment chooses a setting of --params: give --params with it")
-        return None, None
-    setting = load_params(params, experiment)
-    return setting, setting_pipeline(setting, params)
+        return None, None, None
+    path = Path(params)
+    saved = _read_params(path)
+    setting = _checked_setting(saved, path, experiment)
+    chosen = None if experiment is not None else saved.get("best_reason", _UNEXPLAINED_BEST)
+    return setting, setting_pipeline(setting, params), chosen
 
 
 def _count_classes(counted, classes):

@@ -48,13 +48,24 @@ if not RELIES_ON_INTERNALS:  # pragma: no cover - only with another skopt instal
     )
 
 
+#: The start of skopt's warning when its model proposes a point it has evaluated before (it then takes a random
+#: one): expected on a small or discrete space, and no fault of the caller's.
+REPEATED_POINT_WARNING = "The objective has been evaluated at point"
+
+
 class Optimizer(_SkoptOptimizer):
-    """skopt's Optimizer; ``ask(n_points=1)`` returns the point of the last ``tell`` (no refit on a copy)."""
+    """skopt's Optimizer; ``ask(n_points=1)`` returns the point of the last ``tell`` (no refit on a copy).
+
+    ``ask`` silences skopt's warning that its model proposed a point
+    evaluated before (:data:`REPEATED_POINT_WARNING`), and only that one.
+    """
 
     def ask(self, n_points=None, strategy="cl_min"):
-        if n_points == 1:
-            return [super().ask()]  # skopt's single point: the one its last tell chose
-        return super().ask(n_points=n_points, strategy=strategy)
+        with warnings.catch_warnings():
+            warnings.filterwarnings("ignore", message=REPEATED_POINT_WARNING, category=UserWarning)
+            if n_points == 1:
+                return [super().ask()]  # skopt's single point: the one its last tell chose
+            return super().ask(n_points=n_points, strategy=strategy)
 
     @property
     def n_random_left(self):
@@ -91,6 +102,7 @@ class BayesSearchCV(_SkoptBayesSearchCV):
 
 __all__ = [
     "RELIES_ON_INTERNALS",
+    "REPEATED_POINT_WARNING",
     "SUPPORTED_VERSION",
     "BayesSearchCV",
     "Categorical",

@@ -72,7 +72,7 @@ def test_missing_data_folder_is_a_one_line_error(tmp_path, capsys):
 
 
 def test_bad_simulation_parameter_is_a_one_line_error_naming_the_option(tmp_path, capsys):
-    assert main(["simulate", "--out", str(tmp_path / "x"), "--n-sequences", "0"]) == 1
+    assert main(["simulate", "--out", str(tmp_path / "x"), "--n-sequences", "0"]) == 2
     assert "--n-sequences" in capsys.readouterr().err
     assert not (tmp_path / "x").exists()
 

@@ -224,7 +224,8 @@ def test_settings_that_disagree_or_are_missing_write_nothing(
         argv += ["--params", str(files.params), *params]
     if message.startswith("--experiment"):
         argv += ["--experiment", "8"]
-    assert _cluster(folder, out, *argv) == 1
+    usage = message.startswith(("give --params", "--experiment"))  # options that do not go together: exit 2
+    assert _cluster(folder, out, *argv) == (2 if usage else 1)
     err = _one_line_error(capsys)
     assert message in err and not out.exists()
     if classifier is not None and "--experiment" not in message:

@@ -122,7 +122,7 @@ def _cluster(out, *options):
 )
 def test_a_bad_option_is_one_line_naming_it_and_nothing_is_written(tmp_path, capsys, command, options, flag):
     out = tmp_path / "out"
-    assert main(command(out, *options)) == 1
+    assert main(command(out, *options)) == 2
     err = capsys.readouterr().err
     assert err.startswith("sklearn-radar: error:") and len(err.strip().splitlines()) == 1, err
     assert flag in err and "Traceback" not in err
@@ -136,7 +136,7 @@ def test_options_are_checked_before_the_estimators_are_imported(monkeypatch, cap
         raise AssertionError("imported before the options were checked")
 
     monkeypatch.setattr(cli, "_import_the_estimators", not_yet)
-    assert cli.main(["reproduce", "--n-jobs", "0"]) == 1
+    assert cli.main(["reproduce", "--n-jobs", "0"]) == 2
     assert "--n-jobs" in capsys.readouterr().err
 
 

@@ -42,7 +42,7 @@ def _one_line_error(capsys):
 
 
 def test_a_bad_option_writes_nothing(tmp_path, capsys):
-    assert main(_argv("nowhere", "nowhere.json", tmp_path / "out.json", "--experiment", "0")) == 1
+    assert main(_argv("nowhere", "nowhere.json", tmp_path / "out.json", "--experiment", "0")) == 2
     assert "--experiment" in _one_line_error(capsys)
     assert list(tmp_path.iterdir()) == []
 
@@ -89,7 +89,7 @@ def test_stream_never_replaces_another_file(folder, params_file, tmp_path, capsy
 
 def test_objects_and_out_must_differ(folder, params_file, tmp_path, capsys):
     out = tmp_path / "predictions.json"
-    assert main(_argv(folder, params_file, out, "--objects", str(out))) == 1
+    assert main(_argv(folder, params_file, out, "--objects", str(out))) == 2  # a usage error
     assert "same file" in _one_line_error(capsys)
     assert not out.exists()
 

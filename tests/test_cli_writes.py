@@ -330,4 +330,5 @@ def test_cluster_prints_the_setting_it_applied(small_folder, tmp_path, capsys):
     assert main(_cluster_argv(small_folder, params, tmp_path / "p.json")) == 0
     printed = capsys.readouterr().out.splitlines()
     assert printed[0].startswith("applied experiment #12 of") and "merge__eps_d=1.5" in printed[0]
-    assert "stage 1" in printed[1] and "cluster__eps_xyv=1.04" in printed[1]
+    stage1_line = next(line for line in printed if line.startswith("  with stage 1:"))  # after why it was chosen
+    assert "cluster__eps_xyv=1.04" in stage1_line

@@ -128,7 +128,7 @@ def test_bad_workers_value_is_a_one_line_error_naming_the_flag(command, value, t
         args += ["--params", str(tmp_path / "params.json")]
     code = main([command, *args])
     err = capsys.readouterr().err
-    assert code == 1 and err.count("\n") == 1
+    assert code == 2 and err.count("\n") == 1
     assert "--workers" in err and repr(value) in err
 
 
@@ -148,7 +148,7 @@ sys.exit(main(["reproduce", "--data", {str(tiny_folder)!r}, "--out", {str(tmp_pa
 
 def test_both_scheduler_and_workers_is_an_error(tmp_path):
     with pytest.raises(ValueError, match="not both"):
-        reproduce(tmp_path, tmp_path / "o", scheduler="tcp://127.0.0.1:1", workers=2)
+        reproduce(tmp_path / "data", tmp_path / "o", scheduler="tcp://127.0.0.1:1", workers=2)
 
 
 # ----------------------------------------------------------------------------- the search on the cluster

@@ -326,7 +326,8 @@ def test_n_jobs_help_gives_the_default(capsys):
     with pytest.raises(SystemExit):
         main(["reproduce", "--help"])
     text = " ".join(capsys.readouterr().out.split())
-    n_jobs = text[text.rindex("--n-jobs N_JOBS") :].split(" --")[0]
+    options = text.split(" options: ", 1)[1]  # past the usage line
+    n_jobs = options[options.index("--n-jobs J") :].split(" --")[0]
     assert "default" in n_jobs
 
 

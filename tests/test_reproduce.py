@@ -113,10 +113,14 @@ def test_saved_setting_rescored_on_the_test_half_gives_the_reported_v1(tiny_repo
     assert row in (tiny_report / "report.md").read_text()
 
 
-def test_the_best_saved_setting_is_the_one_with_the_highest_test_v1(tiny_report):
+def test_the_best_saved_setting_is_the_one_with_the_highest_cross_validated_v1(tiny_report):
+    # Never the test score: the kept settings' cross-validated V1 on the training half, as results.json has it.
     saved = json.loads((tiny_report / "params.json").read_text())
-    scores = {key: setting["v1_test"] for key, setting in saved["experiments"].items()}
-    assert saved["best"] == max(scores, key=scores.get)
+    results = json.loads((tiny_report / "results.json").read_text())
+    cv = {key: record["cv_best"] for key, record in results["experiments"].items() if "cv_best" in record}
+    assert saved["best"] == max(cv, key=cv.get)
+    assert saved["experiments"]["objects"]["cv_v1"] is None  # tuned for PQ in a V1 run: not comparable
+    assert saved["experiments"]["1"]["cv_v1"] is None and saved["experiments"]["2"]["cv_v1"] == cv["2"]
 
 
 def test_params_file_drives_the_cluster_command_and_the_devkit_reads_its_output(
@@ -161,17 +165,17 @@ def test_our_prediction_file_equals_the_devkits(tmp_path):
 
 
 @pytest.mark.parametrize(
-    "argv, message",
+    "argv, message, code",
     [
-        (["reproduce", "--data", "/nonexistent/radarscenes"], "/nonexistent/radarscenes"),
-        (["reproduce", "--experiments", "1,42"], "unknown experiment '42'"),
-        (["reproduce", "--out", "/proc/forbidden"], "cannot write to the output folder"),
-        (["reproduce", "--n-iter", "0"], "--n-iter"),
-        (["cluster", "--data", "/nonexistent", "--params", "/nonexistent.json", "--out", "x.json"], "not found"),
+        (["reproduce", "--data", "/nonexistent/radarscenes"], "/nonexistent/radarscenes", 1),
+        (["reproduce", "--experiments", "1,42"], "unknown experiment '42'", 2),  # usage errors exit 2
+        (["reproduce", "--out", "/proc/forbidden"], "cannot write to the output folder", 1),
+        (["reproduce", "--n-iter", "0"], "--n-iter", 2),
+        (["cluster", "--data", "/nonexistent", "--params", "/nonexistent.json", "--out", "x.json"], "not found", 1),
     ],
 )
-def test_bad_input_is_a_one_line_error(argv, message, capsys):
-    assert main(argv) == 1
+def test_bad_input_is_a_one_line_error(argv, message, code, capsys):
+    assert main(argv) == code
     err = capsys.readouterr().err
     assert message in err and len(err.strip().splitlines()) == 1 and "Traceback" not in err
 
@@ -374,8 +378,9 @@ def test_objective_pq_is_searched_reported_and_ranks_the_saved_best(tiny_folder,
     results = json.loads((out / "results.json").read_text())
     saved = json.loads((out / "params.json").read_text())
     assert results["meta"]["objective"] == "pq" and saved["objective"] == "pq"
-    pq = {key: setting["pq_test"] for key, setting in saved["experiments"].items()}
-    assert saved["best"] == max(pq, key=pq.get)
+    cv = {key: record["cv_best"] for key, record in results["experiments"].items() if "cv_best" in record}
+    assert saved["best"] == max(cv, key=cv.get) == "3"  # #1 has no search: no cross-validated PQ
+    assert saved["experiments"]["3"]["cv_pq"] == cv["3"] and saved["experiments"]["1"]["cv_pq"] is None
     # The reported PQ of #3 equals a plain per-frame matcher on the saved setting's test labels.
     scenes = load_radarscenes(tiny_folder)
     test = np.flatnonzero(np.isin(scenes.groups, results["meta"]["data"]["test_sequences"]))
@@ -561,13 +566,16 @@ def test_progress_estimates_the_run_and_shows_overall_progress_in_plain_lines(ti
     assert "\r" not in text and "\x1b" not in text  # readable in a file: no carriage returns, no escapes
     lines = text.splitlines()
     assert re.match(r"the run's work: 12 steps, \d+ search iterations in all; the progress lines estimate", lines[1])
-    status = re.compile(r"\| run (\d+) %, (\d+:)?\d+:\d\d elapsed, about (\d+:)?\d+:\d\d left$")
+    left = r"(about (\d+:)?\d+:\d\d left|time left unknown \(not timed yet: [^)]+\))"
+    status = re.compile(r"\| run (\d+) %, (\d+:)?\d+:\d\d elapsed(, " + left + ")?$")
     done = [line for line in lines if re.match(r"\[\d+/12\] .* done in ", line)]
     iterations = [line for line in lines if " iteration " in line]
     assert len(done) == 12 and iterations
     shares = [int(status.search(line).group(1)) for line in done]
     assert all(status.search(line) for line in iterations)
-    assert shares == sorted(shares) and shares[0] < shares[-1] < 100  # the report itself is the rest
+    assert shares == sorted(shares) and shares[0] < shares[-1] == 100  # every step ended: the run's steps are done
+    assert "about" in done[-2] or "unknown" in done[-2]
+    assert re.match(r"run complete; drawing the figures and writing the report \| run 100 %", lines[-3])
     assert re.match(r"report written after \d+:\d\d in all$", lines[-2])
 
 
@@ -588,21 +596,22 @@ def test_progress_counts_units_and_prices_the_work_left_at_each_kinds_measured_r
     progress = RunProgress(work, started=0.0)
     clock[0] = 4.0
     progress.finish("data", 4.0)
-    assert "time left not measured yet" in progress.status()  # the data step prices nothing
+    assert progress.left() is None  # the data step prices nothing
     progress.start("filter")
     clock[0] = 6.0
-    progress.finish("filter")  # 2 s; until a scoring pass is measured, every kind is priced like it
-    assert progress.left() == pytest.approx(21 * 2.0)
+    progress.finish("filter")  # 2 s; scoring and stage 1 are not timed yet: no estimate of them
+    assert progress.left() is None and progress.untimed() == ["scoring", "stage 1"]
     progress.start("1")
     clock[0] = 7.0
-    progress.finish("1")  # 1 s a scoring pass: the price of an iteration until one is measured
-    assert progress.left() == pytest.approx(20 * 1.0)
+    progress.finish("1")  # 1 s a scoring pass: still no price of a stage-1 iteration
+    assert progress.left() is None and progress.untimed() == ["stage 1"]
     progress.start("2")
     for _ in range(4):  # 4 iterations of 0.5 s: the stage-1 rate
         clock[0] += 0.5
         progress.advance("2")
     assert progress.left() == pytest.approx(16 * 0.5)
-    assert progress.status() == "run 53 %, 0:09 elapsed, about 0:08 left"  # 9 / (9 + 8)
+    # The share weighs each unit by its kind's rate: (2 + 1 + 4 * 0.5) / (2 + 1 + 20 * 0.5) = 5 / 13.
+    assert progress.status() == "run 38 %, 0:09 elapsed, about 0:08 left"
     # Work that ran at once: its 6 units took 11 s while the clock moved on by less, so that the measured
     # seconds (20) exceed the time elapsed (19): the rate, (2 + 11) / 10 s, is scaled by 19 / 20.
     progress.finish("2", 11.0)

@@ -163,7 +163,7 @@ def test_the_progress_counts_each_repeated_step_once_per_repeat():
 
 
 def test_repeats_below_one_are_a_one_line_error(capsys):
-    assert main(["reproduce", "--repeats", "0"]) == 1
+    assert main(["reproduce", "--repeats", "0"]) == 2  # a usage error
     err = capsys.readouterr().err
     assert "--repeats" in err and len(err.strip().splitlines()) == 1
 

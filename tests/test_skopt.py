@@ -163,3 +163,64 @@ def test_without_the_pinned_release_random_points_are_asked_one_at_a_time(monkey
     with pytest.raises(ValueError, match="n_points=1"):
         optimizer.ask_random(1)
     assert len(optimizer.ask(n_points=1)) == 1
+
+
+def _ask_and_tell_a_two_point_space(optimizer_class, n_points):
+    """Ask and tell until the model proposes the space's points again (its two points are told first)."""
+    optimizer = optimizer_class([Integer(0, 1)], n_initial_points=2, random_state=0)
+    for _ in range(4):
+        points = optimizer.ask(n_points=n_points)
+        optimizer.tell(points, [float(point[0]) for point in points])
+
+
+@pytest.mark.parametrize("n_points", [1, 2])
+def test_skopts_warning_of_a_point_evaluated_before_does_not_leak(n_points):
+    import warnings
+
+    import skopt
+
+    from sklearn_radar._skopt import REPEATED_POINT_WARNING, Optimizer
+
+    with warnings.catch_warnings(record=True) as plain:
+        warnings.simplefilter("always")
+        _ask_and_tell_a_two_point_space(skopt.Optimizer, n_points)
+    assert any(REPEATED_POINT_WARNING in str(w.message) for w in plain)  # skopt warns: the check below can fail
+    with warnings.catch_warnings(record=True) as ours:
+        warnings.simplefilter("always")
+        _ask_and_tell_a_two_point_space(Optimizer, n_points)
+    assert [str(w.message) for w in ours] == []
+
+
+def test_a_search_of_a_small_space_leaks_no_warning():
+    import warnings
+
+    X, y = make_blobs(n_samples=60, centers=2, cluster_std=0.5, random_state=0)
+    search = BayesSearchCV(
+        DBSCAN(),
+        {"min_samples": Integer(2, 3)},
+        n_iter=5,
+        cv=GroupKFold(n_splits=2),
+        scoring=_fit_predict_v_measure,
+        optimizer_kwargs={"n_initial_points": 2},
+        random_state=0,
+    )
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        search.fit(X, y, groups=np.arange(len(X)) % 2)
+    assert [str(w.message) for w in caught] == []
+
+
+def test_only_the_repeated_point_warning_is_silenced(monkeypatch):
+    import warnings
+
+    import skopt
+
+    from sklearn_radar._skopt import Optimizer
+
+    def warns(self):
+        warnings.warn("another warning of skopt", UserWarning, stacklevel=1)
+        return [0]
+
+    monkeypatch.setattr(skopt.Optimizer, "_ask", warns)
+    with pytest.warns(UserWarning, match="another warning of skopt"):
+        Optimizer([Integer(0, 1)], n_initial_points=2, random_state=0).ask(n_points=1)

@@ -140,7 +140,7 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None, classif
     objects : str or path-like, default=None
         Object-list CSV to write (one row per live object per scan); None: none.
     experiment : int, default=None
-        Which saved experiment; None: the best.
+        Which saved experiment; None: the best (by the cross-validated training score).
     classifier : str or path-like, default=None
         File written by :func:`~sklearn_radar.classification.save_classifier`,
         with the same rules as for ``sklearn-radar cluster``
@@ -150,7 +150,8 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None, classif
     Returns
     -------
     summary : dict
-        ``experiment``, ``params`` (None without ``params``), ``n_detections``, ``n_scans``, ``n_objects``,
+        ``experiment``, ``params`` (None without ``params``), ``chosen`` (why the file names it its best, when
+        ``experiment`` is None; else None), ``n_detections``, ``n_scans``, ``n_objects``,
         ``n_aliases``, ``latency`` and ``cpu`` (wall and thread CPU time per scan, s), ``recording`` (s),
         ``out`` and ``objects``; with ``classifier`` also ``classes`` (detections per devkit class name) and
         ``n_road_users`` (objects classified as a road user in some frame).
@@ -158,7 +159,7 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None, classif
     from .._cluster_command import _params_setting, check_predictions_file, write_predictions
     from .._files import atomic_write
 
-    setting, pipeline = _params_setting(params, experiment, classifier)
+    setting, pipeline, chosen = _params_setting(params, experiment, classifier)
     model = None
     if classifier is not None:
         from .._classifier_setting import classifier_setting
@@ -194,6 +195,7 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None, classif
     return {
         "experiment": None if setting is None else setting["experiment"],
         "params": None if setting is None else setting["params"],
+        "chosen": chosen,
         "n_detections": len(final),
         "n_scans": len(replayed["latency"]),
         "n_objects": len(np.unique(final[final >= 0])),

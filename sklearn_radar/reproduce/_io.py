@@ -29,6 +29,46 @@ def run_marker(file):
     return marker
 
 
+def check_apart(data, out, data_name="data", out_name="out"):
+    """Refuse an output folder that is the data folder, lies inside it or holds it.
+
+    A report written into the data would mix a run's files with the
+    recordings (and a later ``simulate --overwrite`` would refuse the folder).
+    Both paths are compared resolved (symbolic links followed, ``..``
+    removed), whether they exist or not.
+
+    Parameters
+    ----------
+    data, out : str or path-like
+        The data folder (or its parent) and the output folder.
+    data_name, out_name : str, default="data", "out"
+        How the error names them (the command line's options).
+
+    Raises
+    ------
+    ValueError
+        Naming both.
+    """
+    data_path, out_path = Path(data).resolve(), Path(out).resolve()
+    if out_path == data_path:
+        where = "is"
+    elif data_path in out_path.parents:
+        where = "is inside"
+    elif out_path in data_path.parents:
+        where = "holds"
+    else:
+        return
+    raise ValueError(
+        f"{out_name} {_shown(out)} {where} the {data_name} folder {_shown(data)}: the report would mix with the "
+        f"data; choose an {out_name} apart from {data_name}"
+    )
+
+
+def _shown(path):
+    """A path as printable text (undecodable bytes as ``\\xff``)."""
+    return os.fsencode(path).decode("utf-8", "backslashreplace")
+
+
 def check_run_folder(folder, marker_name, run_files):
     """Refuse an output folder where a run would replace a file that no run wrote.
 

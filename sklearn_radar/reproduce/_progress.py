@@ -1,15 +1,22 @@
 """The overall progress of a reproduce run: the work done so far, the time elapsed and the time left.
 
 Plain lines only (no carriage returns, no terminal control), so the output
-reads the same in a terminal and piped to a file.  No cost model: the run
-counts its work in units of a few kinds (an iteration of a stage-1, stage-2
-or baseline search, one pass of a step without a search over its data) and
-measures the seconds each kind took so far.  The time left is the work left
-at those rates; a kind not measured yet is priced like a test-half scoring
-pass (a candidate's evaluation clusters about as much data), else like any
-step measured; before the first step ends, the time left is not known.  When
-work ran concurrently, its seconds add up to more than the time elapsed, and
-the rates are scaled by that overlap.
+reads the same in a terminal and piped to a file.  The run counts its work
+in units of a few kinds (an iteration of a stage-1, stage-2 or baseline
+search, one pass of a step without a search over its data) and measures the
+seconds each kind took so far.
+
+The time left is the work left at those measured rates, and only while
+every kind of work still to come has been measured: a kind not timed yet is
+named instead (its first step may take seconds or minutes), with the time
+left of the rest.  When work ran concurrently, its seconds add up to more
+than the time elapsed, and the rates are scaled by that overlap.
+
+The share done weighs each unit by its expected cost: its kind's measured
+rate, or for a kind not timed yet :data:`EXPECTED_S_PER_UNIT` scaled by how
+fast the kinds measured so far ran against their expected rates.  It counts
+the steps: the data and the report are outside it, so a run whose steps all
+ended is at 100 %.
 """
 
 from __future__ import annotations
@@ -18,11 +25,34 @@ import importlib
 import threading
 import time
 
-#: The kind of the data step and of the report, whose measured time prices a kind that has none yet.
+#: The kind of the data step and of the report: outside the share done and the time left.
 DATA, REPORT = "data", "report"
-#: The kind of a pass over the test half that scores a fixed setting: the price of a search iteration until one is
-#: measured (each candidate clusters the training half).
+#: The kind of a pass over the test half that scores a fixed setting.
 SCORING = "scoring"
+#: Seconds per unit of each kind of step, as measured in the default run (4 x 20 s simulated, 10 iterations, on a
+#: shared 2-core machine): the weight of a unit in the share done until its kind is timed in this run.
+EXPECTED_S_PER_UNIT = {
+    "filter": 1.4,
+    SCORING: 0.2,
+    "stage 1": 0.35,
+    "stage 2": 0.6,
+    "filter-effect": 2.1,
+    "baselines": 1.8,
+    "tracking": 5.3,
+    "classification": 40.0,
+}
+#: The weight of a unit of a kind missing from :data:`EXPECTED_S_PER_UNIT`.
+EXPECTED_S_OTHER = 1.0
+#: The most kinds of step a status line names as not timed yet (the rest are counted).
+NAMED_AT_MOST = 3
+#: How the status line names a kind of step.
+KIND_NAMES = {
+    "filter": "the filter evaluation",
+    "stage 1": "stage-1 searches",
+    "stage 2": "stage-2 searches",
+    "filter-effect": "the filter's effect",
+    "baselines": "the baselines",
+}
 #: The numba kernels a run compiles on an empty cache (a new environment): the first steps then run slower.
 KERNELS = (
     "sklearn_radar.cluster._radar_dbscan_kernels._dbscan_sorted",
@@ -143,39 +173,89 @@ class RunProgress:
         self._units[kind] = self._units.get(kind, 0.0) + units
 
     def rate(self, kind):
-        """Measured seconds per unit of ``kind``; unmeasured: a scoring pass's, else any step's; else None."""
-        measured = [known for known in self._units if known not in (DATA, REPORT) and self._units[known]]
-        for known in (kind, SCORING, *measured):
-            if self._units.get(known):
-                return self._spent[known] / self._units[known]
-        return None
+        """Measured seconds per unit of ``kind``; None while no unit of it was timed."""
+        return self._spent[kind] / self._units[kind] if self._units.get(kind) else None
 
-    def left(self):
-        """Seconds left (None before a step is measured): the work left at the measured rates.
+    def expected_rate(self, kind):
+        """Seconds per unit of ``kind``: its measured rate, else its expected one at the measured speed.
+
+        The speed is the measured seconds of the timed kinds over their
+        expected seconds (:data:`EXPECTED_S_PER_UNIT`); 1 before any is timed.
+        """
+        measured = self.rate(kind)
+        if measured is not None:
+            return measured
+        timed = [known for known in self._units if known not in (DATA, REPORT) and self._units[known]]
+        expected = sum(self._units[known] * _expected(known) for known in timed)
+        speed = sum(self._spent[known] for known in timed) / expected if expected > 0 else 1.0
+        return _expected(kind) * speed
+
+    def share(self):
+        """The share of the steps' work done, 0-1, each unit weighted by its kind's :meth:`expected_rate`."""
+        done = total = 0.0
+        for key, (kind, units) in self.work.items():
+            if kind in (DATA, REPORT):
+                continue
+            rate = self.expected_rate(kind)
+            done, total = done + self._done[key] * rate, total + units * rate
+        return done / total if total > 0 else 1.0
+
+    def _remaining(self):
+        """Units of work left per kind, of the steps (not the data, not the report)."""
+        remaining = {}
+        for key, (kind, units) in self.work.items():
+            if kind not in (DATA, REPORT) and units - self._done[key] > 0:
+                remaining[kind] = remaining.get(kind, 0.0) + units - self._done[key]
+        return remaining
+
+    def untimed(self):
+        """The kinds of work still to come that no unit of has been timed yet, in run order."""
+        return [kind for kind in self._remaining() if self.rate(kind) is None]
+
+    def left(self, known_only=False):
+        """Seconds left of the steps at the measured rates; None while a kind still to come is not timed.
 
         The rates are scaled by how much of the work ran at once (its
         measured seconds add up to more than the time elapsed then).
+
+        Parameters
+        ----------
+        known_only : bool, default=False
+            Count only the kinds timed so far (never None).
         """
-        remaining = {kind: 0.0 for kind, _ in self.work.values()}
-        for key, (kind, units) in self.work.items():
-            remaining[kind] += units - self._done[key]
-        rates = {kind: self.rate(kind) for kind, units in remaining.items() if units > 0}
-        if None in rates.values():
+        remaining = self._remaining()
+        rates = {kind: self.rate(kind) for kind in remaining}
+        if None in rates.values() and not known_only:
             return None
         spent = sum(self._spent.values())
         elapsed = time.perf_counter() - self.started
         overlap = min(1.0, elapsed / spent) if spent > 0 else 1.0
-        return overlap * sum(remaining[kind] * rate for kind, rate in rates.items())
+        return overlap * sum(remaining[kind] * rate for kind, rate in rates.items() if rate is not None)
 
     def status(self):
-        """``"run 42 %, 0:53 elapsed, about 1:13 left"`` (the share never goes back)."""
+        """``"run 42 %, 0:53 elapsed, about 1:13 left"`` (the share never goes back; 100 % once the steps ended).
+
+        While a kind of work still to come is not timed: ``"run 42 %, 0:53
+        elapsed, time left unknown (not timed yet: the baselines; the rest
+        about 0:40)"``.
+        """
         with self._lock:
             elapsed = time.perf_counter() - self.started
-            left = self.left()
-            if left is None:
-                return f"run {100 * self._shown:.0f} %, {duration(elapsed)} elapsed, time left not measured yet"
-            self._shown = max(self._shown, min(elapsed / max(elapsed + left, 1e-9), 0.99))
-            return f"run {100 * self._shown:.0f} %, {duration(elapsed)} elapsed, about {duration(left)} left"
+            remaining = self._remaining()
+            self._shown = max(self._shown, 1.0 if not remaining else min(self.share(), 0.99))
+            text = f"run {100 * self._shown:.0f} %, {duration(elapsed)} elapsed"
+            if not remaining:
+                return text
+            untimed = self.untimed()
+            if not untimed:
+                return f"{text}, about {duration(self.left())} left"
+            names = [KIND_NAMES.get(kind, kind) for kind in untimed]
+            if len(names) > NAMED_AT_MOST:
+                names = [*names[: NAMED_AT_MOST - 1], f"{len(names) - NAMED_AT_MOST + 1} more kinds"]
+            named = ", ".join(names[:-1]) + " and " + names[-1] if len(names) > 1 else names[0]
+            known = self.left(known_only=True)
+            rest = f"; the rest about {duration(known)}" if round(known) >= 1 else ""
+            return f"{text}, time left unknown (not timed yet: {named}{rest})"
 
     def search_status(self, key):
         """A ``status`` for :class:`~sklearn_radar.model_selection.ProgressPrinter` of a search of step ``key``.
@@ -193,4 +273,17 @@ class RunProgress:
         return status
 
 
-__all__ = ["DATA", "KERNELS", "REPORT", "SCORING", "RunProgress", "duration", "uncompiled_kernels"]
+def _expected(kind):
+    return EXPECTED_S_PER_UNIT.get(kind, EXPECTED_S_OTHER)
+
+
+__all__ = [
+    "DATA",
+    "EXPECTED_S_PER_UNIT",
+    "KERNELS",
+    "REPORT",
+    "SCORING",
+    "RunProgress",
+    "duration",
+    "uncompiled_kernels",
+]

@@ -432,8 +432,8 @@ class RunMeta(_JsonRecord):
     interrupted : bool, default=False
         Whether the run was interrupted.
     objective : {"v1", "pq"}, default="v1"
-        What the searches maximised and ``params.json``'s ``best`` ranks by: the paper's radar
-        V-measure, or the panoptic quality of moving road users per 0.5 s frame.
+        What the searches maximised and ``params.json``'s ``best`` ranks by (its cross-validated training
+        score): the paper's radar V-measure, or the panoptic quality of moving road users per 0.5 s frame.
     repeats : int, default=1
         Searches per tuned experiment and baseline, with the seeds ``seed``, ``seed + 1``, ... on the same
         split (the key is absent for 1).
@@ -1293,18 +1293,25 @@ class RunResults(_JsonRecord):
         Returns
         -------
         document : dict or None
-            ``{"best": key, "objective": ..., "experiments": {key: {"experiment",
-            "v1_test", ["pq_test",] "params", "stage1_params"}}}``; ``best`` is the
-            first experiment with the highest test score of the run's objective.  The object experiment, when
-            it ran, is the key ``"objects"`` (with ``causal_pq_test`` besides).  An experiment whose clusters the
-            classification step classified has ``"classifier"``: the file of its saved classifier in the run's
-            folder (``sklearn-radar cluster --classifier``).
+            ``{"best": key, "best_reason": text, "objective": ..., "experiments": {key: {"experiment",
+            "v1_test", ["pq_test",] "cv_<objective>", "params", "stage1_params"}}}``.  ``cv_v1`` (or
+            ``cv_pq``) is the kept setting's mean cross-validated score of the run's objective on the
+            training half, null for a setting no search of that objective kept (the expert setting, #10 and
+            #11, the object experiment of a V1 run).  ``best`` is the first experiment with the highest such
+            score (never chosen by a test score), the only experiment when one ran, else null; ``best_reason``
+            says which rule chose it.  The object experiment, when it ran, is the key ``"objects"`` (with
+            ``causal_pq_test`` besides).  An experiment whose clusters the classification step classified has
+            ``"classifier"``: the file of its saved classifier in the run's folder (``sklearn-radar cluster
+            --classifier``).
         """
+        objective = self.meta.objective
+        cv_key = f"cv_{objective}"
         experiments = {}
         for number, result in self.experiments.items():
             entry = {"experiment": result.number, "v1_test": result.v1_test}
             if result.instance_test is not None:
                 entry["pq_test"] = result.instance_test.pq
+            entry[cv_key] = None if result.search is None else result.search.cv_best
             entry.update(params=result.params, stage1_params=result.stage1_params)
             classified = (self.classification.settings if self.classification else {}).get(f"#{number}")
             if classified is not None and classified.classifier_file:
@@ -1316,14 +1323,35 @@ class RunResults(_JsonRecord):
                 "v1_test": self.objects.kept.v1_test,
                 "pq_test": self.objects.kept.instance_test.pq,
                 "causal_pq_test": self.objects.kept.causal_instance_test.pq,
+                # Its searches maximise PQ whatever the run's objective.
+                cv_key: self.objects.search.cv_best if objective == "pq" else None,
                 "params": self.objects.kept.params,
                 "stage1_params": self.objects.kept.stage1_params,
             }
         if not experiments:
             return None
-        score = "pq_test" if self.meta.objective == "pq" else "v1_test"
-        best = max(experiments, key=lambda key: experiments[key].get(score, float("-inf")))
-        return {"best": best, "objective": self.meta.objective, "experiments": experiments}
+        best, reason = _best_setting(experiments, cv_key, objective)
+        return {"best": best, "best_reason": reason, "objective": objective, "experiments": experiments}
+
+
+def _best_setting(experiments, cv_key, objective):
+    """``(key, why)`` of ``params.json``'s best setting: the highest cross-validated training score, never a test one.
+
+    See :ref:`user-guide-command-line` for the rule and the settings without such a score.
+    """
+    scored = {key: entry[cv_key] for key, entry in experiments.items() if entry[cv_key] is not None}
+    name = OBJECTIVE_NAMES[objective]
+    if scored:
+        best = max(scored, key=scored.get)  # the first of equal scores
+        among = f"the best of {len(scored)} searched settings" if len(scored) > 1 else "the run's only searched setting"
+        return best, f"{among} by cross-validated {name} on the training half ({scored[best]:.3f})"
+    if len(experiments) == 1:
+        return next(iter(experiments)), "the run's only setting"
+    return None, f"no setting of the run has a cross-validated {name} (none was searched for it)"
+
+
+#: How ``params.json`` names each objective.
+OBJECTIVE_NAMES = {"v1": "V1", "pq": "PQ"}
 
 
 __all__ = [

@@ -64,7 +64,7 @@ from ._constants import (
     TRACKING,
 )
 from ._context import RunContext
-from ._io import RUN_TOOL, check_run_folder, previous_run_files, run_marker
+from ._io import RUN_TOOL, check_apart, check_run_folder, previous_run_files, run_marker
 from ._progress import DATA, REPORT, RunProgress, duration, uncompiled_kernels
 from ._report import write_report
 from ._results import Budget, DataMeta, RunMeta, RunResults
@@ -130,8 +130,8 @@ def parse_experiments(text):
     ----------
     text : str or None
         Comma-separated keys: ``filter``, experiment numbers ``1``-``13``,
-        ranges such as ``2-9``, ``filter-effect``, ``baselines`` and ``tracking``.  None
-        selects every step.
+        ranges such as ``2-9``, ``objects``, ``filter-effect``, ``baselines``,
+        ``tracking`` and ``classification``.  None selects every step.
 
     Returns
     -------
@@ -205,8 +205,9 @@ def reproduce(
     data : str or path-like, default=None
         A RadarScenes data folder; None simulates one (:func:`make_scenes`).
     out : str or path-like, default="sklearn-radar-report"
-        Output folder (created).  It holds one run: a previous run's files
-        there (a folder whose ``run.json`` a run wrote) are removed when
+        Output folder (created), apart from ``data``: neither that folder,
+        nor inside it, nor holding it (ValueError).  It holds one run: a
+        previous run's files there (a folder whose ``run.json`` a run wrote) are removed when
         this one starts, other files are left alone, and a folder that
         holds a file of a run's name (``report.md``, ``run.json``, ...)
         that no run wrote is refused (FileExistsError) before anything is
@@ -219,7 +220,8 @@ def reproduce(
         Candidates evaluated in parallel (-1: all cores; 0 is refused).
     experiments : str, default=None
         Comma-separated keys (``filter``, ``1``-``13``, ranges such as
-        ``2-9``, ``filter-effect``, ``baselines``, ``tracking``); None runs all.
+        ``2-9``, ``objects``, ``filter-effect``, ``baselines``, ``tracking``,
+        ``classification``); None runs all.
     full : bool, default=False
         The paper's budget on about a million simulated detections.
     seed : int, default=0
@@ -234,8 +236,9 @@ def reproduce(
         then one line per step and per search iteration with the overall
         progress, the time elapsed and the time left.
     objective : {"v1", "pq"}, default="v1"
-        What every search maximises on the training half, and what ranks
-        ``params.json``'s ``best``: ``"v1"`` the paper's radar V-measure,
+        What every search maximises on the training half, and whose
+        cross-validated training score ranks ``params.json``'s ``best`` (a
+        test score never does): ``"v1"`` the paper's radar V-measure,
         ``"pq"`` the panoptic quality of moving road users per 0.5 s frame
         (:func:`~sklearn_radar.metrics.panoptic_quality`).  Both are
         reported for every experiment whatever the choice.
@@ -282,6 +285,8 @@ def reproduce(
     last_seed = seed + repeats - 1
     if last_seed > SEED_MAX:
         raise ValueError(f"seed {seed} with its repeats uses seeds up to {last_seed}; the largest is {SEED_MAX}")
+    if data is not None:
+        check_apart(data, out)
     check_run_folder(out, RUN_MARKER, RUN_FILES)
     budget = Budget.full(n_iter) if full else Budget.default(n_iter)
     small = _in_process_reason(data, budget, keys, repeats)
@@ -492,8 +497,9 @@ def _say_the_work(run, keys, budget, repeats):
     """The first progress line: the run's work, and that its time is estimated from the work as it goes."""
     n_search = sum(units(key, budget, repeats) for key in keys if STEPS[key].kind in ("stage 1", "stage 2", BASELINES))
     text = (
-        f"the run's work: {len(keys)} steps, {n_search} search iterations in all; the progress lines estimate the "
-        "time left from the rate measured so far for each kind of step"
+        f"the run's work: {counted(len(keys), 'step')}, {counted(n_search, 'search iteration')} in all; the progress "
+        "lines estimate the time left from the rate measured so far for each kind of step (unknown until a step of "
+        "each kind still to come has been timed)"
     )
     uncompiled = uncompiled_kernels()
     if uncompiled:

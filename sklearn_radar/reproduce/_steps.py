@@ -880,8 +880,10 @@ STEPS = {
     OBJECTS: Step(run_objects, kind="stage 2"),
     FILTER_EFFECT: Step(run_filter_effect, (str(BEST_STAGE1),), kind=FILTER_EFFECT),
     BASELINES: Step(run_baselines, kind=BASELINES),
-    TRACKING: Step(run_tracking, tuple(str(number) for number in TRACKED)),
-    CLASSIFICATION: Step(run_classification_step, (*(str(number) for number in CLASSIFIED), BASELINES)),
+    TRACKING: Step(run_tracking, tuple(str(number) for number in TRACKED), kind=TRACKING),
+    CLASSIFICATION: Step(
+        run_classification_step, (*(str(number) for number in CLASSIFIED), BASELINES), kind=CLASSIFICATION
+    ),
 }
 
 
