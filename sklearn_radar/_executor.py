@@ -50,6 +50,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import os
+import sys
 import tempfile
 import threading
 import warnings
@@ -122,12 +123,20 @@ def bound_for_good(threads):
     _bound.threads = threads
 
 
+#: ``(len(sys.modules), ThreadpoolController)`` of this process when last looked for (:func:`_above`).
+_libraries = (0, None)
+
+
 def _above(threads):
     """The loaded OpenMP and BLAS libraries that would use more than ``threads`` threads in this thread."""
+    global _libraries
     # scikit-learn loads its OpenMP and SciPy's BLAS when imported: loaded after the bound, they would escape it.
     import sklearn  # noqa: F401
 
-    controller = ThreadpoolController()
+    # Looking for the libraries takes 3-20 ms: again only when a module was imported since (a library comes with one).
+    if _libraries[1] is None or _libraries[0] != len(sys.modules):
+        _libraries = (len(sys.modules), ThreadpoolController())
+    controller = _libraries[1]
     return [
         controller.select(filepath=library["filepath"])
         for library in controller.info()
