@@ -1,14 +1,15 @@
 """The main job on a busy machine: ``sklearn-radar reproduce`` at load 0 and beside busy loops, wall and CPU time.
 
 Run: ``python benchmarks/bench_load.py`` (the default run, ``reproduce`` with its default settings on simulated
-data, twice; about 10 min on 2 idle cores) or ``python benchmarks/bench_load.py --classification`` (only
-``--experiments 1,classification``, the step of issue 46, about a minute).  ``--experiments`` and ``--n-iter``
+data, twice: many minutes) or ``python benchmarks/bench_load.py --classification`` (only
+``--experiments 1,classification``, the step of issue 46: a minute or two).  ``--experiments`` and ``--n-iter``
 reduce the run further (passed to ``reproduce``); ``--load`` sets the busy loops (default 4), ``--n-jobs`` is
 passed on; ``--warmup`` runs the command once untimed first (numba's cache, the disk cache).
 
 Each condition runs the same command in a fresh process: once with nothing else started by this script ("load 0":
 other users of the machine still count, so the load average before and after each run is printed), once while
-``--load`` processes each spin a core in a pure-Python busy loop (load about 4 with the default).  The busy loops
+``--load`` processes each spin a core in a pure-Python busy loop (load about 4 with the default; ``--nice``
+sets their niceness, 0 as the run's by default, 19 for background jobs).  The busy loops
 start before the run, stop when it ends, also when this script is interrupted or killed (each checks a few times a
 second that this script is still its parent).  OMP_NUM_THREADS, OPENBLAS_NUM_THREADS, MKL_NUM_THREADS and the like
 are removed from the run's environment (``--keep-env`` keeps them), so that the run's own bound on its threads is
@@ -16,9 +17,9 @@ what is measured.
 
 Printed per condition: wall time, the run's CPU time (user + system of the command and the processes it waited for,
 from ``wait4``), CPU/wall, and each step's time from the run's progress lines; then the ratios loaded / load 0.  With
-``--load 4`` on 2 cores a run that keeps one core busy gets about a third of the machine (1 of 5 runnable
-processes per 2 cores: 0.4 core), so its wall time can stretch up to 2.5x even without oversubscription; CPU time is
-what oversubscription (threads spinning in each other's way) inflates.
+``--load 4`` at niceness 0 on an otherwise idle 2-core machine, a run on one thread is one of 5 runnable processes
+on 2 cores: it gets about 0.4 core, so its wall time stretches up to about 2.5x without any oversubscription.  CPU
+time is what oversubscription (threads waiting on each other for cores they do not get) inflates.
 """
 
 from __future__ import annotations
@@ -52,6 +53,7 @@ THREAD_VARIABLES = (
 BUSY_LOOP = """
 import os
 parent = os.getppid()
+os.nice(NICE)
 while os.getppid() == parent:
     for _ in range(200_000):
         pass
@@ -60,10 +62,12 @@ while os.getppid() == parent:
 _busy = []
 
 
-def start_load(n):
-    """Start ``n`` busy-loop processes (stopped by :func:`stop_load`, at exit, or when this process dies)."""
+def start_load(n, nice=0):
+    """Start ``n`` busy-loop processes at niceness ``nice`` (stopped by :func:`stop_load`, at exit, or when this
+    process dies)."""
+    code = BUSY_LOOP.replace("NICE", str(int(nice)))
     for _ in range(n):
-        _busy.append(subprocess.Popen([sys.executable, "-c", BUSY_LOOP], stdin=subprocess.DEVNULL))
+        _busy.append(subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.DEVNULL))
 
 
 def stop_load():
@@ -108,6 +112,7 @@ def main(argv=None):
     parser.add_argument("--n-iter", type=int, default=None, help="passed to reproduce (default: its default)")
     parser.add_argument("--n-jobs", type=int, default=None, help="passed to reproduce (default: not given)")
     parser.add_argument("--load", type=int, default=4, help="busy-loop processes of the loaded run (default 4)")
+    parser.add_argument("--nice", type=int, default=0, help="niceness of the busy loops (default 0, as the run)")
     parser.add_argument("--warmup", action="store_true", help="run the command once untimed first")
     parser.add_argument("--keep-env", action="store_true", help="keep OMP_NUM_THREADS and the like")
     parser.add_argument("--keep", default=None, help="folder to keep the runs' outputs and logs in")
@@ -135,7 +140,7 @@ def main(argv=None):
             line += ["--n-jobs", str(args.n_jobs)]
         return line
 
-    print(f"command: {' '.join(command('<out>')[1:])}")
+    print(f"command: {' '.join(command('<out>')[1:])}; busy loops: {args.load} at niceness {args.nice}")
     outside = ", ".join(f"{n}={os.environ[n]}" for n in THREAD_VARIABLES if n in os.environ) or "none set"
     print(
         f"cores: {os.cpu_count()}; thread variables of this shell ({'kept' if args.keep_env else 'removed'}): {outside}"
@@ -147,7 +152,7 @@ def main(argv=None):
         found = {}
         for name, load in (("load 0", 0), (f"load {args.load}", args.load)):
             before = os.getloadavg()[0]
-            start_load(load)
+            start_load(load, args.nice)
             try:
                 if load:
                     time.sleep(2.0)  # the busy loops running before the clock starts
