@@ -27,6 +27,16 @@ an executor and asks it, never whether a cluster exists:
 ``blocks(sizes)``
     how sequences of these sizes are grouped into tasks.
 
+Every function an executor runs, and the command's own thread for its
+duration (:func:`connect_executor`), runs with its libraries' thread pools
+(OpenMP, BLAS) bounded to what that work is given (:func:`thread_bound`):
+``n_jobs`` threads here, split between the work running at once in
+joblib's processes, and one thread per task on a dask worker, whose
+threads are its tasks at a time.  Without it scikit-learn's
+HistGradientBoosting and BLAS start a thread per core in every task, which
+on a machine busy with other work made a step many times slower
+(:ref:`performance`).
+
 :class:`LocalExecutor` runs everything here (joblib's ``n_jobs`` for
 :meth:`~LocalExecutor.map` and a search's candidates);
 :class:`DaskExecutor` runs on a dask cluster and holds all dask code.
@@ -40,6 +50,7 @@ from __future__ import annotations
 import contextlib
 import logging
 import os
+import sys
 import tempfile
 import threading
 import warnings
@@ -48,7 +59,7 @@ from concurrent.futures import ThreadPoolExecutor
 from numbers import Integral
 
 import numpy as np
-from threadpoolctl import threadpool_limits
+from threadpoolctl import ThreadpoolController, threadpool_limits
 
 #: What to install for ``--scheduler`` / ``--workers``.
 EXTRA = "pip install 'sklearn-radar[distributed]'"
@@ -64,17 +75,108 @@ __all__ = [
     "connect_executor",
     "peak_rss",
     "require_distributed",
+    "thread_bound",
     "without_malloc_trim",
 ]
+
+#: This thread's bound (:func:`thread_bound`): ``threads`` is the most threads its libraries may use, or absent.
+_bound = threading.local()
+
+
+@contextlib.contextmanager
+def thread_bound(threads):
+    """The OpenMP and BLAS thread pools of this thread's library calls at most ``threads`` while inside.
+
+    A library that has more is set to ``threads`` and reset on leaving; one
+    that has fewer (the caller's :func:`threadpoolctl.threadpool_limits`,
+    ``OMP_NUM_THREADS``) keeps them.  Inside a bound of this thread as
+    tight, it does nothing (costs nothing).  OpenMP's setting belongs to
+    the thread that makes it, BLAS's to the process: work in another
+    thread needs its own bound.
+
+    Parameters
+    ----------
+    threads : int
+        The most threads, >= 1.
+    """
+    outer = getattr(_bound, "threads", None)
+    if outer is not None and outer <= threads:
+        yield
+        return
+    with contextlib.ExitStack() as stack:
+        for library in _above(threads):
+            stack.enter_context(library.limit(limits=threads))
+        _bound.threads = threads
+        try:
+            yield
+        finally:
+            _bound.threads = outer
+
+
+def bound_for_good(threads):
+    """:func:`thread_bound` for the rest of this thread's life (a dask worker's thread, whose tasks all get one)."""
+    outer = getattr(_bound, "threads", None)
+    if outer is not None and outer <= threads:
+        return
+    for library in _above(threads):
+        library.limit(limits=threads)
+    _bound.threads = threads
+
+
+#: ``(len(sys.modules), ThreadpoolController)`` of this process when last looked for (:func:`_above`).
+_libraries = (0, None)
+
+
+def _above(threads):
+    """The loaded OpenMP and BLAS libraries that would use more than ``threads`` threads in this thread."""
+    global _libraries
+    # scikit-learn loads its OpenMP and SciPy's BLAS when imported: loaded after the bound, they would escape it.
+    import sklearn  # noqa: F401
+
+    # Looking for the libraries takes 3-20 ms: again only when a module was imported since (a library comes with one).
+    if _libraries[1] is None or _libraries[0] != len(sys.modules):
+        _libraries = (len(sys.modules), ThreadpoolController())
+    controller = _libraries[1]
+    return [
+        controller.select(filepath=library["filepath"])
+        for library in controller.info()
+        if library["num_threads"] > threads
+    ]
+
+
+def _bounded(threads, function, *args):
+    """``function(*args)`` with :func:`thread_bound` ``(threads)`` (in whichever process runs it)."""
+    with thread_bound(threads):
+        return function(*args)
+
+
+class _OneThread:
+    """``function`` as a dask task: its worker thread's libraries bounded to one thread for good, then the call.
+
+    ``__name__`` is the function's, so that dask names the task after it.
+    """
+
+    def __init__(self, function):
+        self.function = function
+        self.__name__ = getattr(function, "__name__", type(function).__name__)
+
+    def __call__(self, *args):
+        bound_for_good(1)
+        return self.function(*args)
 
 
 class LocalExecutor:
     """Everything in this process; ``n_jobs`` joblib workers for :meth:`map` and a search's candidates.
 
+    Every function it runs has its libraries bounded to :attr:`threads`
+    threads (:func:`thread_bound`), those in joblib's processes to their
+    share of them.
+
     Parameters
     ----------
     n_jobs : int or None, default=None
-        Candidates (and repeats) at a time; None: one.
+        Candidates (and repeats) at a time, and the threads of the library
+        calls in all (joblib's: -1 is every core); None: one.
     alone : bool, default=True
         Whether the work runs alone (its progress lines may be printed),
         not beside other work of :meth:`map`.
@@ -88,15 +190,20 @@ class LocalExecutor:
         self.alone = alone
         self.note = note
 
+    @property
+    def threads(self):
+        """The most threads of the library calls of the work here, >= 1 (``n_jobs``, None: 1)."""
+        return _effective_n_jobs(self.n_jobs)
+
     def describe(self):
         """The run's first line about where it runs (None: nothing to say)."""
         return self.note
 
     def place(self, function, *args):
-        return function(*args)
+        return _bounded(self.threads, function, *args)
 
     def submit(self, function, *args, priority=0):
-        return function(*args)
+        return _bounded(self.threads, function, *args)
 
     def gather(self, handles):
         return list(handles)
@@ -110,22 +217,24 @@ class LocalExecutor:
 
     def stream(self, function, items):
         for item in items:
-            yield function(item)
+            yield _bounded(self.threads, function, item)
 
     def queued(self, function, batches):
         """Per batch, ``[function(*call) for call in batch]``, computed when the caller asks for it (``n_jobs``)."""
         for batch in batches:
-            if _effective_n_jobs(self.n_jobs) < 2 or len(batch) < 2:
-                yield [function(*call) for call in batch]
+            concurrent = min(len(batch), self.threads)
+            if concurrent < 2:
+                yield [_bounded(self.threads, function, *call) for call in batch]
             else:
                 from joblib import Parallel, delayed
 
-                yield Parallel(n_jobs=self.n_jobs)(delayed(function)(*call) for call in batch)
+                share = max(1, self.threads // concurrent)
+                yield Parallel(n_jobs=self.n_jobs)(delayed(_bounded)(share, function, *call) for call in batch)
 
     def ahead(self, function, items, on_done=None):
         """``function(self, item)`` for each item when the caller asks for it, in order (here, one at a time)."""
         for item in items:
-            yield _done(on_done, item, function(self, item))
+            yield _done(on_done, item, _bounded(self.threads, function, self, item))
 
     def map(self, function, items, on_done=None):
         """``[function(executor, item) for item in items]``: with ``n_jobs`` above 1, up to ``n_jobs`` at once.
@@ -135,18 +244,18 @@ class LocalExecutor:
         lines would interleave).
         """
         items = list(items)
-        concurrent = min(len(items), _effective_n_jobs(self.n_jobs))
+        concurrent = min(len(items), self.threads)
         if concurrent < 2:
             return list(self.ahead(function, items, on_done))
         from joblib import Parallel, delayed
 
-        inner = LocalExecutor(max(1, _effective_n_jobs(self.n_jobs) // concurrent), alone=False)
-        found = Parallel(n_jobs=concurrent)(delayed(function)(inner, item) for item in items)
+        inner = LocalExecutor(max(1, self.threads // concurrent), alone=False)
+        found = Parallel(n_jobs=concurrent)(delayed(_bounded)(inner.threads, function, inner, item) for item in items)
         return [_done(on_done, item, result) for item, result in zip(items, found, strict=True)]
 
     def on_a_worker(self, function, handles, *args):
         # The Gaussian process works on tiny matrices, where multi-threaded BLAS was 20x slower (measured).
-        with threadpool_limits(limits=1, user_api="blas"):
+        with thread_bound(self.threads), threadpool_limits(limits=1, user_api="blas"):
             return function(self, handles, *args)
 
     @contextlib.contextmanager
@@ -214,17 +323,21 @@ class DaskExecutor:
         Workers that run with dask's ``MALLOC_TRIM_THRESHOLD_`` (about 2x
         slower clustering; :func:`without_malloc_trim`), said in
         :meth:`describe`.
+    threads : int, default=1
+        The most threads of the library calls of the work that runs in this
+        process (:meth:`ahead`); a task on a worker has one.
     """
 
     alone = False
     n_jobs = 1
 
-    def __init__(self, client, address, n_workers, n_threads, n_malloc_trim=0):
+    def __init__(self, client, address, n_workers, n_threads, n_malloc_trim=0, threads=1):
         self.client = client
         self.address = address
         self.n_workers = n_workers
         self.n_threads = n_threads
         self.n_malloc_trim = n_malloc_trim
+        self.threads = threads
         self._turn = -1
         self._lock = threading.Lock()
 
@@ -243,12 +356,12 @@ class DaskExecutor:
         """``function(*args)`` as a task's result kept on a worker (not scattered: a lost worker loses nothing)."""
         with warnings.catch_warnings():
             warnings.filterwarnings("ignore", message="Sending large graph", category=UserWarning)
-            return self.client.submit(function, *args, pure=False)
+            return self.client.submit(_OneThread(function), *args, pure=False)
 
     def submit(self, function, *args, priority=STEP_PRIORITY):
         """One task; by default ahead of the searches' queued candidates (the steps wait for theirs in turn)."""
         # pure=False: a re-run after a lost worker computes the task again instead of sharing a key.
-        return self.client.submit(function, *args, pure=False, priority=priority)
+        return self.client.submit(_OneThread(function), *args, pure=False, priority=priority)
 
     def gather(self, handles):
         return self.client.gather(list(handles))
@@ -268,8 +381,9 @@ class DaskExecutor:
         candidates); a caller that stops early drops the batches it no
         longer needs.  Priority 0: behind the steps' tasks.
         """
+        task = _OneThread(function)
         queued = [
-            [self.client.submit(function, *call, pure=False, priority=priority) for call in batch] for batch in batches
+            [self.client.submit(task, *call, pure=False, priority=priority) for call in batch] for batch in batches
         ]
         try:
             for futures in queued:
@@ -286,9 +400,9 @@ class DaskExecutor:
         neither this process nor a worker ever holds more than a few items.
         """
         in_flight = in_flight or 2 * max(self.n_threads, 1)
-        pending, iterator = deque(), iter(items)
+        pending, iterator, task = deque(), iter(items), _OneThread(function)
         for item in iterator:
-            pending.append(self.client.submit(function, item, pure=False))
+            pending.append(self.client.submit(task, item, pure=False))
             if len(pending) >= in_flight:
                 break
         while pending:
@@ -296,7 +410,7 @@ class DaskExecutor:
             result = future.result()
             future.release()
             for item in iterator:
-                pending.append(self.client.submit(function, item, pure=False))
+                pending.append(self.client.submit(task, item, pure=False))
                 break
             yield result
 
@@ -306,11 +420,14 @@ class DaskExecutor:
         A search alone keeps the workers busy only while its candidates run,
         not while its Gaussian process chooses the next one; several at once
         fill those gaps.  ``on_done(item, result)`` is called in the item's
-        thread as it ends.
+        thread as it ends; the thread's libraries have :attr:`threads`.
         """
         items = list(items)
         pool = ThreadPoolExecutor(max_workers=max(len(items), 1), thread_name_prefix="sklearn-radar")
-        futures = [pool.submit(lambda item=item: _done(on_done, item, function(self, item))) for item in items]
+        futures = [
+            pool.submit(lambda item=item: _done(on_done, item, _bounded(self.threads, function, self, item)))
+            for item in items
+        ]
         return self._in_order(pool, futures)
 
     @staticmethod
@@ -378,9 +495,9 @@ def balanced_blocks(sizes, n_blocks):
 def _on_this_worker(function, keys, args):
     from distributed import Future, worker_client
 
-    # One BLAS thread in this worker process for good, as dask's environment gives it and as a search in one
-    # process computes its Gaussian process: the same rounding.  Not undone: the worker's tasks share the process.
-    threadpool_limits(limits=1, user_api="blas")
+    # One thread for good, as dask's environment gives a worker's tasks and as a search in one process computes its
+    # Gaussian process (one BLAS thread): the same rounding.  Not undone: the worker's tasks share the process.
+    bound_for_good(1)
     with worker_client() as client:
         here = DaskExecutor(client, client.scheduler.address, 0, 1)
         return function(here, [Future(key, client=client) for key in keys], *args)
@@ -402,7 +519,10 @@ def connect_executor(scheduler=None, workers=None, n_jobs=None, *, in_process_re
     workers : int or None, default=None
         Start a local cluster of this many worker processes (one thread each).
     n_jobs : int or None, default=None
-        Work at a time in this process (:class:`LocalExecutor`).
+        Work at a time in this process (:class:`LocalExecutor`), and the
+        threads of the library calls in this process (-1: every core;
+        None: one): this thread has them for the duration
+        (:func:`thread_bound`), a task on a dask worker one.
     in_process_reason : str or None, default=None
         Why a local cluster (``workers``) would be slower than this process
         for this command's work: then none is started, and the executor's
@@ -433,7 +553,9 @@ def connect_executor(scheduler=None, workers=None, n_jobs=None, *, in_process_re
         raise ValueError(f"--scheduler must be a scheduler address such as tcp://host:8786, got {scheduler!r}")
     if scheduler is None and (workers is None or in_process_reason is not None):
         note = None if workers is None else f"--workers {workers}: {in_process_reason}; running in this process"
-        yield LocalExecutor(n_jobs, note=note)
+        executor = LocalExecutor(n_jobs, note=note)
+        with thread_bound(executor.threads):
+            yield executor
         return
     distributed = require_distributed()
     import dask
@@ -461,13 +583,16 @@ def connect_executor(scheduler=None, workers=None, n_jobs=None, *, in_process_re
             client = distributed.Client(local, set_as_default=True)
         stack.callback(client.close)
         workers_info = client.scheduler_info().get("workers", {})
-        yield DaskExecutor(
+        executor = DaskExecutor(
             client=client,
             address=client.scheduler.address,
             n_workers=len(workers_info),
             n_threads=sum(w.get("nthreads", 1) for w in workers_info.values()) or 1,
             n_malloc_trim=_workers_with_malloc_trim(client),
+            threads=_effective_n_jobs(n_jobs),
         )
+        with thread_bound(executor.threads):
+            yield executor
 
 
 #: What dask sets for every worker process it spawns and we do not want (:func:`without_malloc_trim`).

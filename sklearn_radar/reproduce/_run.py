@@ -217,7 +217,8 @@ def reproduce(
         Bayesian-optimisation iterations per tuned experiment; None: 10, or
         100 with ``full`` (30 % of them random, as the paper's 30 + 70).
     n_jobs : int, default=None
-        Candidates evaluated in parallel (-1: all cores; 0 is refused).
+        Candidates evaluated in parallel, and the threads of the library
+        calls in all (-1: all cores; 0 is refused; None: one, one thread).
     experiments : str, default=None
         Comma-separated keys (``filter``, ``1``-``13``, ranges such as
         ``2-9``, ``objects``, ``filter-effect``, ``baselines``, ``tracking``,
