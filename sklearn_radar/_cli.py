@@ -159,8 +159,9 @@ def _parser():
         "--n-jobs",
         _n_jobs,
         metavar="J",
-        help="on one machine: how many candidates (and repeats of a step) are evaluated at once in this process "
-        "(default: 1; -1: all cores); the results do not depend on it",
+        help="on one machine: how many candidates (and repeats of a step) are evaluated at once in this process, "
+        "and the threads of the library calls within a step (default: 1; -1: all cores); the results do not "
+        "depend on it",
     )
     reproduce.add_argument(
         "--experiments",
