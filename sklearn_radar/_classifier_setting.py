@@ -80,11 +80,11 @@ def classifier_setting(classifier_path, setting=None, params_path=None, pipeline
     classifier_path : str or path-like
         File written by :func:`~sklearn_radar.classification.save_classifier`.
     setting : dict, default=None
-        The checked setting of ``--params`` (:func:`~sklearn_radar._cluster_command.load_params`), or None.
+        The checked setting of ``--params`` (:func:`~sklearn_radar.reproduce.load_params`), or None.
     params_path : str or path-like, default=None
         Its file, for the messages.
     pipeline : Pipeline, default=None
-        The setting's pipeline (:func:`~sklearn_radar._cluster_command.setting_pipeline`).
+        The setting's pipeline (:func:`~sklearn_radar.experiments._saved.setting_pipeline`).
 
     Returns
     -------

@@ -533,7 +533,7 @@ def _classes(summary):
 def _stream(args) -> int:
     import numpy as np
 
-    from .online._replay import stream_radarscenes
+    from ._stream_command import stream_radarscenes
 
     summary = stream_radarscenes(
         args.data,

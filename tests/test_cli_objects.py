@@ -6,9 +6,9 @@ import numpy as np
 import pytest
 
 from sklearn_radar._cli import main
-from sklearn_radar._cluster_command import load_params, setting_pipeline
 from sklearn_radar.datasets import load_radarscenes, make_scenes, write_radarscenes
 from sklearn_radar.experiments import object_pipeline
+from sklearn_radar.experiments._saved import load_params, setting_pipeline
 
 STAGE1 = {
     "cluster__eps_xyv": 1.2,

@@ -7,11 +7,12 @@ import pandas as pd
 import pytest
 
 from sklearn_radar._cli import main
-from sklearn_radar._cluster_command import load_params, setting_pipeline
+from sklearn_radar._stream_command import OBJECTS_HEADER
 from sklearn_radar.datasets import load_radarscenes, make_scenes, write_radarscenes
 from sklearn_radar.experiments import paper_params
+from sklearn_radar.experiments._saved import load_params, setting_pipeline
 from sklearn_radar.online import OnlinePipeline
-from sklearn_radar.online._replay import OBJECTS_HEADER, replay
+from sklearn_radar.online._replay import replay
 
 STAGE1 = {key.split("__", 1)[1]: value for key, value in paper_params(8).items()}
 

@@ -11,6 +11,7 @@ from sklearn.pipeline import Pipeline
 
 from .._schema import RAW_LAYOUT
 from ..cluster import ClusterMerger, RadarDBSCAN, ScanStream
+from ..experiments._saved import load_params, setting_pipeline
 from ..preprocessing import DopplerDensityFilter, FrameTransform
 from ._filter import FilterWindow
 from ._merger import MergeWindow
@@ -189,8 +190,6 @@ class OnlinePipeline:
             Its :attr:`experiment` is the experiment taken (the best's
             number when ``experiment`` is None).
         """
-        from .._cluster_command import load_params, setting_pipeline
-
         setting = load_params(path, experiment)
         online = cls(setting_pipeline(setting, path))
         online.experiment = setting["experiment"]

@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..experiments import experiment_pipeline, get_experiment, paper_params
+from ..experiments._saved import setting_pipeline
 from ..metrics import tracking_scores
 from ..metrics._tracking import _scores
 from ..online import OnlinePipeline
@@ -46,7 +47,6 @@ def tracked_setting(number, result):
 
 def run_setting_pipeline(number, params, stage1_params):
     """The pipeline of a setting of experiment ``number`` the run found (as ``params.json`` saves it)."""
-    from .._cluster_command import setting_pipeline  # here: the cluster command imports the reproduce package
 
     setting = {"experiment": number, "params": params, "stage1_params": stage1_params}
     return setting_pipeline(setting, "results")

@@ -8,9 +8,9 @@ import pytest
 from sklearn.pipeline import Pipeline, make_pipeline
 
 from sklearn_radar import ClusterMerger, DopplerDensityFilter, FrameTransform, RadarDBSCAN
-from sklearn_radar._cluster_command import load_params
 from sklearn_radar.datasets import make_scenes
 from sklearn_radar.experiments import experiment_pipeline, paper_params
+from sklearn_radar.experiments._saved import load_params
 from sklearn_radar.online import OnlinePipeline
 
 
