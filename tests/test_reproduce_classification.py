@@ -264,6 +264,16 @@ def test_the_answer_chooses_the_clustering_by_its_cv_score_and_names_ties():
     assert "without a search (#1)" in said and "no cross-validated PQ to choose by" in said
 
 
+def test_average_precision_by_class_is_in_percent_as_the_tables_map():
+    import dataclasses
+
+    from sklearn_radar.reproduce._sections._classification import _per_class
+
+    row = _setting("#8", [0.1, 0.1])
+    row = dataclasses.replace(row, scores=dataclasses.replace(row.scores, per_class={"car": {"ap": 0.3125}}))
+    assert _per_class(row, "ap") == "car 31.2 %"
+
+
 def test_the_background_share_before_classifying_is_the_object_level_tables(classified):
     """One figure printed once: the classification table prints the object-level table's (not a second figure)."""
     import dataclasses

@@ -236,7 +236,9 @@ def _repeated(row: ClassifiedSetting, score):
 
 
 def _per_class(row: ClassifiedSetting, score):
-    return ", ".join(f"{name} {figures[score]:.2f}" for name, figures in row.scores.per_class.items()) or "-"
+    return (
+        ", ".join(f"{name} {_figure(figures[score], score)}" for name, figures in row.scores.per_class.items()) or "-"
+    )
 
 
 def _cell(value):
