@@ -44,8 +44,8 @@ def markdown(results: RunResults) -> list[str]:
             "after the number marks experiments whose setting is the paper's, kept because the search found nothing "
             "better. Each bar's value (%, two decimals as in the tables) is written above it."
             + (
-                f" Our bars are the mean over the {results.meta.repeats} repeats, the error bars and the value's "
-                "\u00b1 one standard deviation either side."
+                f" Our bars are the mean over the {results.meta.repeats} repeats, the error bars one standard "
+                "deviation either side (the \u00b1 of the value above each bar)."
                 if results.meta.repeats > 1
                 else " One run has no spread to show: with `--repeats 3` our bars get error bars (the standard "
                 "deviation over the repeats)."
