@@ -530,6 +530,7 @@ def test_the_report_shows_every_figure_it_drew_with_a_caption(tiny_report):
         assert len(caption) > 40 and not caption.startswith(("|", "!", "#")), match.group(1)
     glance = report.split("## At a glance", 1)[1].split("\n## ", 1)[0]
     assert all(f"]({name})" in glance for name in drawn)  # the summary links every figure
+    assert "- best point clustering by test V1 (the searches tuned for V1): #" in glance  # says the objective
     findings = report.split("## The paper's findings, checked", 1)[1]
     verdicts = re.findall(r"\*\*(holds|does not hold|cannot tell)\*\*", findings.split("\n\nThe rule", 1)[0])
     n = {verdict: verdicts.count(verdict) for verdict in ("holds", "does not hold", "cannot tell")}
@@ -759,7 +760,7 @@ def test_coinciding_convergence_curves_differ_in_marker_and_the_legend_is_readab
         styles = [(line.get_color(), line.get_linestyle(), line.get_marker()) for line in lines]
         assert len(set(styles)) == len(styles) and all(line.get_marker() not in ("", "None") for line in lines)
         assert len({line.get_markevery()[0] for line in lines}) == len(lines)
-    shown = [line.get_label() for ax in fig.axes for line in ax.get_lines()]
+    shown = [line.get_label().replace(" \u2020", "") for ax in fig.axes for line in ax.get_lines()]  # dagger apart
     assert sorted(shown) == sorted(name if name != "#8" else "#8 (the paper's best)" for name in curves)
     assert all(t.get_fontsize() >= 10 for ax in fig.axes for t in ax.get_legend().get_texts())
     plt.close(fig)

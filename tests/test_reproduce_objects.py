@@ -69,8 +69,8 @@ def test_report_section_gives_offline_and_causal_scores(objects_report):
     assert "## Beyond the paper: the framework set up for objects" in report
     results = json.loads((objects_report / "results.json").read_text())
     pq = [r["instance_test"]["pq"] for r in results["objects"]["repeats"]]
-    assert f"| object experiment | past and future | {np.mean(pq):.3f} \u00b1 {np.std(pq, ddof=1):.3f} |" in report
-    assert "| object experiment, causal | the past |" in report
+    assert f"| object experiment | past and future | PQ | {np.mean(pq):.3f} \u00b1 {np.std(pq, ddof=1):.3f} |" in report
+    assert "| object experiment, causal | the past | PQ |" in report
     assert "The baselines did not run" in report
 
 
@@ -85,17 +85,26 @@ def test_verdict_needs_repeats_and_a_difference_beyond_two_standard_errors():
     assert verdict([0.40, 0.41], [0.50, 0.50], "B").endswith("lower.")
 
 
-def test_the_section_says_when_the_baselines_were_tuned_for_another_objective(objects_report, monkeypatch):
+def test_baselines_tuned_for_another_objective_are_not_set_beside_the_object_experiment(objects_report):
+    """Like with like: a run tuned for V1 sets no V1-tuned baseline beside the PQ-tuned experiment (issue 46, 8)."""
     import dataclasses
     from types import SimpleNamespace
 
-    from sklearn_radar.reproduce._sections import _objects
+    from sklearn_radar.reproduce._sections import _objects, _summary
 
     results = RunResults.read(objects_report / "results.json")
-    baseline = ("a baseline", SimpleNamespace(repeats=None, instance_test=SimpleNamespace(pq=0.2), v1_test=0.5))
-    monkeypatch.setattr(_objects, "_best_baselines", lambda results: (baseline, None))
     assert results.meta.objective == "v1"
-    said = "The baselines were tuned for V1"
-    assert any(said in line for line in _objects.markdown(results))
-    pq_run = dataclasses.replace(results, meta=dataclasses.replace(results.meta, objective="pq"))
-    assert not any(said in line for line in _objects.markdown(pq_run))
+    offline = SimpleNamespace(repeats=None, search=None, instance_test=SimpleNamespace(pq=0.116), v1_test=0.5)
+    causal = SimpleNamespace(repeats=None, search=None, instance_test=SimpleNamespace(pq=0.09), v1_test=0.4)
+    baselines = {"offline baseline": offline, f"causal baseline, {_objects.CAUSAL_MARK}": causal}
+    v1_run = dataclasses.replace(results, baselines=baselines)
+    section = "\n".join(_objects.markdown(v1_run))
+    glance = "\n".join(_summary.markdown(v1_run))
+    assert "0.116" not in glance and "0.116" not in section
+    assert "baseline" not in section.replace(_objects.NOT_COMPARED, "") and _objects.NOT_COMPARED in section
+    assert "not set beside the baselines, which this run tuned for V1" in glance
+    assert "the framework set up for objects, tuned for PQ" in glance
+    pq_run = dataclasses.replace(v1_run, meta=dataclasses.replace(results.meta, objective="pq"))
+    section = "\n".join(_objects.markdown(pq_run))
+    assert "| offline baseline | past and future | PQ | 0.116 |" in section and _objects.NOT_COMPARED not in section
+    assert "against 0.116 for offline baseline, also tuned for PQ" in "\n".join(_summary.markdown(pq_run))

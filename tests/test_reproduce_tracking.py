@@ -88,6 +88,21 @@ def test_the_report_has_the_tracking_section(tracked):
     assert "| #13 " in section and "(tuned #13)" in section and "(paper's #8)" in section
 
 
+def test_the_tracking_table_names_what_its_count_of_objects_counts(tracked):
+    """The MOTA denominator, objects summed over frames: not the data section's object instances, and said so."""
+    results = RunResults.read(tracked / "results.json")
+    report = (tracked / "report.md").read_text()
+    section = report.split("## Beyond the paper: object tracking online")[1].split("\n## ")[0]
+    header = next(line for line in section.splitlines() if line.startswith("| setting |"))
+    columns = [cell.strip() for cell in header.strip("|").split("|")]
+    assert "objects" not in columns and "object-frames" in columns
+    assert "*object-frames* counts each annotated moving road user once in every 0.5 s frame it is seen in" in section
+    for number, result in results.tracking.items():
+        row = next(line for line in section.splitlines() if line.startswith(f"| #{number} "))
+        cells = [cell.strip() for cell in row.strip("|").split("|")]
+        assert cells[columns.index("object-frames")] == str(result.final.n_objects)
+
+
 def test_results_without_tracking_still_load():
     """Older results files have no 'tracking' key: it reads as None and the section is left out."""
     from pathlib import Path

@@ -149,6 +149,7 @@ def classified_sequence(sequence, model):
         "id": sequence.id,
         "classes_true": road_user_class(data["label_id"]),
         "instances_true": np.asarray(sequence.scenes.target, dtype=np.int64),
+        "target": np.asarray(sequence.target, dtype=np.int64),
         "times": data["timestamp"].to_numpy(dtype=np.float64) * 1e-6,
         "classes_pred": found["class"].to_numpy(),
         "instances_pred": found["instance"].to_numpy(),
@@ -252,9 +253,12 @@ def _scores(arrays, groups):
 
 
 def _background_share(arrays, labels, groups):
-    """Share of the per-frame segments of ``labels`` with no detection of an annotated road user."""
+    """Share of the per-frame segments of ``labels`` with no detection of a road user of the pre-clustered target.
+
+    The target of the object-level scores (``instance_test``): the share of a clustering is the same figure there.
+    """
     share = background_share(
-        arrays["instances_true"], labels, times=arrays["times"], groups=groups, frame=CLASSIFICATION_FRAME_S
+        arrays["target"], labels, times=arrays["times"], groups=groups, frame=CLASSIFICATION_FRAME_S
     )
     return float(share.background_segment_share)
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._results import ClassifiedSetting, RunResults, repeated_scores
-from ._base import Section, format_params
+from ._base import Section, format_params, format_score, objective_name
 from ._comparison import DOES_NOT_HOLD, HOLDS, N_STANDARD_ERRORS, paired_verdict
 
 #: Published figures of radar instance segmentation on real RadarScenes data (learned models): (source, mAP@0.5,
@@ -45,8 +45,10 @@ def markdown(results: RunResults) -> list[str]:
         "(a match needs the same class and IoU > 0.5; the mean over classes), mAP@0.5 (instances ranked by the "
         "classifier's confidence; COCO's 101-point interpolation; the mean over classes), macro-F1 over the "
         "detections (background counted as a class) and the class-agnostic mCov. Background-only segments: the "
-        "share of segments with no detection of a road user, of the clustering (before) and of what the "
-        "classifier keeps (after). With repeats, a cell gives the mean \u00b1 sd over the classifiers of each "
+        "share of segments with no detection of a road user of the target the object-level scores use, of the "
+        "clustering (before: the object-level table's 'bg segments') and of what the classifier keeps (after). "
+        "Classes are the library's road-user classes (`sklearn_radar.classification`; the data section maps the "
+        "RadarScenes labels onto them). With repeats, a cell gives the mean \u00b1 sd over the classifiers of each "
         "repeat's setting (the other columns are the first repeat's).",
         "",
         "| classified clusters of | clustering's test V1 | clustering's test PQ | class PQ | mAP@0.5 | macro-F1 "
@@ -55,7 +57,8 @@ def markdown(results: RunResults) -> list[str]:
     ]
     for name, row in rows.items():
         v1, pq = clustering_scores(results, name)
-        before = "-" if row.background_share_before is None else f"{100 * row.background_share_before:.1f} %"
+        before = background_before(results, name, row)
+        before = "-" if before is None else f"{100 * before:.1f} %"
         pq_cell, map_cell, f1_cell, mcov_cell = (_repeated(row, key) for key in ("pq", "map", "macro_f1", "mcov"))
         lines.append(
             f"| {name}, {_source(name, row.setting_source)} | {_v1_cell(v1)} | {_cell(pq)} | {pq_cell} | {map_cell} | "
@@ -86,35 +89,94 @@ def markdown(results: RunResults) -> list[str]:
 
 def clustering_scores(results: RunResults, name):
     """(test V1, test PQ) of the clustering ``name`` (``"#8"`` or a baseline), means over the repeats; or Nones."""
-    if name.startswith("#") and name[1:].isdigit():
-        result = results.experiments.get(int(name[1:]))
-    else:
-        result = (results.baselines or {}).get(name)
+    result = _clustering(results, name)
     if result is None:
         return None, None
     pq = repeated_scores(result, "pq")
     return float(np.mean(repeated_scores(result, "v1"))), float(np.mean(pq)) if pq else None
 
 
+def background_before(results: RunResults, name, row: ClassifiedSetting):
+    """Share of the clustering's segments that hold no detection of a road user: the object-level table's figure.
+
+    That of the clustering's own scores (``instance_test``, the first repeat's, as the object-level table gives
+    it) where its experiment or baseline ran, else the classification step's (the same definition: the
+    pre-clustered target, per 0.5 s frame); None for the point-wise classifier.
+    """
+    if row.background_share_before is None:
+        return None
+    result = _clustering(results, name)
+    if result is not None and result.instance_test is not None:
+        return result.instance_test.background_segment_share
+    return row.background_share_before
+
+
+def cv_score(results: RunResults, name):
+    """The mean cross-validated score (the run's objective, training half) of clustering ``name``; None unsearched.
+
+    The mean over the repeats' searches; None for a setting that was not searched (the fixed #1, a paper's
+    setting of an experiment that did not run).
+    """
+    result = _clustering(results, name)
+    if result is None:
+        return None
+    scores = [r.search.cv_best for r in result.repeats or [result] if r.search is not None]
+    return float(np.mean(scores)) if scores else None
+
+
+def _clustering(results: RunResults, name):
+    """The experiment or baseline result of the clustering ``name``; None when it did not run."""
+    if name.startswith("#") and name[1:].isdigit():
+        return results.experiments.get(int(name[1:]))
+    return (results.baselines or {}).get(name)
+
+
 def answer_lines(results: RunResults) -> list[str]:
-    """The paper's question: does the clustering best on V1 (or on PQ) give the best classifier, with its noise."""
+    """The paper's question: does the clustering chosen by its CV score give the best classifier, with its noise.
+
+    The clustering is chosen among the classified ones by its cross-validated score on the training half (the run's
+    objective), never by a test score; those whose CV score prints the same are tied with it and left out of the
+    rivals.
+    """
     rows = {
         name: row for name, row in results.classification.settings.items() if row.background_share_before is not None
     }
+    label = objective_name(results)
+    scored = {name: cv_score(results, name) for name in rows}
+    scored = {name: value for name, value in scored.items() if value is not None}
+    if not scored:
+        return []
+    best = max(scored, key=scored.get)
+    shown = format_score(scored[best], results)
+    tied = [name for name in scored if name != best and format_score(scored[name], results) == shown]
+    rivals = {name: row for name, row in rows.items() if name != best and name not in tied}
+    if not rivals:
+        return []
+    chosen = f"{best}, CV {label} {shown}"
+    if tied:
+        one = len(tied) == 1
+        chosen += (
+            f"; {', '.join(tied)} {'ties' if one else 'tie'} it and {'is' if one else 'are'} left out of the rivals"
+        )
     lines = []
-    for objective, label in (("v1", "V1"), ("pq", "PQ")):
-        scored = {name: clustering_scores(results, name)[0 if objective == "v1" else 1] for name in rows}
-        scored = {name: value for name, value in scored.items() if value is not None}
-        if len(scored) < 2:
-            continue
-        best = max(scored, key=scored.get)
-        for score, score_label in ANSWERED_BY:
-            rivals = {name: row for name, row in rows.items() if name != best}
-            rival = max(rivals, key=lambda name: np.mean(_values(rivals[name], score)))
-            lines.append(
-                f"- Does the clustering with the best test {label} ({best}) give the best classifier by "
-                f"{score_label}? {_verdict(rows[best], rivals[rival], rival, score, score_label)}"
-            )
+    for score, score_label in ANSWERED_BY:
+        rival = max(rivals, key=lambda name: np.mean(_values(rivals[name], score)))
+        lines.append(
+            f"- Does the clustering with the best cross-validated {label} of those classified ({chosen}) give the "
+            f"best classifier by {score_label}? {_verdict(rows[best], rivals[rival], rival, score, score_label)}"
+        )
+    unsearched = [name for name in rows if name not in scored]
+    other = "PQ" if label == "V1" else "V1"
+    lines.append(
+        f"- The clustering is chosen by its cross-validated {label} (training half), never by a test score"
+        + (
+            f"; without a search ({', '.join(unsearched)}) a setting has no CV score and is a rival only"
+            if unsearched
+            else ""
+        )
+        + f". The searches maximised {label}, so there is no cross-validated {other} to choose by"
+        + ("; `--objective pq` asks the question for PQ." if label == "V1" else ".")
+    )
     return lines
 
 
@@ -130,7 +192,10 @@ def _verdict(ours: ClassifiedSetting, theirs: ClassifiedSetting, rival, score, s
     else:
         differences, unit = np.subtract(ours.per_sequence[score], theirs.per_sequence[score]), "test sequences"
     said, mean, se = paired_verdict(differences)
-    head = f"{score_label} {np.mean(mine):.3f} against {np.mean(other):.3f} for the best other, {rival}"
+    head = (
+        f"{score_label} {_figure(np.mean(mine), score)} against {_figure(np.mean(other), score)} for the best "
+        f"other, {rival}"
+    )
     if se is None:
         return f"{head}; one test sequence cannot tell a difference from the spread between sequences."
     words = {HOLDS: "yes, it is higher", DOES_NOT_HOLD: "no, it is lower"}.get(said, "cannot tell (within the noise)")
@@ -140,9 +205,20 @@ def _verdict(ours: ClassifiedSetting, theirs: ClassifiedSetting, rival, score, s
         else ""
     )
     return (
-        f"{head}: {words} (mean paired difference over the {len(differences)} {unit} {mean:+.3f} \u00b1 {se:.3f} "
-        f"standard error; it counts beyond {N_STANDARD_ERRORS:g} standard errors{weak})."
+        f"{head}: {words} (mean paired difference over the {len(differences)} {unit} "
+        f"{_difference(mean, score)} \u00b1 {_difference(se, score, sign='')} standard error; it counts beyond "
+        f"{N_STANDARD_ERRORS:g} standard errors{weak})."
     )
+
+
+def _figure(value, score):
+    """One score as the table prints it: class PQ as a fraction (3 decimals), the others in percent (1 decimal)."""
+    return f"{value:.3f}" if score == "pq" else f"{100 * value:.1f} %"
+
+
+def _difference(value, score, sign="+"):
+    """A difference of one score in the table's unit: a fraction for class PQ, percentage points otherwise."""
+    return f"{value:{sign}.3f}" if score == "pq" else f"{100 * value:{sign}.1f} points"
 
 
 def _values(row: ClassifiedSetting, score):
@@ -153,14 +229,16 @@ def _values(row: ClassifiedSetting, score):
 def _repeated(row: ClassifiedSetting, score):
     """``"0.392"`` / ``"31.1 %"``, or mean \u00b1 sd over the repeats."""
     values = _values(row, score)
-    scale, unit, digits = (1, "", 3) if score == "pq" else (100, " %", 1)
     if len(values) == 1:
-        return f"{scale * values[0]:.{digits}f}{unit}"
-    return f"{scale * np.mean(values):.{digits}f} \u00b1 {scale * np.std(values, ddof=1):.{digits}f}{unit}"
+        return _figure(values[0], score)
+    sd = np.std(values, ddof=1)
+    return f"{_figure(np.mean(values), score).removesuffix(' %')} \u00b1 {_figure(sd, score)}"
 
 
 def _per_class(row: ClassifiedSetting, score):
-    return ", ".join(f"{name} {figures[score]:.2f}" for name, figures in row.scores.per_class.items()) or "-"
+    return (
+        ", ".join(f"{name} {_figure(figures[score], score)}" for name, figures in row.scores.per_class.items()) or "-"
+    )
 
 
 def _cell(value):

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+from ... import LABELS
+from ...classification import CLASS_OF_LABEL, ROAD_USER_CLASSES
 from .._results import RunResults
 from ._base import Section
 
@@ -26,7 +28,21 @@ def markdown(results: RunResults) -> list[str]:
         "```",
         *statistics.text.splitlines(),
         "```",
+        "",
+        class_names_line(),
     ]
+
+
+def class_names_line():
+    """How the library's road-user classes, the names the classification section uses, group the data's labels."""
+    grouped = "; ".join(
+        f"{name}: {', '.join(LABELS[label] for label, code in CLASS_OF_LABEL.items() if code == class_code)}"
+        for class_code, name in ROAD_USER_CLASSES.items()
+    )
+    return (
+        "The table names the RadarScenes labels; the classification section names the library's road-user classes "
+        f"(`sklearn_radar.classification`), which group them: {grouped}."
+    )
 
 
 SECTION = Section("data", markdown)

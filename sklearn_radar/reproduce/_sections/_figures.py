@@ -25,6 +25,9 @@ V1_BARS = "v1_ours_vs_paper.png"
 SCENE = "fig6_scene.png"
 CONVERGENCE = "convergence.png"
 
+#: What marks a setting that is the paper's, kept because the search found nothing better (tables and figures).
+DAGGER = " \u2020"
+
 #: Line styles of the convergence curves; with the 10 colours of tab10 and a marker each no two of up to 40 curves
 #: look alike.
 LINESTYLES = ("-", "--", "-.", ":")
@@ -39,12 +42,13 @@ def markdown(results: RunResults) -> list[str]:
             "V1 on the test half, ours beside the paper's, per experiment (Tables III and IV), on an axis from 0 "
             "(bar lengths compare as the scores do); a dagger (\u2020) "
             "after the number marks experiments whose setting is the paper's, kept because the search found nothing "
-            "better."
+            "better. Each bar's value (%, two decimals as in the tables) is written above it."
             + (
                 f" Our bars are the mean over the {results.meta.repeats} repeats, the error bars one standard "
-                "deviation either side."
+                "deviation either side (the \u00b1 of the value above each bar)."
                 if results.meta.repeats > 1
-                else ""
+                else " One run has no spread to show: with `--repeats 3` our bars get error bars (the standard "
+                "deviation over the repeats)."
             ),
             "",
             f"![V1 ours vs paper]({V1_BARS})",
@@ -55,11 +59,15 @@ def markdown(results: RunResults) -> list[str]:
     if drawn.get("convergence"):
         lines += [
             f"Best mean cross-validated {objective_name(results)} so far (training half), per search: the paper's "
-            "experiments on top, the scikit-learn baselines below (each panel on its own scale), one colour and "
-            "marker per curve. "
+            "experiments on top, the scikit-learn baselines below (each panel on its own scale), one colour, line "
+            "style and marker per curve. "
             "Where two searches found the same best score their lines coincide, and their markers, spaced along "
-            f"each line at other places, alternate on it. #{BEST_STAGE1}, the paper's best method, is the wide grey "
-            "band, drawn underneath so that a curve that coincides with it shows inside it."
+            f"each line at other places, alternate on it; right of the experiments' panel each final value is "
+            f"written once with every experiment that ends there. #{BEST_STAGE1}, the paper's best method, is the "
+            "wide grey band, drawn underneath so that a curve that coincides with it shows inside it. A dagger "
+            "(\u2020) marks an experiment whose table keeps the paper's setting: scored on the same folds beside the "
+            "search, it beat every setting the search tried, so the table's CV score is the paper's setting's and "
+            "the curve, which shows only the search's own settings, ends below it (at it on a tie)."
             + (
                 f" With {results.meta.repeats} repeats per search, each line is the median over the repeats and the "
                 "shaded band around it spans their minimum to maximum."
@@ -101,7 +109,10 @@ def scene_caption(results: RunResults):
     return [
         f"Fig. 6 analogue, one test sequence: raw data and target (top), the FCS baseline (#{baseline}) and the best "
         f"experiment by test {objective_name(results)} (#{best}, bottom). The target labels only moving road users; "
-        "everything else, the static background, is light grey there (noise). The clusterings also group "
+        "everything else, the static background, is light grey there (noise). Each road user has one colour, the "
+        "same in every panel, and a cluster takes the colour of the road user most of its detections belong to: "
+        "two clusters of one colour split a road user, one cluster over two road users merges them. The "
+        "clusterings also group "
         "background detections, e.g. along the streaks that guard rails, parked cars and buildings leave as the car "
         "drives: a cluster that holds no detection of a moving road user is *background-only* and drawn in dark "
         "grey, beneath the coloured clusters, and each panel's title counts them. The paper's V-measure does not "
@@ -156,17 +167,18 @@ def best_so_far(convergences):
 
 
 def curve_styles(n):
-    """``n`` distinct (colour, line style, marker) triples: tab10's colours with a marker each, then the next style.
+    """``n`` distinct (colour, line style, marker) triples: tab10's colours, the line styles in turn, a marker each.
 
-    The markers tell apart curves that coincide (a search that found the
-    same best score as another draws on top of it): each curve's markers sit
-    at other places along the line (:func:`convergence_figure`).
+    The line styles and markers tell apart curves that coincide (a search
+    that found the same best score as another draws on top of it): each
+    curve's markers sit at other places along the line
+    (:func:`convergence_figure`).
     """
     import matplotlib
 
     colours = matplotlib.colormaps["tab10"].colors
     return [
-        (colours[k % 10], LINESTYLES[(k // 10) % len(LINESTYLES)], MARKERS[k % len(MARKERS)] if k < 40 else "")
+        (colours[k % 10], LINESTYLES[(k + k // 10) % len(LINESTYLES)], MARKERS[k % len(MARKERS)] if k < 40 else "")
         for k in range(n)
     ]
 
@@ -194,22 +206,70 @@ def convergence_figure(curves, results: RunResults):
     baselines = {name: c for name, c in curves.items() if name not in experiments}
     groups = [("the paper's experiments", experiments), ("scikit-learn baselines", baselines)]
     groups = [(title, group) for title, group in groups if group]
+    daggered = {f"#{n}" for n, e in results.experiments.items() if setting_source(e) == SETTING_PAPER}
+    in_percent = results.meta.objective != "pq"  # V1 in percent, as the tables give it
+    if in_percent:
+        groups = [(title, {name: [[100 * v for v in c] for c in cs] for name, cs in g.items()}) for title, g in groups]
     fig, axes = plt.subplots(
-        len(groups), 1, figsize=(11, 4.6 * len(groups) + 0.4), sharex=True, squeeze=False, layout="constrained"
+        len(groups), 1, figsize=(11, 5.4 * len(groups) + 0.4), sharex=True, squeeze=False, layout="constrained"
     )
     for ax, (title, group) in zip(axes[:, 0], groups, strict=True):
-        _convergence_panel(ax, group)
-        ax.set(ylabel=f"best mean CV {objective_name(results)} so far", title=title)
+        _convergence_panel(ax, group, daggered)
+        unit = " (%)" if in_percent else ""
+        ax.set(ylabel=f"best mean CV {objective_name(results)} so far{unit}", title=title)
         ax.grid(alpha=0.3)
-        ax.legend(fontsize=10, loc="center left", bbox_to_anchor=(1.01, 0.5), frameon=False)
+        ax.xaxis.get_major_locator().set_params(integer=True)
+        long_names = max(len(name) for name in group) > SHORT_NAME
+        if not long_names:  # the experiments: their numbers beside the values they end at (baselines rarely tie)
+            _end_labels(ax, group, " %" if in_percent else "")
+        # Below the panel, across its width: the plot keeps the figure's width (long baseline names, one a row).
+        ax.legend(
+            fontsize=10, loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=1 if long_names else 4, frameon=False
+        )
     axes[-1][0].set_xlabel("iteration")
-    axes[-1][0].xaxis.get_major_locator().set_params(integer=True)
     fig.suptitle("Bayesian optimisation convergence (training half)")
     return fig
 
 
-def _convergence_panel(ax, curves):
-    """One line per search (the median over its repeats, a band from their minimum to maximum), markers staggered."""
+def _end_labels(ax, curves, unit):
+    """The final best score right of each panel, once per value, with every curve that ends there (coinciding ones).
+
+    ``unit``: ``" %"`` for V1 in percent (two decimals, as the tables), ``""`` for PQ (three decimals).
+    """
+    ends = {}
+    for name, convergences in curves.items():
+        final = best_so_far(convergences)[0][-1]
+        ends.setdefault(f"{final:.2f}{unit}" if unit else f"{final:.3f}", []).append((final, name))
+    ax.autoscale_view()
+    low, high = ax.get_ylim()
+    placed = []  # axes fractions, upwards, at least END_LABEL_GAP apart
+    for text, named in sorted(ends.items(), key=lambda item: item[1][0][0]):
+        wanted = (named[0][0] - low) / (high - low)
+        at = max(wanted, placed[-1] + END_LABEL_GAP) if placed else wanted
+        placed.append(at)
+        ax.annotate(
+            f"{', '.join(name for _, name in named)}: {text}",
+            xy=(1.0, wanted),
+            xytext=(1.02, at),
+            xycoords="axes fraction",
+            textcoords="axes fraction",
+            va="center",
+            fontsize=9,
+            arrowprops={"arrowstyle": "-", "color": "0.5", "linewidth": 0.6},
+        )
+
+
+#: The longest curve name that is labelled at the end of its curve too (an experiment's "#13 \u2020").
+SHORT_NAME = 12
+#: The smallest vertical gap between two end labels of :func:`_end_labels`, as a share of the panel's height.
+END_LABEL_GAP = 0.07
+
+
+def _convergence_panel(ax, curves, daggered=frozenset()):
+    """One line per search (the median over its repeats, a band from their minimum to maximum), markers staggered.
+
+    ``daggered``: the names whose table keeps the paper's setting, labelled with a dagger.
+    """
     highlight = f"#{BEST_STAGE1}"
     others = [name for name in curves if name != highlight]
     styles = curve_styles(len(others))
@@ -231,7 +291,7 @@ def _convergence_panel(ax, curves):
             marker=marker,
             markersize=6.5,
             markevery=every,
-            label=name,
+            label=f"{name}{DAGGER}" if name in daggered else name,
             zorder=2,
         )
     if highlight in curves:
@@ -247,7 +307,7 @@ def _convergence_panel(ax, curves):
             linewidth=5,
             alpha=0.45,
             solid_capstyle="butt",
-            label=f"{highlight} (the paper's best)",
+            label=f"{highlight}{DAGGER if highlight in daggered else ''} (the paper's best)",
             zorder=1,
         )
 
@@ -277,10 +337,18 @@ def v1_bars_figure(results: RunResults):
         width,
         yerr=spread if several else None,
         capsize=3,
-        label=f"ours (test half, mean \u00b1 sd of {results.meta.repeats} repeats)" if several else "ours (test half)",
+        label=f"ours (test half, mean \u00b1 sd of {results.meta.repeats} repeats)"
+        if several
+        else "ours (test half, one run: no spread to show)",
         color="tab:blue",
     )
     ax.bar(positions + width / 2, paper, width, label="the paper's", color="tab:gray")
+    # Each bar's value above it (above its error bar), in the figure's unit.
+    for position, value, sd in zip(positions - width / 2, ours, spread, strict=True):
+        text = f"{value:.2f} \u00b1 {sd:.2f}" if several else f"{value:.2f}"
+        ax.annotate(text, (position, value + sd), **BAR_LABEL)
+    for position, value in zip(positions + width / 2, paper, strict=True):
+        ax.annotate(f"{value:.2f}", (position, value), **BAR_LABEL)
     labels = [f"#{e.number}" + (" \u2020" if setting_source(e) == SETTING_PAPER else "") for e in experiments]
     ax.set_xticks(positions, labels)
     ax.set_ylim(0, 100)  # from 0: the bars' lengths compare as the scores do
@@ -288,6 +356,17 @@ def v1_bars_figure(results: RunResults):
     ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.08), ncol=2, fontsize=11, frameon=False)
     ax.grid(axis="y", alpha=0.3)
     return fig
+
+
+#: How a bar's value is written above it: vertical, just above its top (or its error bar), in points.
+BAR_LABEL = {
+    "xytext": (0, 3),
+    "textcoords": "offset points",
+    "ha": "center",
+    "va": "bottom",
+    "rotation": 90,
+    "fontsize": 9,
+}
 
 
 def scene_figure(results: RunResults, context: RunContext):
@@ -314,6 +393,9 @@ def scene_figure(results: RunResults, context: RunContext):
     width, height = scene_size(x, y, width=13.0, extra_height=0.6, panels=2)  # a row: its panels and title
     fig, axes = plt.subplots(2, 2, figsize=(width, 2 * height + 0.5), sharex=True, sharey=True, layout="constrained")
     target = np.asarray(sequence.target)
+    objects = np.asarray(sequence.scenes.target)
+    shown = np.unique(objects[target >= 0])  # the road users any panel colours
+    colours = dict(zip(shown.tolist(), distinct_colours(len(shown)), strict=True))
     for k, (ax, (title, labels)) in enumerate(zip(axes.flat, panels, strict=True)):
         if labels is None:
             ax.scatter(x, y, s=0.5, c="0.3", rasterized=True)
@@ -324,9 +406,8 @@ def scene_figure(results: RunResults, context: RunContext):
             coloured = ~noise & ~background
             ax.scatter(x[noise], y[noise], s=0.3, c="0.85", zorder=1)
             ax.scatter(x[background], y[background], s=0.8, c=BACKGROUND_COLOUR, zorder=2)
-            ax.scatter(
-                x[coloured], y[coloured], s=2.5, c=labels[coloured] % 20, cmap="tab20", vmin=0, vmax=19, zorder=3
-            )
+            owner = majority_object(labels, objects, target)
+            ax.scatter(x[coloured], y[coloured], s=2.5, c=[colours[o] for o in owner[coloured].tolist()], zorder=3)
             if k >= 2:
                 n_clusters = len(np.unique(labels[~noise]))
                 n_background = len(np.unique(labels[background]))
@@ -337,14 +418,64 @@ def scene_figure(results: RunResults, context: RunContext):
     for ax in axes[:, 0]:
         ax.set_ylabel("y (m, FCS)")
     fig.suptitle(
-        f"test sequence {sequence.id}: each object cluster its own colour, background-only clusters dark grey, "
-        "noise and static background light grey"
+        f"test sequence {sequence.id}: one colour per road user, the same in every panel; a cluster takes the colour "
+        "of the road user most of its detections belong to\nbackground-only clusters dark grey, noise and static "
+        "background light grey"
     )
     return fig
 
 
 #: The colour of background-only clusters in the scene figure: darker than noise, duller than any cluster colour.
 BACKGROUND_COLOUR = "0.5"
+
+
+def majority_object(labels, objects, target):
+    """Per row: the annotated road user most of its cluster's road-user detections belong to; -1 for none.
+
+    Parameters
+    ----------
+    labels : ndarray of int, shape (n_detections,)
+        Clusters, -1 noise.
+    objects : ndarray of int, shape (n_detections,)
+        Annotated road user of each detection, -1 background (the data's ``target``).
+    target : ndarray of int, shape (n_detections,)
+        The pre-clustered target: only its road-user detections (``target >= 0``) count, so that a cluster with
+        an object is one that :func:`_background_only` does not mark.
+
+    Returns
+    -------
+    owner : ndarray of int, shape (n_detections,)
+        The road user of the row's cluster (ties: the lowest id); -1 for noise and background-only clusters.
+    """
+    owner = np.full(len(labels), -1, dtype=np.asarray(objects).dtype)
+    counted = (labels >= 0) & (target >= 0)
+    if not counted.any():
+        return owner
+    pairs, counts = np.unique(np.stack([labels[counted], objects[counted]]), axis=1, return_counts=True)
+    # Per cluster, the road user with the most detections (lexsort: by cluster, then count descending, then id).
+    order = np.lexsort((pairs[1], -counts, pairs[0]))
+    clusters, first = np.unique(pairs[0][order], return_index=True)
+    winner = dict(zip(clusters.tolist(), pairs[1][order][first].tolist(), strict=True))
+    clustered = labels >= 0
+    owner[clustered] = [winner.get(label, -1) for label in labels[clustered].tolist()]
+    return owner
+
+
+def distinct_colours(n):
+    """``n`` RGB colours, no two alike and none grey: tab10's hues, their light tab20 shades, tab20b, tab20c, then
+    evenly spaced hues."""
+    import matplotlib
+
+    def coloured(colours):
+        return [c for c in colours if max(c) - min(c) > 0.05]  # no grey
+
+    tab20 = matplotlib.colormaps["tab20"].colors
+    found = coloured(tab20[0::2]) + coloured(tab20[1::2])
+    found += coloured(matplotlib.colormaps["tab20b"].colors) + coloured(matplotlib.colormaps["tab20c"].colors)
+    if n > len(found):
+        hsv = matplotlib.colormaps["hsv"]
+        found += [tuple(hsv(k / (n - len(found)))[:3]) for k in range(n - len(found))]
+    return [tuple(float(v) for v in c) for c in found[:n]]
 
 
 def _background_only(labels, target):

@@ -78,8 +78,10 @@ def markdown(results: RunResults) -> list[str]:
             "",
             f"What the filter removes at the chosen setting (FCS, eta_1 = {CHOSEN[0]:.2f} m/s, d_xy = "
             f"{CHOSEN[1]:.1f} m), one test sequence in the world frame: kept detections dark grey (background) "
-            "and green (moving road users), removed background light blue, removed detections of moving road users red "
-            "crosses; the legend counts each.",
+            "and green (moving road users), removed background light blue, and the figure's point, the removed "
+            "detections of moving road users, as large magenta crosses drawn on top of everything else; the legend "
+            "counts each. Left the whole sequence, right a zoom on the removed road-user detections (the dashed box "
+            "on the left).",
             "",
             f"![what the filter removes]({FILTER_SCENE})",
         ]
@@ -178,21 +180,30 @@ def heatmap_figure(results: RunResults):
     return fig
 
 
-#: How what the filter keeps and removes is drawn, in drawing order (what it keeps on top of what it removes): the
-#: removed object detections are few (tens against thousands kept), so they are small red crosses, visible on top
-#: without hiding the kept ones.
+#: How what the filter keeps and removes is drawn, in drawing order: the removed road-user detections, the figure's
+#: point and few (tens against thousands), last and on top, large filled crosses in a colour no other kind has.
 FILTER_SCENE_KINDS = (
     ("removed background", {"s": 0.6, "c": "lightskyblue", "marker": "o"}),
     ("kept background", {"s": 0.6, "c": "0.35", "marker": "o"}),
-    ("kept, moving road users", {"s": 1.5, "c": "tab:green", "marker": "o"}),
-    ("removed, moving road users", {"s": 7, "c": "tab:red", "marker": "x", "linewidths": 0.7}),
+    ("kept, moving road users", {"s": 2.0, "c": "tab:green", "marker": "o"}),
+    ("removed, moving road users", {"s": 70, "c": "magenta", "marker": "X", "edgecolors": "black", "linewidths": 0.6}),
 )
+#: Drawing order of the removed road-user detections: above every other kind.
+REMOVED_OBJECTS_ZORDER = 10
+#: The zoomed panel's margin around the removed road-user detections, m, and its smallest side, m.
+ZOOM_MARGIN, ZOOM_MIN_SIDE = 5.0, 30.0
 
 
 def filter_scene_figure(context: RunContext):
-    """One test sequence in FCS: kept, removed background and removed object detections at the chosen setting."""
+    """One test sequence in FCS at the chosen setting: the whole scene, and a zoom on the removed road-user detections.
+
+    The removed detections of moving road users are drawn on top, large and in their own colour, in both panels;
+    the right panel zooms on them (on the road users when the filter removed none of theirs), and a dashed box
+    marks its area on the left.
+    """
     import matplotlib.pyplot as plt
     from matplotlib.lines import Line2D
+    from matplotlib.patches import Rectangle
 
     from ...preprocessing import DopplerDensityFilter, FrameTransform
 
@@ -203,22 +214,75 @@ def filter_scene_figure(context: RunContext):
     is_object = np.asarray(drawn.scenes.target) >= 0
     x, y = prepared["x"].to_numpy(), prepared["y"].to_numpy()
     masks = (~keep & ~is_object, keep & ~is_object, keep & is_object, ~keep & is_object)
-    fig, ax = plt.subplots(figsize=scene_size(x, y, width=9.0, extra_height=1.6), layout="constrained")
+    box = zoom_box(x, y, masks[3] if masks[3].any() else is_object)
+    width, height = scene_size(x, y, width=15.0, extra_height=1.8, panels=2)
+    fig, axes = plt.subplots(1, 2, figsize=(width, height), layout="constrained")
     handles = []
-    for zorder, (mask, (name, style)) in enumerate(zip(masks, FILTER_SCENE_KINDS, strict=True)):
-        ax.scatter(x[mask], y[mask], zorder=zorder + 1, **style)
+    for k, (mask, (name, style)) in enumerate(zip(masks, FILTER_SCENE_KINDS, strict=True)):
+        zorder = REMOVED_OBJECTS_ZORDER if k == len(masks) - 1 else k + 1
+        for ax in axes:
+            ax.scatter(x[mask], y[mask], zorder=zorder, label=name, **style)
         # The legend's markers all of one readable size, whatever the size drawn.
-        marker = {"marker": style["marker"], "markersize": 6 if style["marker"] == "x" else 5}
-        handles.append(Line2D([], [], linestyle="", color=style["c"], label=f"{name}: {int(mask.sum()):,}", **marker))
-    ax.set(
-        xlabel="x (m, FCS)",
-        ylabel="y (m, FCS)",
-        aspect="equal",
-        title=f"what the filter removes: test sequence {drawn.id}, FCS, eta_1 = {CHOSEN[0]:.2f} m/s, "
-        f"d_xy = {CHOSEN[1]:.1f} m",
+        edge = {"markeredgecolor": style["edgecolors"]} if "edgecolors" in style else {}
+        handles.append(
+            Line2D(
+                [],
+                [],
+                linestyle="",
+                color=style["c"],
+                marker=style["marker"],
+                markersize=8 if edge else 6,
+                label=f"{name}: {int(mask.sum()):,}",
+                **edge,
+            )
+        )
+    overview, zoom = axes
+    overview.set(xlabel="x (m, FCS)", ylabel="y (m, FCS)", aspect="equal", title="the whole sequence")
+    if box is not None:
+        (x0, x1), (y0, y1) = box
+        overview.add_patch(
+            Rectangle(
+                (x0, y0),
+                x1 - x0,
+                y1 - y0,
+                fill=False,
+                edgecolor="black",
+                linestyle="--",
+                linewidth=1.2,
+                zorder=REMOVED_OBJECTS_ZORDER + 1,
+            )
+        )
+        zoom.set(xlim=(x0, x1), ylim=(y0, y1))
+    zoom.set(xlabel="x (m, FCS)", aspect="equal", title="zoom on the removed road-user detections (dashed box)")
+    fig.suptitle(
+        f"what the filter removes: test sequence {drawn.id}, FCS, eta_1 = {CHOSEN[0]:.2f} m/s, d_xy = {CHOSEN[1]:.1f} m"
     )
-    ax.legend(handles=handles, loc="upper center", bbox_to_anchor=(0.5, -0.1), ncol=2, fontsize=9, frameon=False)
+    fig.legend(handles=handles, loc="outside lower center", ncol=4, fontsize=10, frameon=False)
     return fig
+
+
+def zoom_box(x, y, mask):
+    """The zoomed panel's area: a square around the detections of ``mask``, or None without any.
+
+    Parameters
+    ----------
+    x, y : ndarray of shape (n_detections,)
+        Positions, m.
+    mask : ndarray of bool, shape (n_detections,)
+        The detections to zoom on.
+
+    Returns
+    -------
+    box : ((float, float), (float, float)) or None
+        ``((x0, x1), (y0, y1))``, m: their bounding box with :data:`ZOOM_MARGIN` around, squared, at least
+        :data:`ZOOM_MIN_SIDE` a side.
+    """
+    if not mask.any():
+        return None
+    centre = np.array([(x[mask].min() + x[mask].max()) / 2, (y[mask].min() + y[mask].max()) / 2])
+    side = max(float(np.ptp(x[mask])), float(np.ptp(y[mask]))) + 2 * ZOOM_MARGIN
+    half = max(side, ZOOM_MIN_SIDE) / 2
+    return (centre[0] - half, centre[0] + half), (centre[1] - half, centre[1] + half)
 
 
 SECTION = Section("filter", markdown, figures)

@@ -35,27 +35,24 @@ def markdown(results: RunResults) -> list[str]:
         "test half offline and causally (every stage deciding from the past only, as a car must). "
         f"Stage 1: {format_params(kept.stage1_params)}; stage 2: {format_params(kept.params)}.",
         "",
-        "| setting | decides from | PQ (test) | V1 (test) |",
-        "|---|---|---|---|",
-        _row("object experiment", "past and future", offline_pq, kept.v1_test),
+        "| setting | decides from | tuned for | PQ (test) | V1 (test) |",
+        "|---|---|---|---|---|",
+        _row("object experiment", "past and future", "PQ", offline_pq, kept.v1_test),
     ]
-    offline, causal = _best_baselines(results)
+    offline, causal = _best_baselines(results) if comparable(results) else (None, None)
     if offline is not None:
-        lines.append(_row(offline[0], "past and future", repeated_scores(offline[1], "pq"), offline[1].v1_test))
-    lines.append(_row("object experiment, causal", "the past", causal_pq, kept.causal_v1_test))
+        lines.append(_row(offline[0], "past and future", "PQ", repeated_scores(offline[1], "pq"), offline[1].v1_test))
+    lines.append(_row("object experiment, causal", "the past", "PQ", causal_pq, kept.causal_v1_test))
     if causal is not None:
-        lines.append(_row(causal[0], "the past", repeated_scores(causal[1], "pq"), causal[1].v1_test))
+        lines.append(_row(causal[0], "the past", "PQ", repeated_scores(causal[1], "pq"), causal[1].v1_test))
     lines.append("")
     for mode, ours, baseline in (("Offline", offline_pq, offline), ("Causally", causal_pq, causal)):
         if baseline is not None:
             lines.append(f"- {mode}: " + verdict(ours, repeated_scores(baseline[1], "pq"), baseline[0]))
-    if offline is None and causal is None:
+    if results.baselines and not comparable(results):
+        lines.append(NOT_COMPARED)
+    elif offline is None and causal is None:
         lines.append("The baselines did not run, so there is nothing to compare with (`--experiments ...,baselines`).")
-    elif results.meta.objective != "pq":
-        lines.append(
-            "- The baselines were tuned for V1, the run's objective, and the object experiment for PQ, so this "
-            "comparison favours the object experiment; `--objective pq` tunes both for PQ."
-        )
     return lines
 
 
@@ -89,16 +86,25 @@ def glance_line(results: RunResults):
         "offline": [r.instance_test.pq for r in objects.every_repeat],
         "causally": [r.causal_instance_test.pq for r in objects.every_repeat],
     }
+    baselines = _best_baselines(results) if comparable(results) else (None, None)
     parts = []
-    for (mode, pq), baseline in zip(ours.items(), _best_baselines(results), strict=True):
+    for (mode, pq), baseline in zip(ours.items(), baselines, strict=True):
         part = f"{values_cell(pq, 'pq')} {mode}"
         if baseline is not None:
             theirs = repeated_scores(baseline[1], "pq")
             n = min(len(pq), len(theirs))
             said = paired_verdict(np.subtract(pq[:n], theirs[:n]))[0]
-            part += f" against {values_cell(theirs, 'pq')} for {baseline[0]} (higher: {said})"
+            part += f" against {values_cell(theirs, 'pq')} for {baseline[0]}, also tuned for PQ (higher: {said})"
         parts.append(part)
-    return f"the framework set up for objects, tuned for PQ: test PQ {'; '.join(parts)}; its section has the details."
+    apart = (
+        " (not set beside the baselines, which this run tuned for V1: `--objective pq` compares them)"
+        if results.baselines and not comparable(results)
+        else ""
+    )
+    return (
+        f"the framework set up for objects, tuned for PQ: test PQ {'; '.join(parts)}{apart}; its section has the "
+        "details."
+    )
 
 
 def _best_baselines(results: RunResults):
@@ -111,8 +117,21 @@ def _best_baselines(results: RunResults):
     return best[False], best[True]
 
 
-def _row(name, decides_from, pq, v1):
-    return f"| {name} | {decides_from} | {values_cell(pq, 'pq')} | {v1:.3f} |"
+def comparable(results: RunResults):
+    """Whether the run's baselines were tuned for PQ, as the object experiment: only then are they set beside it."""
+    return results.meta.objective == "pq"
+
+
+#: Why a run tuned for V1 does not set its baselines beside the object experiment.
+NOT_COMPARED = (
+    "The baselines of this run were tuned for V1, the run's objective, and the object experiment for PQ: their PQ "
+    "is not set beside its PQ here, as a comparison would favour the setting tuned for the score compared (their "
+    "scores are in the object-level table). `--objective pq` tunes both for PQ and compares them."
+)
+
+
+def _row(name, decides_from, objective, pq, v1):
+    return f"| {name} | {decides_from} | {objective} | {values_cell(pq, 'pq')} | {values_cell([v1])} |"
 
 
 SECTION = Section("objects", markdown)

@@ -27,7 +27,8 @@ def markdown(results: RunResults) -> list[str]:
         )
         paper = f" (the paper's best is #{BEST_STAGE1}, {get_experiment(BEST_STAGE1).v1_percent:.2f} %{ours8})"
         mean = " (mean over the repeats)" if results.meta.repeats > 1 else ""
-        lines.append(f"- best point clustering by test V1{mean}: #{best} {e.method}, {score_cell(e)}{paper}.")
+        tuned = f" (the searches tuned for {objective_name(results)})"
+        lines.append(f"- best point clustering by test V1{mean}{tuned}: #{best} {e.method}, {score_cell(e)}{paper}.")
     checks = checked(results)
     if checks:
         lines.append(f"- {findings_line(checks, results.meta.repeats)}")
