@@ -108,3 +108,21 @@ def test_baselines_tuned_for_another_objective_are_not_set_beside_the_object_exp
     section = "\n".join(_objects.markdown(pq_run))
     assert "| offline baseline | past and future | PQ | 0.116 |" in section and _objects.NOT_COMPARED not in section
     assert "against 0.116 for offline baseline, also tuned for PQ" in "\n".join(_summary.markdown(pq_run))
+
+
+def test_the_baselines_beside_the_object_experiment_are_chosen_by_cv_score_not_test_score():
+    from types import SimpleNamespace
+
+    from sklearn_radar.reproduce._sections._objects import CAUSAL_MARK, _best_baselines
+
+    def baseline(cv, pq):
+        return SimpleNamespace(search=SimpleNamespace(cv_best=cv), instance_test=SimpleNamespace(pq=pq), repeats=None)
+
+    baselines = {
+        "per sequence A": baseline(cv=0.8, pq=0.3),
+        "per sequence B": baseline(cv=0.6, pq=0.5),
+        f"window ({CAUSAL_MARK}) C": baseline(cv=0.4, pq=0.6),
+        f"window ({CAUSAL_MARK}) D": baseline(cv=0.5, pq=0.2),
+    }
+    offline, causal = _best_baselines(SimpleNamespace(baselines=baselines))
+    assert offline[0] == "per sequence A" and causal[0] == f"window ({CAUSAL_MARK}) D"

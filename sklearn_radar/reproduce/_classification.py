@@ -59,7 +59,8 @@ def classified_settings(needed):
     """``[(name, source, pipelines, params)]``: the clusterings whose clusters are classified, in the table's order.
 
     The settings of :data:`CLASSIFIED` (their run's results in ``needed`` by key, the paper's otherwise), then
-    the strongest offline baseline of the run by mean test PQ (none when the baselines did not run).
+    the strongest offline baseline of the run by its cross-validated training score (none when the baselines did
+    not run).
     ``pipelines`` holds one pipeline per repeat of the search (repeat ``k`` of #13 on repeat ``k`` of #8, as the
     run built it); ``params`` is the kept setting, the first repeat's.
     """
@@ -91,13 +92,17 @@ def _later_repeats(number, result, needed):
 
 
 def strongest_offline_baseline(baselines):
-    """``(name, result)`` of the offline baseline with the highest test PQ, or None (no baselines, no PQ)."""
+    """``(name, result)`` of the offline baseline with the highest cross-validated score, or None (no baselines).
+
+    The score is the kept setting's mean cross-validated score of the run's objective on the training half: a
+    choice on the test half would select on the data it is scored on.
+    """
     scored = [
         (name, result)
         for name, result in (baselines or {}).items()
         if result.instance_test is not None and name != SLIDING_BASELINE and name in SKLEARN_BASELINES
     ]
-    return max(scored, key=lambda item: item[1].instance_test.pq, default=None)
+    return max(scored, key=lambda item: item[1].search.cv_best, default=None)
 
 
 def classifier_model(pipeline):

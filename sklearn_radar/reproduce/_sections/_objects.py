@@ -108,12 +108,16 @@ def glance_line(results: RunResults):
 
 
 def _best_baselines(results: RunResults):
-    """(name, result) of the offline and of the causal baseline with the highest mean test PQ, or None each."""
+    """(name, result) of the offline and of the causal baseline with the highest cross-validated score, or None each.
+
+    The score is the kept setting's cross-validated score of the run's objective on the training half, never a
+    test score.
+    """
     scored = {name: result for name, result in (results.baselines or {}).items() if result.instance_test is not None}
     best = {}
     for causal in (False, True):
         named = [(name, r) for name, r in scored.items() if (CAUSAL_MARK in name) == causal]
-        best[causal] = max(named, key=lambda item: np.mean(repeated_scores(item[1], "pq")), default=None)
+        best[causal] = max(named, key=lambda item: item[1].search.cv_best, default=None)
     return best[False], best[True]
 
 
