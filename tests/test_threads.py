@@ -11,8 +11,10 @@ themselves report, not a timing.
 
 import io
 import logging
+import os
 import re
 from pathlib import Path
+from unittest import mock
 
 import pytest
 from threadpoolctl import threadpool_info, threadpool_limits
@@ -161,8 +163,11 @@ def many_threads_cluster():
     distributed = pytest.importorskip("dask.distributed")
     import dask
 
-    many = {f"distributed.nanny.pre-spawn-environ.{name}": MANY for name in ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS")}
+    names = ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS")
+    many = {f"distributed.nanny.pre-spawn-environ.{name}": MANY for name in names}
+    # dask writes its pre-spawn variables into this process's environment too (an earlier cluster's 1 would stay).
     with (
+        mock.patch.dict(os.environ, {name: str(MANY) for name in names}),
         dask.config.set(many),
         distributed.LocalCluster(
             n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=logging.ERROR
