@@ -1,4 +1,4 @@
-"""Tables I and II and the error windows as combinations of per-sequence parts (issue 14).
+"""Tables I and II and the error windows as combinations of per-sequence parts.
 
 The filter of Eq. 1 counts neighbours within a sequence only, and an error
 window belongs to one object, which never spans sequences.  So Table I
