@@ -43,6 +43,8 @@ def min_points_at_range(range_m, min_samples, alpha_r, range_scaling="reciprocal
     (remote objects have fewer reflections, so they need fewer points),
     ``N_min,50 * (1 + alpha_r * (50 / clip(r, 25, 125) - 1))``.
 
+    Read more in the :ref:`User Guide <user-guide-radar-dbscan>`.
+
     Parameters
     ----------
     range_m : array-like
@@ -453,6 +455,8 @@ class ScanStream:
     the last ``eps_t`` and gives every new detection the label the offline
     ``causal=True`` mode gives it.  A cluster that continues keeps its id;
     when clusters meet the older (smaller) id wins; ids are never reused.
+
+    Read more in the :ref:`User Guide <user-guide-radar-dbscan>`.
 
     Parameters
     ----------

@@ -51,6 +51,8 @@ OBJECT_EXPERIMENT = "objects"
 def object_pipeline(stage=2, *, params=None, stage1_params=None, causal=False, memory=None):
     """The object experiment's pipeline: #8's stage 1 (``stage=1``) or #12's velocity merging on it (``stage=2``).
 
+    Read more in the :ref:`User Guide <user-guide-objects>`.
+
     Parameters
     ----------
     stage : {1, 2}, default=2
@@ -121,6 +123,8 @@ def object_search_space(stage):
 
     The paper's ranges (:func:`search_space` of 8 and 12): wider ones overfit the search's budget.  The minimum
     cluster size reaches from off (1) to a few seconds of one road user's detections.
+
+    Read more in the :ref:`User Guide <user-guide-objects>`.
 
     Parameters
     ----------
