@@ -61,7 +61,7 @@ def _run(args) -> int:
 
 
 def _import_the_estimators():
-    """The heavy imports every command needs (numpy, pandas, scikit-learn, numba, the estimators; about 1.5 s).
+    """The heavy imports every command needs (numpy, pandas, scikit-learn, numba, the estimators).
 
     ``sklearn_radar/__init__.py`` imports them lazily, and so does this
     module: ``--help`` and ``--version`` never import them.  A command

@@ -320,9 +320,8 @@ class DaskExecutor:
     n_threads : int
         Worker threads in total (tasks that run at the same time).
     n_malloc_trim : int, default=0
-        Workers that run with dask's ``MALLOC_TRIM_THRESHOLD_`` (about 2x
-        slower clustering; :func:`without_malloc_trim`), said in
-        :meth:`describe`.
+        Workers that run with dask's ``MALLOC_TRIM_THRESHOLD_`` (slower
+        clustering; :func:`without_malloc_trim`), said in :meth:`describe`.
     threads : int, default=1
         The most threads of the library calls of the work that runs in this
         process (:meth:`ahead`); a task on a worker has one.
@@ -370,8 +369,8 @@ class DaskExecutor:
         return handle.result()
 
     def blocks(self, sizes):
-        """One block per worker thread, balanced in detections: a task's round trip (about 10 ms) would cost
-        as much as a small sequence's clustering."""
+        """One block per worker thread, balanced in detections: a task's round trip would cost as much as a small
+        sequence's clustering (:ref:`user-guide-cluster`)."""
         return balanced_blocks(sizes, self.n_threads)
 
     def queued(self, function, batches, priority=0):
@@ -609,9 +608,8 @@ def without_malloc_trim():
     dask sets that variable (65,536 bytes) for every worker process it
     spawns, to give memory back to the system sooner.  It also fixes glibc's
     mmap threshold, so that every array above 128 kB is mapped and unmapped
-    anew: our clustering ran 2.1x slower per detection in such a worker
-    (0.130 s instead of 0.061 s for the same 8 sequences, measured), and 2
-    workers were slower than 1 process.  dask also writes it into this
+    anew, which slows our clustering down (by how much:
+    :ref:`user-guide-cluster`).  dask also writes it into this
     process's environment when it spawns a worker, which later workers
     would inherit, so it is removed from there for the duration and put
     back afterwards.

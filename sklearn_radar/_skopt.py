@@ -10,9 +10,9 @@ a single candidate, the optimiser returns the point that its last ``tell``
 already chose (skopt's ask-and-tell protocol, as ``gp_minimize`` uses it)
 instead of refitting the Gaussian process on a copy and then once more on a
 discarded "constant liar" point.  A guided step fits one Gaussian process
-instead of three (measured: about 3x less time in skopt per guided step);
-the candidates are chosen by the same model and acquisition, from different
-random draws.  Batches of ``n_points > 1`` keep skopt's constant-liar strategy.
+instead of three (the time it saves: :ref:`performance`); the candidates
+are chosen by the same model and acquisition, from different random draws.
+Batches of ``n_points > 1`` keep skopt's constant-liar strategy.
 
 :meth:`Optimizer.ask_random` (the random phase asked at once, which lets a
 search evaluate those candidates concurrently) reads skopt's private

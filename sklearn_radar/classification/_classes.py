@@ -94,6 +94,8 @@ _DEVKIT_LOOKUP = np.array([DEVKIT_CLASS_INDEX[code] for code in range(BACKGROUND
 def road_user_class(label_id):
     """Road-user class code of each RadarScenes ``label_id`` (the devkit's mapping).
 
+    Read more in the :ref:`User Guide <user-guide-classification>`.
+
     Parameters
     ----------
     label_id : array-like of int, shape (n_detections,)
@@ -151,6 +153,8 @@ def devkit_class_index(classes):
     4     pedestrian group  PEDESTRIAN_GROUP 2
     -1    background        STATIC 5
     ====  ================  ==============================
+
+    Read more in the :ref:`User Guide <user-guide-classification>`.
 
     Parameters
     ----------

@@ -97,9 +97,8 @@ class ClusterClassifier(BaseEstimator):
         Classifies the segments' feature rows (cloned).  None means a
         :class:`~sklearn.ensemble.HistGradientBoostingClassifier` with
         ``max_iter=30`` and ``random_state=0``, which takes the NaN of an
-        unknown velocity as missing (30 boosting iterations instead of 100
-        cost a third of the prediction time at the same macro-F1, measured:
-        ``benchmarks/bench_classifier.py --accuracy``).  A classifier that
+        unknown velocity as missing (why 30 boosting iterations:
+        :ref:`User Guide <classification-cost>`).  A classifier that
         cannot take NaN needs an imputer in front
         (``make_pipeline(SimpleImputer(), ...)``).
     frame_length : float or None, default=0.5

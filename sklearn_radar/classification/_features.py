@@ -124,6 +124,8 @@ def cluster_features(X, labels, *, frame_length=None, return_rows=False):
     ``azimuth_sc + sensor_yaw + heading``, ``heading`` 0 when absent), and
     ``n_sensors`` needs ``sensor_id``.
 
+    Read more in the :ref:`User Guide <user-guide-classification>`.
+
     Parameters
     ----------
     X : DataFrame of shape (n_detections, n_columns)

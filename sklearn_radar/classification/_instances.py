@@ -22,6 +22,8 @@ def predict_instances(model, X):
     ``predict_instances``, which is what ``pipeline.predict(X)`` does for
     ``predict``.
 
+    Read more in the :ref:`User Guide <user-guide-classification>`.
+
     Parameters
     ----------
     model : estimator with ``predict_instances``, or Pipeline

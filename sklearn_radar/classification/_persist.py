@@ -66,6 +66,8 @@ def save_classifier(classifier, path):
     ClusterClassifier(...))``): a bare ClusterClassifier reads working
     detections and needs ``--params`` for the steps before it.
 
+    Read more in the :ref:`User Guide <user-guide-classification>`.
+
     Parameters
     ----------
     classifier : ClusterClassifier or Pipeline
@@ -124,6 +126,8 @@ def load_classifier(path):
       plain Python over the stored parameters and fitted attributes; the
       loaded object is still checked to be a fitted ClusterClassifier, but
       its predictions may differ where the package changed its features.
+
+    Read more in the :ref:`User Guide <user-guide-classification>`.
 
     Parameters
     ----------

@@ -54,6 +54,8 @@ class PointClassifier(BaseEstimator):
     :class:`~sklearn_radar.DopplerDensityFilter`) are background and take no
     part in training.
 
+    Read more in the :ref:`User Guide <user-guide-classification>`.
+
     Parameters
     ----------
     classifier : classifier with ``fit`` and ``predict_proba``, default=None

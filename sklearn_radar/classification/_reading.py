@@ -5,8 +5,8 @@ row of every column an estimator reads.  ClusterClassifier's features depend
 on the clustered detections only (a tenth to a fifth of a filtered table),
 and on the time and sequence of all detections (the frames start at each
 sequence's first detection).  Converting and checking all rows of its twelve
-columns took a sixth of its prediction time (measured in
-``benchmarks/bench_classifier.py --profile``), so it validates X as
+columns would cost a large share of its prediction time
+(:ref:`classification-cost`), so it validates X as
 ``read_columns`` does (names or width, a numeric array, no empty input),
 then reads ``t`` and ``sequence`` for all rows and the other columns only
 at the rows it uses, each checked as ``read_columns`` checks it: numeric,

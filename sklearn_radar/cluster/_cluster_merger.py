@@ -69,6 +69,8 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
 
     Only detections with a stage-1 cluster take part; noise stays noise.
 
+    Read more in the :ref:`User Guide <user-guide-merging>`.
+
     Parameters
     ----------
     mode : {"continuation", "velocity"}, default="continuation"

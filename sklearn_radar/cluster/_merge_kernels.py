@@ -4,8 +4,8 @@ Everything here works on one sequence and uses, for a decision at time tau,
 only detections at or before tau.  The detections of every stage-1 cluster
 form one run of a flat array sorted by (cluster, time); the pair loops are
 numba kernels, because a tuned stage 1 can leave thousands of small clusters
-and tens of thousands of pairs per sequence (a Python loop over them took
-12-16 s per 30 s sequence).
+and tens of thousands of pairs per sequence (the cost of a Python loop over
+them: :ref:`performance`).
 """
 
 from __future__ import annotations

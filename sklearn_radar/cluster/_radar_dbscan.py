@@ -43,6 +43,8 @@ def min_points_at_range(range_m, min_samples, alpha_r, range_scaling="reciprocal
     (remote objects have fewer reflections, so they need fewer points),
     ``N_min,50 * (1 + alpha_r * (50 / clip(r, 25, 125) - 1))``.
 
+    Read more in the :ref:`User Guide <user-guide-radar-dbscan>`.
+
     Parameters
     ----------
     range_m : array-like
@@ -119,11 +121,8 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
         Form of Eq. 2, see :func:`~sklearn_radar.cluster.min_points_at_range`.  The paper prints
         the linear form (N_min grows with range) but describes the
         reciprocal one (remote objects give fewer reflections, so need fewer
-        points).  Measured on simulated data
-        (``benchmarks/experiment_range_scaling.py``, two seeds), raising
-        alpha_r from 0 to 0.99 changed the held-out V-measure by +0.2 and
-        +0.4 points with the reciprocal form and by -0.2 and -0.3 points
-        with the linear one, hence the default.
+        points); why the reciprocal form is the default is in the
+        :ref:`User Guide <radar-dbscan-range-scaling>`.
     vr_min : float, default=0.4
         Only detections with ``|v_r| > vr_min`` (m/s) can be core points;
         ``-inf`` lets every detection be one.
@@ -139,17 +138,10 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
         median ``|v_r|`` (ego-motion-compensated radial speed) is at most
         ``cluster_vr_min`` becomes noise, and the remaining ids are
         renumbered consecutively.  None (the default) turns the gate off, so
-        the paper's experiments stay as printed.  Why: the paper's V-measure
-        does not penalise clusters of static background (they hold no
-        object detection), so tuned settings cluster guard rails and other
-        static structures; ``vr_min`` cannot remove them without changing
-        which detections may be core, whereas this gate judges whole
-        clusters.  The median is robust to the few moving detections a
-        static cluster may hold (and to the few near-zero Doppler detections
-        of a crossing object).  The gate needs the whole cluster, so
-        :meth:`partial_fit` and :class:`ScanStream` raise when it is set;
-        with ``causal=True`` :meth:`fit` applies it in hindsight, to the
-        whole cluster.
+        the paper's experiments stay as printed.  The gate needs the whole
+        cluster, so :meth:`partial_fit` and :class:`ScanStream` raise when it
+        is set; with ``causal=True`` :meth:`fit` applies it in hindsight, to
+        the whole cluster.  Why it exists: :ref:`User Guide <radar-dbscan-cluster-gate>`.
     n_jobs : int, default=None
         Sequences clustered in parallel (joblib threads).
 
@@ -179,6 +171,8 @@ class RadarDBSCAN(ClusterMixin, BaseEstimator):
     ``eps_vr``, on (x, y, v_r / vr_scale) with ``metric="xyv"``, and the
     Chebyshev DBSCAN on (x, y, v_r * eps_xy / eps_vr) with ``metric="box"``
     (up to ties at exactly eps).
+
+    Read more in the :ref:`User Guide <user-guide-radar-dbscan>`.
 
     Examples
     --------
@@ -461,6 +455,8 @@ class ScanStream:
     the last ``eps_t`` and gives every new detection the label the offline
     ``causal=True`` mode gives it.  A cluster that continues keeps its id;
     when clusters meet the older (smaller) id wins; ids are never reused.
+
+    Read more in the :ref:`User Guide <user-guide-radar-dbscan>`.
 
     Parameters
     ----------

@@ -397,6 +397,8 @@ def estimate_velocity(
     RANSAC over pairs of detections followed by least squares on the inliers
     (Kellner et al. 2013, as used by Scheiner et al. 2019).
 
+    Read more in the :ref:`User Guide <user-guide-merging>`.
+
     Parameters
     ----------
     v_r : array-like of shape (n_detections,)
@@ -499,6 +501,8 @@ def estimate_velocities(
     finds the groups, and groups of equal size are stacked and processed
     together (their random pairs, which then depend only on the size, are
     drawn once per size).
+
+    Read more in the :ref:`User Guide <user-guide-merging>`.
 
     Parameters
     ----------

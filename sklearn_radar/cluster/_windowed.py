@@ -48,6 +48,8 @@ class WindowedDBSCAN(_WindowedClusterer):
     span time windows (there is no sliding window), so an object becomes one
     cluster per window.  Rows with ``keep = False`` are noise.
 
+    Read more in the :ref:`User Guide <user-guide-radar-dbscan>`.
+
     Parameters
     ----------
     eps : float, default=1.0
@@ -114,6 +116,8 @@ def _fewest_hdbscan_rows(min_cluster_size, min_samples):
 
 class WindowedHDBSCAN(_WindowedClusterer):
     """scikit-learn's HDBSCAN on (x, y, v_r / vr_scale), each ``window`` of each sequence on its own.
+
+    Read more in the :ref:`User Guide <user-guide-radar-dbscan>`.
 
     Parameters
     ----------
@@ -215,6 +219,8 @@ class SequenceDBSCAN(_SequenceClusterer):
     Sequences never share a cluster: they are clustered in one scikit-learn
     call, laid far apart along x.
 
+    Read more in the :ref:`User Guide <user-guide-objects>`.
+
     Parameters
     ----------
     eps : float, default=1.0
@@ -297,6 +303,8 @@ class SequenceHDBSCAN(_SequenceClusterer):
     As :class:`SequenceDBSCAN`, with one HDBSCAN call per sequence.
     Detections with ``|v_r| <= vr_min`` and rows with ``keep = False`` are
     noise and take part in nothing.
+
+    Read more in the :ref:`User Guide <user-guide-objects>`.
 
     Parameters
     ----------
@@ -389,6 +397,8 @@ class SlidingDBSCAN(_SequenceClusterer):
     never revised, and nothing after a scan changes its labels.  Detections
     with ``|v_r| <= vr_min`` and rows with ``keep = False`` are noise and
     take part in nothing; sequences never share a cluster.
+
+    Read more in the :ref:`User Guide <user-guide-objects>`.
 
     Parameters
     ----------

@@ -83,6 +83,8 @@ ODOMETRY_H5_DTYPE = np.dtype(
 def load_radarscenes(path, sequences=None) -> Bunch:
     """Load RadarScenes sequences into the data Bunch.
 
+    Read more in the :ref:`User Guide <user-guide-data>`.
+
     Parameters
     ----------
     path : str or path-like
@@ -531,6 +533,8 @@ def write_radarscenes(bunch, path, overwrite=False) -> Path:
     columns of ``bunch.data`` are not written: each scene points to the
     odometry row nearest in time
     (:func:`~sklearn_radar._schema.nearest_odometry_index`).
+
+    Read more in the :ref:`User Guide <user-guide-data>`.
 
     Parameters
     ----------

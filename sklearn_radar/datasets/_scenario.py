@@ -77,7 +77,7 @@ class StaticScatterers:
 
 #: Road-user classes: RadarScenes label, size (length, width) ranges in m,
 #: mean detections per scan at 10 m range, micro-Doppler amplitude, RCS in dBsm.
-#: The class signatures of the realistic preset (issue 31; off in "easy", see
+#: The class signatures of the realistic preset (off in "easy", see
 #: ``_simulator.DIFFICULTY_PRESETS``): ``rcs_side`` and ``rcs_oblique`` (dB) shape
 #: the aspect dependence of the RCS (:func:`aspect_rcs`), ``axles`` are the
 #: positions of the wheel axles along the body, as fractions of half the length

@@ -119,7 +119,7 @@ DIFFICULTY_PRESETS = {
         "glint": 0.0,
     },
 }
-#: Issue 32's preset: the realistic one with RadarScenes' traffic (fewer, longer-lived road users; see the user
+#: The radarscenes preset: the realistic one with RadarScenes' traffic (fewer, longer-lived road users; see the user
 #: guide's "Towards RadarScenes' statistics") and road users that stop and start.
 DIFFICULTY_PRESETS["radarscenes"] = {
     **DIFFICULTY_PRESETS["realistic"],
@@ -130,8 +130,8 @@ DIFFICULTY_PRESETS["radarscenes"] = {
     "stop_and_go": 0.3,
     "glint": 0.75,
 }
-#: The knobs that issue 32 added: off in "easy" and in "realistic" (so both stay as they were); "radarscenes" turns
-#: on all but ``annotation_margin``, whose box labels drop the glinted detections (see the simulator guide).
+#: The knobs of the radarscenes preset: off in "easy" and in "realistic" (so both stay as they were); "radarscenes"
+#: turns on all but ``annotation_margin``, whose box labels drop the glinted detections (see the simulator guide).
 ISSUE_32_KNOBS = ("road_user_share", "stop_and_go", "annotation_margin", "glint")
 #: The knobs that are shares or probabilities, in [0, 1].
 UNIT_INTERVAL_KNOBS = ("object_detection_probability", "wheel_micro_doppler", "road_user_share", "stop_and_go", "glint")
@@ -202,8 +202,8 @@ def make_scenes(
         "radarscenes" is "realistic" with RadarScenes' traffic statistics
         (about 31 road users per minute with about 470 annotated detections
         each, instead of about 83 with 240), road users that stop and start
-        and box annotation (issue 32; the user guide's "Towards RadarScenes'
-        statistics").  Equal seeds give the same drive, road, static world
+        and box annotation (:ref:`User Guide <simulator-radarscenes-statistics>`).
+        Equal seeds give the same drive, road, static world
         and base road users in all presets ("radarscenes" keeps a share of
         them).
     knobs : dict, default=None
@@ -375,8 +375,8 @@ def simulate_sequences(numbers, seeds, duration, n_objects, static_density, knob
     data, odometry = [], []
     for number, seed in zip(numbers, seeds, strict=True):
         # The phenomena draw from a stream of their own, so that both presets share the world of a seed; the
-        # class signatures from a third and the road users' traffic and behaviour (issue 32) from a fourth, so
-        # that each leaves the others' draws alone.
+        # class signatures from a third and the road users' traffic and behaviour (the radarscenes knobs) from a
+        # fourth, so that each leaves the others' draws alone.
         det, odo = _simulate_sequence(
             int(number),
             duration,

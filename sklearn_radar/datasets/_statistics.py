@@ -126,7 +126,7 @@ def format_statistics(summary, table) -> str:
 
 
 # ----------------------------------------------------------------------------
-# Mergeable per-sequence summaries (issue 14: the data never has to fit in one process)
+# Mergeable per-sequence summaries (the data never has to fit in one process)
 # ----------------------------------------------------------------------------
 @dataclass(frozen=True, eq=False)
 class StatisticsPart:

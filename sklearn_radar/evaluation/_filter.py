@@ -252,6 +252,8 @@ def _shares(removed, n):
 def filter_removal_rates(keep, target) -> dict:
     """Shares of background and of object detections that a filter removed.
 
+    Read more in the :ref:`User Guide <user-guide-filter>`.
+
     Parameters
     ----------
     keep : array-like of bool, shape (n_detections,)
@@ -533,6 +535,8 @@ def _count_settings(X, target, table, options, time_eps, label):
 )
 def plot_filter_errors(errors, ax=None, chosen=(0.10, 1.4), *, vmax=None, colorbar=True):
     """Heatmap of the filter error matrix (Table I).
+
+    Read more in the :ref:`User Guide <user-guide-filter>`.
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""Tables I and II and the error windows as combinations of per-sequence parts (issue 14).
+"""Tables I and II and the error windows as combinations of per-sequence parts.
 
 The filter of Eq. 1 counts neighbours within a sequence only, and an error
 window belongs to one object, which never spans sequences.  So Table I
@@ -463,6 +463,8 @@ def filter_error_windows(keep, target, t, window=0.15, min_kept=0.75) -> pd.Data
     with ``n > 0`` detections of which ``kept`` survive the filter is an
     *error* when ``kept / n < min_kept`` (the paper: 75 % within 150 ms).
 
+    Read more in the :ref:`User Guide <user-guide-filter>`.
+
     Parameters
     ----------
     keep : array-like of bool, shape (n_detections,)
@@ -516,6 +518,8 @@ def filter_errors(keep, target, t, window=0.15, min_kept=0.75) -> int:
     windows count; see :func:`filter_error_windows` for the exact rule and
     for the windows themselves.
 
+    Read more in the :ref:`User Guide <user-guide-filter>`.
+
     Parameters
     ----------
     keep, target, t, window, min_kept
@@ -549,6 +553,8 @@ def filter_grid(X, target, options=None) -> Bunch:
     ``d_xy`` (they do not depend on the Doppler threshold) and only Eq. 1
     itself per cell.  The result is the combination of one part
     (:func:`filter_grid_parts`), the whole data set.
+
+    Read more in the :ref:`User Guide <user-guide-filter>`.
 
     Parameters
     ----------
@@ -602,6 +608,8 @@ def filter_settings_table(X, target, settings=None, options=None) -> pd.DataFram
 
     The result is the combination of one part
     (:func:`filter_settings_table_parts`), the whole data set.
+
+    Read more in the :ref:`User Guide <user-guide-filter>`.
 
     Parameters
     ----------

@@ -1,17 +1,9 @@
 """Beyond the paper: the framework's own stages, set up to count objects (panoptic quality).
 
-The object-level ablation (``benchmarks/ablation_object_level.py``, issue #27)
-tuned one factor at a time against the paper's best stage 1 (#8) for
-per-frame PQ, 5 seeds on each of three presets.  No change of the
-framework's stage-1 choices (eps_t tuned, a Doppler gate on every detection,
-no filter, a pure Doppler gate, the box or the x-y criterion, a fixed N_min,
-wider ranges) raised PQ beyond the noise on any preset; on the realistic one
-five of them lowered it beyond the noise, by 0.043-0.093.  What raised it was
-stage 2: the Eq. 6 velocity merging on the easy preset (+0.031 +- 0.011), and
-with a smallest merged cluster (``min_cluster_size``) +0.043 +- 0.010 there
-(+0.009 to +0.030 over the merging alone on the three presets).  So
-the object experiment is the paper's own #12 on #8 with a minimum cluster
-size, tuned for PQ (the user guide's "Counting objects" has the table):
+The object experiment is the paper's own #12 on #8 with a minimum cluster
+size, tuned for per-frame panoptic quality (PQ).  Why these stages and not
+others (an ablation of one factor at a time against #8): read more in the
+:ref:`User Guide <objects-measured>`.
 
 * ``"frame"``: :class:`~sklearn_radar.FrameTransform` in FCS;
 * ``"filter"``: :class:`~sklearn_radar.DopplerDensityFilter` at the paper's
@@ -58,6 +50,8 @@ OBJECT_EXPERIMENT = "objects"
 )
 def object_pipeline(stage=2, *, params=None, stage1_params=None, causal=False, memory=None):
     """The object experiment's pipeline: #8's stage 1 (``stage=1``) or #12's velocity merging on it (``stage=2``).
+
+    Read more in the :ref:`User Guide <user-guide-objects>`.
 
     Parameters
     ----------
@@ -129,6 +123,8 @@ def object_search_space(stage):
 
     The paper's ranges (:func:`search_space` of 8 and 12): wider ones overfit the search's budget.  The minimum
     cluster size reaches from off (1) to a few seconds of one road user's detections.
+
+    Read more in the :ref:`User Guide <user-guide-objects>`.
 
     Parameters
     ----------

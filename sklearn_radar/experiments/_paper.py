@@ -234,6 +234,8 @@ def _get_experiment(number):
 def paper_experiments():
     """Tables III and IV as one DataFrame, one row per experiment, indexed by number.
 
+    Read more in the :ref:`User Guide <user-guide-radar-dbscan>`.
+
     Returns
     -------
     table : DataFrame
@@ -302,6 +304,8 @@ def derived_params(number, best_params=None):
     * #11: #8's eps values transferred to the box criterion (Eq. 3):
       ``eps_xy = eps_xyv``, ``eps_vr = vr_scale``,
       ``min_samples = round(N_min,50)``, ``vr_min`` as #8, ``alpha_r = 0``.
+
+    Read more in the :ref:`User Guide <user-guide-tuning>`.
 
     Parameters
     ----------
@@ -373,6 +377,8 @@ def experiment_pipeline(number, *, memory=None, params=None, n_jobs=None, stage1
       setting (stage-1 experiments #1-#11), **or**
     * ``"merge"``: :class:`~sklearn_radar.ClusterMerger` with the Table IV
       setting and ``stage1=RadarDBSCAN(**stage1_params)`` (#12, #13).
+
+    Read more in the :ref:`User Guide <user-guide-tuning>`.
 
     Parameters
     ----------
@@ -473,6 +479,8 @@ def search_space(number):
     For the stage-2 experiments (#12, #13) only ``merge__*`` parameters are
     searched; stage 1 stays at the ``stage1_params`` of
     :func:`experiment_pipeline`.
+
+    Read more in the :ref:`User Guide <user-guide-tuning>`.
 
     Parameters
     ----------

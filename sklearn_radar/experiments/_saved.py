@@ -121,7 +121,8 @@ def _checked_setting(saved, path, experiment):
 
 
 _ABSENT = object()
-#: Why a ``params.json`` without ``best_reason`` names its ``best`` (files of versions before issue 46).
+#: Why a ``params.json`` without ``best_reason`` names its ``best`` (files of older versions, which chose it by the
+#: test score).
 _UNEXPLAINED_BEST = "the file's 'best', which it does not explain (older versions chose it by the test score)"
 
 

@@ -69,6 +69,8 @@ def instance_scores(labels_true, labels_pred, *, times, groups=None, frame=0.5):
     it; it segments the detections once: the choice for a report that shows
     them side by side.
 
+    Read more in the :ref:`User Guide <user-guide-scoring>`.
+
     Parameters
     ----------
     labels_true : array-like of shape (n_detections,)
@@ -137,6 +139,8 @@ def panoptic_quality(labels_true, labels_pred, *, times, groups=None, frame=0.5)
     spans.  Degenerate input never raises: a ratio 0/0 (no segment at all,
     or no match for SQ) is 0.0, never NaN.
 
+    Read more in the :ref:`User Guide <user-guide-scoring>`.
+
     Parameters
     ----------
     labels_true, labels_pred, times, groups, frame
@@ -190,6 +194,8 @@ def instance_coverage(labels_true, labels_pred, *, times, groups=None, frame=0.5
     :func:`panoptic_quality`, not instead of it.  Without ground-truth
     segments both are 0.0 (never NaN).
 
+    Read more in the :ref:`User Guide <user-guide-scoring>`.
+
     Parameters
     ----------
     labels_true, labels_pred, times, groups, frame
@@ -233,6 +239,8 @@ def background_share(labels_true, labels_pred, *, times=None, groups=None, frame
     object (``labels_true == -1`` for all of them).  The shares make the
     cost of clustering static background visible, which the radar V-measure
     ignores by design.  Without clusters both are 0.0 (never NaN).
+
+    Read more in the :ref:`User Guide <user-guide-scoring>`.
 
     Parameters
     ----------
@@ -308,6 +316,8 @@ def panoptic_quality_scorer(estimator, X, y):
     :func:`make_instance_scorer` for how it fits the estimator, reads the
     times and sequences of X and scores a failing fit (0.0).
 
+    Read more in the :ref:`User Guide <user-guide-scoring>`.
+
     Parameters
     ----------
     estimator : estimator with ``fit_predict``
@@ -357,6 +367,8 @@ def make_instance_scorer(metric="pq", *, frame=0.5):
     never raises and never returns NaN: a failing fit scores the worst value
     (0.0; -1.0 for a negated share), a degenerate labelling what the
     function gives it (0.0 for a ratio 0/0).
+
+    Read more in the :ref:`User Guide <user-guide-scoring>`.
 
     Parameters
     ----------

@@ -1,4 +1,4 @@
-"""Mergeable per-sequence summaries of a labelling, for scoring a candidate one sequence at a time (issue 14).
+"""Mergeable per-sequence summaries of a labelling, for scoring a candidate one sequence at a time.
 
 A distributed search scores a candidate with one task per sequence, on the
 worker that holds the sequence.  Each task returns a small summary, a

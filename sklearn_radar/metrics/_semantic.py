@@ -320,6 +320,8 @@ def class_panoptic_quality(
     never raises: a ratio 0/0 is 0.0, and so is a mean over no class (no
     road user in truth or prediction).
 
+    Read more in the :ref:`User Guide <user-guide-classification>`.
+
     Parameters
     ----------
     classes_true : array-like of int, shape (n_detections,)
@@ -421,6 +423,8 @@ def mean_average_precision(
     leaves out the others); a class with ground truth but no prediction has
     AP 0.  No ground-truth segment at all: ``map`` is 0.0 (never NaN).
 
+    Read more in the :ref:`User Guide <user-guide-classification>`.
+
     Parameters
     ----------
     classes_true, instances_true, classes_pred, instances_pred
@@ -492,6 +496,8 @@ def pointwise_macro_f1(classes_true, classes_pred, *, include_background=True):
     ``include_background=False``: a road user predicted as background still
     costs its class recall).  No class at all: 0.0.
 
+    Read more in the :ref:`User Guide <user-guide-classification>`.
+
     Parameters
     ----------
     classes_true : array-like of int, shape (n_detections,)
@@ -541,6 +547,8 @@ def semantic_scores(
     whatever it is), 0 when none overlaps, as
     :func:`~sklearn_radar.metrics.instance_coverage` computes it; without
     ground-truth segments it is 0.0.
+
+    Read more in the :ref:`User Guide <user-guide-classification>`.
 
     Parameters
     ----------
@@ -703,6 +711,8 @@ def make_semantic_scorer(metric="pq", *, frame=0.5, instance_column="track_id"):
     function gives it, 0.0 for a ratio 0/0 or a mean over no class (no road
     user in truth or prediction scores 0.0 for PQ, SQ, RQ and mCov; no road
     user in truth 0.0 for mAP).
+
+    Read more in the :ref:`User Guide <user-guide-classification>`.
 
     Parameters
     ----------

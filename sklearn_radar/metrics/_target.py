@@ -34,6 +34,8 @@ def precluster_target(X, y, *, eps_xy=2.0, eps_vr=25.0, eps_t=0.25, vr_min=0.01,
     noise (no other detection of the object within 2 m and 0.25 s) become
     background (-1): no stage-1 setting could cluster them either.
 
+    Read more in the :ref:`User Guide <user-guide-scoring>`.
+
     Parameters
     ----------
     X : DataFrame

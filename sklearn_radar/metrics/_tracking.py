@@ -69,6 +69,8 @@ def _segments(cell, sequence, labels):
 def tracking_scores(labels_true, labels_pred, *, times, groups=None, frame=0.5):
     """ID switches, MOTA and IDF1 of predicted object ids against ground-truth objects, per time frame.
 
+    Read more in the :ref:`User Guide <user-guide-online>`.
+
     Parameters
     ----------
     labels_true : array-like of shape (n_detections,)

@@ -54,6 +54,8 @@ def radar_homogeneity_completeness_v_measure(labels_true, labels_pred, *, groups
     partly into noise, lowers completeness; and without background the three
     values equal :func:`sklearn.metrics.homogeneity_completeness_v_measure`.
 
+    Read more in the :ref:`User Guide <user-guide-scoring>`.
+
     Parameters
     ----------
     labels_true : array-like of shape (n_detections,)
@@ -108,6 +110,8 @@ def radar_v_measure(labels_true, labels_pred, *, groups=None, beta=1.0):
     see :func:`radar_homogeneity_completeness_v_measure` for the exact
     reading of the paper's modified completeness.
 
+    Read more in the :ref:`User Guide <user-guide-scoring>`.
+
     Parameters
     ----------
     labels_true, labels_pred, groups, beta
@@ -147,6 +151,8 @@ def radar_v_measure_scorer(estimator, X, y):
     raises and never returns NaN: a failing fit or a degenerate labelling
     scores 0.0, which keeps Bayesian optimisation (whose Gaussian process
     cannot take NaN) running.
+
+    Read more in the :ref:`User Guide <user-guide-scoring>`.
 
     Parameters
     ----------

@@ -104,6 +104,8 @@ class ProgressBayesSearchCV(BayesSearchCV):
     (labelled ``progress`` when it is a string) to the callbacks.
     :func:`make_bayes_search` builds one with the paper's settings.
 
+    Read more in the :ref:`User Guide <user-guide-tuning>`.
+
     Parameters
     ----------
     estimator, search_spaces, optimizer_kwargs, n_iter, scoring, fit_params, n_jobs, n_points, iid, refit, cv, \
@@ -266,6 +268,8 @@ def make_bayes_search(
     (:func:`~sklearn_radar.metrics.radar_v_measure_scorer`), and a failing
     candidate scores ``error_score=0.0`` instead of stopping the search or
     feeding NaN to the Gaussian process.
+
+    Read more in the :ref:`User Guide <user-guide-tuning>`.
 
     Parameters
     ----------

@@ -514,8 +514,8 @@ class SequenceSearchCV(MetaEstimatorMixin, BaseEstimator):
     Notes
     -----
     The Gaussian process runs with one BLAS thread, as in ``reproduce``: on
-    its small matrices multi-threaded BLAS was 20x slower (measured).  A
-    fold holding a sequence whose fit fails scores 0.0; when every fit of a
+    its small matrices multi-threaded BLAS is slower (:ref:`User Guide
+    <user-guide-tuning>`).  A fold holding a sequence whose fit fails scores 0.0; when every fit of a
     step fails, :meth:`fit` raises.
 
     Examples

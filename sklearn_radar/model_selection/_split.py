@@ -35,6 +35,8 @@ def sequence_train_test_split(groups, *, test_size=0.5, random_state=None):
     too, for example with :class:`sklearn.model_selection.GroupKFold` and
     ``groups=groups[train_index]`` (what :func:`make_bayes_search` sets up).
 
+    Read more in the :ref:`User Guide <user-guide-tuning>`.
+
     Parameters
     ----------
     groups : array-like of shape (n_detections,)

@@ -84,6 +84,8 @@ class ObjectList:
     seconds before it, and carried unchanged until the next one (so a scan
     costs the estimates of the objects it sees, not of all).
 
+    Read more in the :ref:`User Guide <user-guide-online>`.
+
     Parameters
     ----------
     object_id : ndarray of int64

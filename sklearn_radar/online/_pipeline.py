@@ -125,6 +125,8 @@ class OnlinePipeline:
     offline pipeline it is built from, which keeps the parameters and
     passes the scikit-learn checks.
 
+    Read more in the :ref:`User Guide <user-guide-online>`.
+
     Parameters
     ----------
     pipeline : sklearn.pipeline.Pipeline

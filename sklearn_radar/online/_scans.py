@@ -34,6 +34,8 @@ def iter_scans(data):
     were recorded (ties of timestamp across sequences by sequence number),
     the order in which ``sklearn-radar stream`` replays a recording.
 
+    Read more in the :ref:`User Guide <user-guide-online>`.
+
     Parameters
     ----------
     data : DataFrame

@@ -40,6 +40,8 @@ def doppler_density_keep(
         N < 1  or  any_i (|v_r| < eta_i and N < N_i),
         eta_1 = 5 eta_2 = 10 eta_3 = 50 eta_4,  N = (2, 3, 4, 10).
 
+    Read more in the :ref:`User Guide <user-guide-filter>`.
+
     Parameters
     ----------
     v_r : array-like of shape (n_detections,)
@@ -121,6 +123,8 @@ def neighbor_counts(x, y, t, sequence, d_xy, dt, causal=False, cap=10, n_jobs=No
     number of detections: a grid of cell ``d_xy`` limits the candidates and
     counting stops at ``cap``.
 
+    Read more in the :ref:`User Guide <user-guide-filter>`.
+
     Parameters
     ----------
     x, y : array-like of float, shape (n_detections,)
@@ -198,6 +202,8 @@ class DopplerDensityFilter(TransformerMixin, BaseEstimator):
     eta_1 = 5 eta_2 = 10 eta_3 = 50 eta_4 and N = (2, 3, 4, 10)).  The fewer
     the neighbours, the faster a detection must move to stay.  Rows are never
     dropped: the later stages treat ``keep = False`` as noise.
+
+    Read more in the :ref:`User Guide <user-guide-filter>`.
 
     Parameters
     ----------

@@ -50,6 +50,8 @@ class FrameTransform(TransformerMixin, BaseEstimator):
 
     Rows are never dropped or reordered.
 
+    Read more in the :ref:`User Guide <user-guide-data>`.
+
     Parameters
     ----------
     frame : {"frame", "car"}, default="frame"

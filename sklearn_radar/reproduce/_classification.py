@@ -1,4 +1,4 @@
-"""The classification step: the paper's next stage, a classifier trained on each setting's clusters (issue 31).
+"""The classification step: the paper's next stage, a classifier trained on each setting's clusters.
 
 The paper clusters so that a classifier can name road users (Sec. I, and its
 future work: "the impact of the proposed clustering framework on a

@@ -45,7 +45,7 @@ BASELINES = "baselines"
 #: Beyond the paper: the framework's stages set up for objects (``experiments.object_pipeline``).
 OBJECTS = OBJECT_EXPERIMENT
 TRACKING = "tracking"
-#: Beyond the paper: the paper's next stage, a classifier of the clusters (issue 31).
+#: Beyond the paper: the paper's next stage, a classifier of the clusters.
 CLASSIFICATION = "classification"
 
 #: Every step key, in the order they run.

@@ -23,18 +23,9 @@ the same:
 - dictionary keys typed ``int`` are written as strings; numbers and strings
   are written as they are, for :func:`json.dumps` to format.
 
-Why a converter over :func:`dataclasses.fields` rather than a library
-(issue 28; measured on the default run's ``results.json``, 34 kB, and on a
-``--full``-sized one, 216 kB: 100 iterations, 3 repeats): cattrs 26.2 writes
-the same bytes only with hand-written hooks for the flattened records (about
-50 lines), turns an int in a float field into a float (``1`` becomes
-``1.0``: other bytes) and reads the string ``"1.4"`` as a number; msgspec
-0.23 writes NaN as null and pydantic 2.14 adds 10 MB (pydantic-core), and
-neither writes a record flat among its owner's keys.  Speed decides nothing:
-the converter loads the files in 0.6-0.8 ms and 2.7 ms and dumps them in
-0.2-0.3 ms and 1.0-1.4 ms, cattrs in 0.4-0.6 / 1.9-3.2 ms and 0.3-0.4 /
-0.7-1.1 ms, while ``json.loads`` alone takes 0.7 / 5.9 ms and
-``json.dumps(indent=1)`` 2.9 / 22 ms.  So no new dependency.
+A converter over :func:`dataclasses.fields` rather than a library: the
+libraries tried write other bytes or read other values (the comparison:
+:ref:`contributing-decisions`).
 
 Parameter settings (``params``, ``paper_params``, ...) stay dictionaries of
 pipeline parameters (``{"cluster__eps_xy": 0.6, ...}``): their keys are the

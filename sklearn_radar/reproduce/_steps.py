@@ -9,9 +9,10 @@ saves after each step.
 Stages 0-2 never cross sequences, so every figure is combined from
 per-sequence summaries computed where each sequence lives (:mod:`._sequences`),
 and a search's candidate is one task per block of training sequences
-(:mod:`._search`).  The repeats of a search are one :meth:`map` over the
-executor (:mod:`sklearn_radar._executor`); repeat ``k`` of a search has the
-seed :func:`search_seed` ``(seed + k, its experiment or baseline)``.
+(:mod:`sklearn_radar.model_selection._sequence_search`).  The repeats of a
+search are one :meth:`map` over the executor (:mod:`sklearn_radar._executor`);
+repeat ``k`` of a search has the seed :func:`search_seed` ``(seed + k, its
+experiment or baseline)``.
 """
 
 from __future__ import annotations
@@ -678,8 +679,9 @@ def search_seed(run_seed, key):
 
     Each search has its own stream, ``SeedSequence(run_seed, spawn_key=(id,))``
     with ``id`` the experiment's number or, for a name, its CRC-32 (stable
-    across processes and Python versions, unlike ``hash``): searches with
-    equal spaces (#2-#5) no longer draw the same random candidates.
+    across processes and Python versions, unlike ``hash``), so that searches
+    with equal spaces (#2-#5) draw different random candidates
+    (:ref:`user-guide-tuning`).
 
     Parameters
     ----------
@@ -743,7 +745,8 @@ def _score_sequence(sequence, pipeline, drawn):
 def tune(env, key, estimator, space, label, start_from=None, seed=None):
     """Bayesian optimisation on the training half with grouped CV; returns (best params, SearchRecord).
 
-    A candidate is one task per block of training sequences (:mod:`._search`)
+    A candidate is one task per block of training sequences
+    (:mod:`sklearn_radar.model_selection._sequence_search`)
     and the search's loop one task where the executor runs it
     (:meth:`~sklearn_radar._executor.DaskExecutor.on_a_worker`); its
     iterations are printed (and counted as units of step ``key``) when it
@@ -807,9 +810,11 @@ def _search(executor, blocks, ids, estimator, space, folds, start_from, options,
 
 
 class TrainingData:
-    """The training half per sequence (:class:`._search.SearchData`), placed once per run where its tasks run.
+    """The training half per sequence, placed once per run where its tasks run.
 
-    Its stage-0 outputs (:meth:`prepared`) are shared by the searches with
+    A search builds its
+    :class:`~sklearn_radar.model_selection._sequence_search.SearchData` from
+    these blocks.  Its stage-0 outputs (:meth:`prepared`) are shared by the searches with
     the same stage 0 (repeats, experiments on the same input); the last
     :data:`PREPARED_KEPT` are kept.  Concurrent searches (threads) share it.
     """

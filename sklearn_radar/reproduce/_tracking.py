@@ -7,8 +7,8 @@ the sequence lives; :func:`~sklearn_radar.metrics.tracking_scores` scores
 the ids against the annotated moving road users, per 0.5 s frame.  The
 online pipeline rather than the offline causal one (whose merged clusters it
 equals): it alone gives the ids as reported at each scan, with the stage-1
-meetings as aliases, which is what a tracker downstream sees; it costs about
-0.3-0.5 ms of CPU per scan.
+meetings as aliases, which is what a tracker downstream sees (its cost per
+scan: :ref:`online-speed`).
 """
 
 from __future__ import annotations
