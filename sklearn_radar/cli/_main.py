@@ -1,4 +1,8 @@
-"""The ``sklearn-radar`` command line (also ``python -m sklearn_radar``)."""
+"""The ``sklearn-radar`` command line (also ``python -m sklearn_radar``).
+
+The commands import the package's estimators inside their functions, not at the top: ``--help``, ``--version``
+and a usage error answer without importing scikit-learn.
+"""
 
 from __future__ import annotations
 
