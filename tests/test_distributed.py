@@ -16,8 +16,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from sklearn_radar._cli import main
 from sklearn_radar._executor import connect_executor
+from sklearn_radar.cli import main
 from sklearn_radar.datasets import load_radarscenes
 from sklearn_radar.experiments import experiment_pipeline
 from sklearn_radar.reproduce import cluster_radarscenes, load_params, reproduce, write_predictions
@@ -78,7 +78,7 @@ def test_without_the_flags_dask_is_not_imported(tiny_folder, tmp_path):
     out = tmp_path / "out"
     code = f"""
 import sys
-from sklearn_radar._cli import main
+from sklearn_radar.cli import main
 assert main(["reproduce", "--data", {str(tiny_folder)!r}, "--out", {str(out)!r}, "--n-iter", "1",
              "--experiments", "1"]) == 0
 assert main(["cluster", "--data", {str(tiny_folder)!r}, "--params", {str(out / "params.json")!r},
@@ -137,7 +137,7 @@ def test_missing_dask_is_a_one_line_error_naming_the_extra(tiny_folder, tmp_path
     code = f"""
 import sys
 sys.modules["dask"] = None
-from sklearn_radar._cli import main
+from sklearn_radar.cli import main
 sys.exit(main(["reproduce", "--data", {str(tiny_folder)!r}, "--out", {str(tmp_path / "o")!r}, "--workers", "2"]))
 """
     done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=_env(), timeout=120)
@@ -299,7 +299,7 @@ def _whole_table_predictions(tiny_folder, saved_params, path):
 
 
 def test_cluster_streams_per_sequence_and_equals_the_whole_table_fit(tiny_folder, saved_params, tmp_path, monkeypatch):
-    from sklearn_radar import _cluster_command
+    from sklearn_radar.cli import _cluster as _cluster_command
 
     loaded = []
 

@@ -11,7 +11,7 @@ import time
 
 import pytest
 
-from sklearn_radar._cli import main
+from sklearn_radar.cli import main
 from sklearn_radar.datasets import make_scenes, write_radarscenes
 
 
@@ -155,7 +155,7 @@ if kill_at == "h5":
             os.kill(os.getpid(), signal.SIGKILL)
         real_write(*args)
     _radarscenes._write_radar_data_h5 = write
-from sklearn_radar._cli import main
+from sklearn_radar.cli import main
 sys.exit(main(argv))
 """
 
@@ -332,7 +332,7 @@ def test_n_jobs_help_gives_the_default(capsys):
 
 
 def test_an_interrupt_during_the_start_up_imports_is_one_line(monkeypatch, capsys):
-    import sklearn_radar._cli as cli
+    import sklearn_radar.cli._main as cli
 
     def interrupted():
         raise KeyboardInterrupt

@@ -19,6 +19,8 @@ from sklearn.utils._param_validation import HasMethods, Interval, validate_param
 
 from .._schema import FRAME_TRANSFORM_READS
 from .._skopt import Integer, Real
+from ..cluster import ClusterMerger, RadarDBSCAN
+from ..preprocessing import DopplerDensityFilter, FrameTransform
 
 __all__ = [
     "PAPER_EXPERIMENTS",
@@ -417,9 +419,6 @@ def experiment_pipeline(number, *, memory=None, params=None, n_jobs=None, stage1
     >>> pipe.get_params()["cluster__eps_xyv"]
     1.04
     """
-    from ..cluster import ClusterMerger, RadarDBSCAN
-    from ..preprocessing import DopplerDensityFilter, FrameTransform
-
     experiment = _get_experiment(number)
     if experiment.stage == 1 and stage1_params is not None:
         raise ValueError(f"stage1_params applies to the stage-2 experiments 12 and 13, not to #{number}")

@@ -8,6 +8,9 @@ import numpy as np
 import pandas as pd
 from sklearn.utils._param_validation import Interval, StrOptions, validate_params
 
+from ..cluster import RadarDBSCAN
+from ..preprocessing import FrameTransform
+
 
 # RadarDBSCAN's constraints for the parameters passed on to it (its own validation is skipped inside).
 @validate_params(
@@ -68,9 +71,6 @@ def precluster_target(X, y, *, eps_xy=2.0, eps_vr=25.0, eps_t=0.25, vr_min=0.01,
     ValueError
         If ``y`` does not have one label per row of ``X``.
     """
-    from ..cluster import RadarDBSCAN
-    from ..preprocessing import FrameTransform
-
     y = np.asarray(y)
     if len(y) != len(X):
         raise ValueError(f"precluster_target: y has {len(y)} labels for {len(X)} detections")

@@ -11,6 +11,7 @@ from sklearn.model_selection import GroupKFold
 from sklearn.utils._param_validation import HasMethods, Interval, validate_params
 
 from .._skopt import BayesSearchCV
+from ..metrics import radar_v_measure_scorer
 
 __all__ = ["ProgressPrinter", "make_bayes_search"]
 
@@ -356,7 +357,7 @@ def make_bayes_search(
     True
     """
     if scoring is None:
-        from ..metrics import radar_v_measure_scorer as scoring
+        scoring = radar_v_measure_scorer
     if isinstance(cv, Integral) and not isinstance(cv, bool):
         cv = GroupKFold(n_splits=int(cv))
     return ProgressBayesSearchCV(

@@ -1,6 +1,6 @@
 """The main job: re-run the paper's experiments (``sklearn-radar reproduce``) and apply a tuned pipeline."""
 
-from .._cluster_command import cluster_radarscenes, write_predictions
+from ..cli._cluster import cluster_radarscenes, write_predictions
 from ..experiments._saved import load_params
 from ._run import ALL_EXPERIMENTS, parse_experiments, reproduce
 

@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
+from ...preprocessing import FrameTransform
 from .._constants import BEST_STAGE1, FCS_BASELINE
 from .._context import RunContext
 from .._results import RunResults, repeated_scores
@@ -377,8 +378,6 @@ def scene_figure(results: RunResults, context: RunContext):
     grey beneath them, noise light grey beneath those.
     """
     import matplotlib.pyplot as plt
-
-    from ...preprocessing import FrameTransform
 
     sequence = context.sequences.fetch(context.drawn_sequence)
     data = FrameTransform().fit_transform(sequence.X)

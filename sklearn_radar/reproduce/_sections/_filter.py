@@ -6,6 +6,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ...evaluation import plot_filter_errors
+from ...preprocessing import DopplerDensityFilter, FrameTransform
 from .._constants import FRAMES, PAPER_FILTER_SETTING
 from .._context import RunContext
 from .._results import RunResults
@@ -166,8 +168,6 @@ def heatmap_figure(results: RunResults):
     """Table I's error counts, FCS beside CCS, on one colour scale from 0 (one shade is one count in both)."""
     import matplotlib.pyplot as plt
 
-    from ...evaluation import plot_filter_errors
-
     grids = {frame: results.filter.table_i[frame].errors.to_frame() for frame in FRAMES}
     highest = max(float(np.nanmax(grid.to_numpy(dtype=float))) for grid in grids.values())
     fig, axes = plt.subplots(1, len(grids), figsize=(12, 5), sharey=True, layout="constrained")
@@ -204,8 +204,6 @@ def filter_scene_figure(context: RunContext):
     import matplotlib.pyplot as plt
     from matplotlib.lines import Line2D
     from matplotlib.patches import Rectangle
-
-    from ...preprocessing import DopplerDensityFilter, FrameTransform
 
     drawn = context.sequences.fetch(context.drawn_sequence)
     prepared = FrameTransform(frame="frame").fit_transform(drawn.scenes.data)

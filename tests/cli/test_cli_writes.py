@@ -10,7 +10,7 @@ import json
 
 import pytest
 
-from sklearn_radar._cli import main
+from sklearn_radar.cli import main
 from sklearn_radar.datasets import make_scenes, write_radarscenes
 from sklearn_radar.datasets._radarscenes import MANIFEST
 from sklearn_radar.experiments import paper_params
@@ -273,8 +273,8 @@ def test_write_predictions_refuses_a_foreign_file(tmp_path):
 
 
 def test_a_file_appearing_during_the_write_is_kept(tmp_path):
-    from sklearn_radar._cluster_command import check_predictions_file
     from sklearn_radar._files import atomic_write
+    from sklearn_radar.cli._cluster import check_predictions_file
 
     out = tmp_path / "p.json"
 

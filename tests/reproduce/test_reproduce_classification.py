@@ -7,8 +7,8 @@ import json
 import numpy as np
 import pytest
 
-from sklearn_radar._cli import main
 from sklearn_radar.classification import road_user_class
+from sklearn_radar.cli import main
 from sklearn_radar.datasets import load_radarscenes
 from sklearn_radar.experiments import SKLEARN_BASELINES
 from sklearn_radar.metrics import semantic_scores

@@ -29,7 +29,7 @@ from sklearn_radar.reproduce._results import (
     SearchRecord,
 )
 
-DATA = Path(__file__).parent / "data"
+DATA = Path(__file__).parents[1] / "data"
 DEFAULT_RUN = DATA / "results_default_run.json"
 OLD_LAYOUT = DATA / "results_3bcbd36_layout.json"
 FULL_RUN_PARTIAL = DATA / "results_full_run_partial.json"

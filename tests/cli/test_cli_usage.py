@@ -6,9 +6,9 @@ from pathlib import Path
 
 import pytest
 
-from sklearn_radar._cli import _parser, main
+from sklearn_radar.cli._main import _parser, main
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 
 def _help(capsys, *argv):

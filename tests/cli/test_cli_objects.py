@@ -5,7 +5,7 @@ import json
 import numpy as np
 import pytest
 
-from sklearn_radar._cli import main
+from sklearn_radar.cli import main
 from sklearn_radar.datasets import load_radarscenes, make_scenes, write_radarscenes
 from sklearn_radar.experiments import object_pipeline
 from sklearn_radar.experiments._saved import load_params, setting_pipeline

@@ -7,15 +7,15 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from .._files import atomic_write
+from ..classification import DEVKIT_CLASS_NAMES
+from ..datasets import load_radarscenes
+from ..experiments._saved import params_setting
+from ..online import OnlinePipeline
+from ..online._objects import ObjectList
+from ..online._replay import replay
 from ._classifier_setting import classifier_setting
-from ._cluster_command import check_predictions_file, write_predictions
-from ._files import atomic_write
-from .classification import DEVKIT_CLASS_NAMES
-from .datasets import load_radarscenes
-from .experiments._saved import params_setting
-from .online import OnlinePipeline
-from .online._objects import ObjectList
-from .online._replay import replay
+from ._cluster import check_predictions_file, write_predictions
 
 #: The first line of an object-list CSV this package writes: how a file is recognised as ours.
 OBJECTS_HEADER = ",".join(["timestamp", *ObjectList.__dataclass_fields__])

@@ -8,7 +8,7 @@ import re
 import numpy as np
 import pytest
 
-from sklearn_radar._cli import main
+from sklearn_radar.cli import main
 from sklearn_radar.datasets import make_scenes, write_radarscenes
 from sklearn_radar.reproduce import parse_experiments
 

@@ -5,7 +5,7 @@ import sys
 
 import pytest
 
-from sklearn_radar._cli import main
+from sklearn_radar.cli import main
 from sklearn_radar.datasets import load_radarscenes, make_scenes
 
 
@@ -78,7 +78,7 @@ def test_bad_simulation_parameter_is_a_one_line_error_naming_the_option(tmp_path
 
 
 def test_reproduce_accepts_every_difficulty_preset():
-    from sklearn_radar._cli import _parser
+    from sklearn_radar.cli._main import _parser
     from sklearn_radar.datasets._simulator import DIFFICULTY_PRESETS
 
     for difficulty in DIFFICULTY_PRESETS:

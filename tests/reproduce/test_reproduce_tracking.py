@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from sklearn_radar._cli import main
+from sklearn_radar.cli import main
 from sklearn_radar.datasets import load_radarscenes
 from sklearn_radar.experiments import experiment_pipeline
 from sklearn_radar.metrics import tracking_scores
@@ -109,7 +109,7 @@ def test_results_without_tracking_still_load():
 
     from sklearn_radar.reproduce._sections import _tracking
 
-    for path in sorted((Path(__file__).parent / "data").glob("results_*.json")):
+    for path in sorted((Path(__file__).parents[1] / "data").glob("results_*.json")):
         results = RunResults.read(path)
         assert results.tracking is None
         assert _tracking.markdown(results) == []

@@ -1,4 +1,8 @@
-"""The ``sklearn-radar`` command line (also ``python -m sklearn_radar``)."""
+"""The ``sklearn-radar`` command line (also ``python -m sklearn_radar``).
+
+The commands import the package's estimators inside their functions, not at the top: ``--help``, ``--version``
+and a usage error answer without importing scikit-learn.
+"""
 
 from __future__ import annotations
 
@@ -8,7 +12,7 @@ import os
 import sys
 import time
 
-from . import __version__
+from .. import __version__
 
 
 def main(argv=None) -> int:
@@ -67,7 +71,7 @@ def _import_the_estimators():
     module: ``--help`` and ``--version`` never import them.  A command
     imports them here, inside :func:`main`, where an interrupt is caught.
     """
-    from . import cluster, datasets, preprocessing  # noqa: F401
+    from .. import cluster, datasets, preprocessing  # noqa: F401
 
 
 def _silence_stdout():
@@ -404,8 +408,8 @@ def _duration(text, flag):
 
 
 def _simulate(args) -> int:
-    from .datasets import format_statistics, make_scenes, scene_statistics, write_radarscenes
-    from .datasets._radarscenes import check_output_folder
+    from ..datasets import format_statistics, make_scenes, scene_statistics, write_radarscenes
+    from ..datasets._radarscenes import check_output_folder
 
     check_output_folder(args.out, args.overwrite, flag="--overwrite")  # before the simulation, which takes a while
     start = time.perf_counter()
@@ -420,16 +424,16 @@ def _simulate(args) -> int:
 
 
 def _stats(args) -> int:
-    from .datasets import format_statistics, load_radarscenes, scene_statistics
+    from ..datasets import format_statistics, load_radarscenes, scene_statistics
 
     print(format_statistics(*scene_statistics(load_radarscenes(args.data))))
     return 0
 
 
 def _reproduce(args) -> int:
-    from .reproduce import reproduce
-    from .reproduce._io import check_apart
-    from .reproduce._run import parse_experiments
+    from ..reproduce import reproduce
+    from ..reproduce._io import check_apart
+    from ..reproduce._run import parse_experiments
 
     try:
         parse_experiments(args.experiments)
@@ -472,8 +476,8 @@ def _written(out):
     The files its marker (``run.json``) lists, which are those that exist:
     a run without an experiment writes no ``params.json``.
     """
-    from .reproduce._io import run_marker
-    from .reproduce._run import RUN_MARKER
+    from ..reproduce._io import run_marker
+    from ..reproduce._run import RUN_MARKER
 
     marker = run_marker(os.path.join(out, RUN_MARKER)) or {}
     names = list(marker.get("files") or {})
@@ -491,7 +495,7 @@ def _counted(n, noun):
 
 
 def _cluster(args) -> int:
-    from ._cluster_command import cluster_radarscenes
+    from ._cluster import cluster_radarscenes
 
     summary = cluster_radarscenes(
         args.data,
@@ -533,7 +537,7 @@ def _classes(summary):
 def _stream(args) -> int:
     import numpy as np
 
-    from ._stream_command import stream_radarscenes
+    from ._stream import stream_radarscenes
 
     summary = stream_radarscenes(
         args.data,

@@ -5,13 +5,13 @@ from pathlib import Path
 
 import pytest
 
-from sklearn_radar._cli import main
+from sklearn_radar.cli import main
 from sklearn_radar.datasets import make_scenes, write_radarscenes
 from sklearn_radar.experiments import paper_params
 from sklearn_radar.experiments._saved import load_params
 from sklearn_radar.reproduce._results import RunResults
 
-DEFAULT_RUN = Path(__file__).resolve().parent / "data" / "results_default_run.json"
+DEFAULT_RUN = Path(__file__).resolve().parents[1] / "data" / "results_default_run.json"
 
 
 def _cv_best(document):

@@ -16,9 +16,9 @@ from radar_scenes.sequence import Sequence
 from sklearn.base import clone
 from sklearn.pipeline import make_pipeline
 
-from sklearn_radar._cli import main
-from sklearn_radar._cluster_command import write_predictions
 from sklearn_radar.classification import DEVKIT_CLASS_NAMES, ClusterClassifier, road_user_class, save_classifier
+from sklearn_radar.cli import main
+from sklearn_radar.cli._cluster import write_predictions
 from sklearn_radar.datasets import load_radarscenes, make_scenes, write_radarscenes
 from sklearn_radar.experiments import experiment_pipeline, paper_params
 from sklearn_radar.experiments._saved import load_params, setting_pipeline

@@ -7,7 +7,7 @@ import json
 import numpy as np
 import pytest
 
-from sklearn_radar._cli import main
+from sklearn_radar.cli import main
 from sklearn_radar.reproduce._results import RunResults
 from sklearn_radar.reproduce._sections._objects import verdict
 

@@ -6,8 +6,8 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from sklearn_radar._cli import main
-from sklearn_radar._stream_command import OBJECTS_HEADER
+from sklearn_radar.cli import main
+from sklearn_radar.cli._stream import OBJECTS_HEADER
 from sklearn_radar.datasets import load_radarscenes, make_scenes, write_radarscenes
 from sklearn_radar.experiments import paper_params
 from sklearn_radar.experiments._saved import load_params, setting_pipeline

@@ -20,9 +20,10 @@ import numpy as np
 from sklearn.base import clone
 from sklearn.pipeline import Pipeline
 
-from .classification import DEVKIT_CLASS_INDEX, load_classifier
-from .classification._persist import final_classifier
-from .cluster import RadarDBSCAN
+from ..classification import DEVKIT_CLASS_INDEX, load_classifier
+from ..classification._persist import final_classifier
+from ..cluster import RadarDBSCAN
+from ..datasets import load_radarscenes
 
 #: Our class code -> the devkit's ClassificationLabel value, as a lookup indexed by ``code + 1``.
 _DEVKIT_LOOKUP = np.array([DEVKIT_CLASS_INDEX[code] for code in range(-1, len(DEVKIT_CLASS_INDEX) - 1)])
@@ -175,8 +176,6 @@ def classify_sequence(task):
     (-1 for noise and background), ``classes`` the devkit's class indices.
     Runs on a dask worker with ``--scheduler``/``--workers``, else here.
     """
-    from .datasets import load_radarscenes
-
     data_dir, number, setting = task
     scenes = load_radarscenes(data_dir, sequences=number)
     predicted = setting.classifier.predict_instances(setting.working(scenes.data))

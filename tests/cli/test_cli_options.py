@@ -7,9 +7,9 @@ from pathlib import Path
 
 import pytest
 
-from sklearn_radar._cli import main
+from sklearn_radar.cli import main
 
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 
 #: Modules that ``--help`` and ``--version`` must not import: they make every call take seconds.
 HEAVY = ("sklearn", "numpy", "pandas", "numba", "scipy", "h5py", "matplotlib", "joblib")
@@ -57,7 +57,7 @@ def test_the_subprocess_check_sees_heavy_imports():
 
 
 def test_a_command_still_imports_the_estimators_where_an_interrupt_is_caught(monkeypatch, capsys):
-    import sklearn_radar._cli as cli
+    import sklearn_radar.cli._main as cli
 
     def interrupted():
         raise KeyboardInterrupt
@@ -68,7 +68,7 @@ def test_a_command_still_imports_the_estimators_where_an_interrupt_is_caught(mon
 
 
 def test_an_interrupt_while_parsing_is_one_line(monkeypatch, capsys):
-    import sklearn_radar._cli as cli
+    import sklearn_radar.cli._main as cli
 
     def interrupted():
         raise KeyboardInterrupt
@@ -130,7 +130,7 @@ def test_a_bad_option_is_one_line_naming_it_and_nothing_is_written(tmp_path, cap
 
 
 def test_options_are_checked_before_the_estimators_are_imported(monkeypatch, capsys):
-    import sklearn_radar._cli as cli
+    import sklearn_radar.cli._main as cli
 
     def not_yet():
         raise AssertionError("imported before the options were checked")

@@ -11,7 +11,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from sklearn_radar._cli import main
+from sklearn_radar.cli import main
 from sklearn_radar.reproduce._sections._comparison import (
     CANNOT_TELL,
     DOES_NOT_HOLD,

@@ -12,7 +12,7 @@ from sklearn_radar.reproduce._context import RunContext
 from sklearn_radar.reproduce._results import RunResults
 from sklearn_radar.reproduce._sequences import RunSequences
 
-DEFAULT_RUN = Path(__file__).parent / "data" / "results_default_run.json"
+DEFAULT_RUN = Path(__file__).parents[1] / "data" / "results_default_run.json"
 
 
 @pytest.fixture(scope="module")

@@ -11,13 +11,14 @@ import numpy as np
 from sklearn.base import clone
 from sklearn.utils._param_validation import validate_params
 
-from ._executor import connect_executor
-from ._files import atomic_write, check_ours_to_replace
-from ._schema import LABELS, STATIC_LABEL
-from .classification._classes import CLASS_OF_LABEL, DEVKIT_CLASS_INDEX, DEVKIT_CLASS_NAMES, IGNORED
-from .datasets import load_radarscenes
-from .datasets._radarscenes import _read_sensors_json, _read_sequences_json, _resolve_data_dir
-from .experiments._saved import SAVED_EXPERIMENT, params_setting
+from .._executor import connect_executor
+from .._files import atomic_write, check_ours_to_replace
+from .._schema import LABELS, STATIC_LABEL
+from ..classification._classes import CLASS_OF_LABEL, DEVKIT_CLASS_INDEX, DEVKIT_CLASS_NAMES, IGNORED
+from ..datasets import load_radarscenes
+from ..datasets._radarscenes import _read_sensors_json, _read_sequences_json, _resolve_data_dir
+from ..experiments._saved import SAVED_EXPERIMENT, params_setting
+from ._classifier_setting import classifier_setting, classify_sequence, devkit_class_index
 
 #: Our two "classes" in the devkit's per-point prediction file: clustered or noise.
 CLASS_NAMES = {0: "NOISE", 1: "CLUSTERED"}
@@ -105,8 +106,6 @@ def cluster_radarscenes(data, params, out, experiment=None, *, classifier=None, 
     """
     setting, pipeline, chosen = params_setting(params, experiment, classifier)
     if classifier is not None:
-        from ._classifier_setting import classifier_setting, classify_sequence
-
         model = classifier_setting(classifier, setting, params, pipeline)
         run, head, counted = classify_sequence, _CLASSES_HEAD, {name: 0 for name in DEVKIT_CLASS_NAMES.values()}
     else:
@@ -154,8 +153,6 @@ def cluster_radarscenes(data, params, out, experiment=None, *, classifier=None, 
 
 def _count_classes(counted, classes):
     """Add the detections of each devkit class index in ``classes`` to ``counted`` (by class name)."""
-    from ._classifier_setting import devkit_class_index
-
     indices, numbers = np.unique(classes, return_counts=True)
     name_of = {int(devkit_class_index([code])[0]): name for code, name in DEVKIT_CLASS_NAMES.items()}
     for index, number in zip(indices.tolist(), numbers.tolist(), strict=True):
@@ -256,8 +253,6 @@ def write_predictions(uuids, labels, out, classes=None):
 
 def _devkit_classes(classes, n):
     """The devkit's class index of each road-user class code; ValueError for another length or code."""
-    from ._classifier_setting import devkit_class_index
-
     classes = np.asarray(classes)
     if len(classes) != n:
         raise ValueError(f"classes and labels differ in length: {len(classes)} != {n}")
