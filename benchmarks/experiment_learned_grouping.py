@@ -668,7 +668,7 @@ def run_links(train, test, options, rng, clock, n_scans):
         _print(rec)
     for design, mode, biases in (
         ("A-gaec", "sum", (-2.0, -1.0, 0.0, 1.0, 2.0, 3.0)),
-        ("A-mean", "mean", tuple(np.round(np.arange(0.3, 0.951, 0.05), 2))),
+        ("A-mean", "mean", tuple(np.round(np.arange(0.1, 0.951, 0.05), 2).tolist())),
     ):
         if design not in options.designs:
             continue
@@ -819,7 +819,7 @@ def main(argv=None):
     parser.add_argument(
         "--cuts", type=float, nargs="+", default=[0.5, 0.6, 0.7, 0.8, 0.85, 0.9, 0.95, 0.98], help="linkage cuts"
     )
-    parser.add_argument("--min-sizes", type=int, nargs="+", default=[1, 3, 6, 10, 15])
+    parser.add_argument("--min-sizes", type=int, nargs="+", default=[1, 3, 6, 10, 15, 20])
     parser.add_argument("--vote-control", action="store_true", help="also B's DBSCAN without the shift (B0)")
     parser.add_argument("--baselines", action="store_true", help="also run the ablation's SequenceDBSCAN + objects")
     parser.add_argument("--n-iter", type=int, default=20, help="search iterations of the baselines")
