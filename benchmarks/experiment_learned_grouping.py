@@ -22,11 +22,20 @@ Designs (each learner a ``HistGradientBoosting*`` on vectorised numpy features o
   (1 for pairs that are not candidates) per sequence and chunk of ``chunk`` s (chunk borders are offset by 0.25 s
   from the 0.5 s PQ frames, so a split at a border costs as it would on line); the cut, the objectness threshold,
   the chunk length and a minimum cluster size are tuned for PQ.
+* ``A-mean`` (the default; learned links + average linkage over the existing links only): greedily merge the two
+  clusters with the largest mean P(link) over the candidate pairs between them while it exceeds the link threshold;
+  pairs that are not candidates carry no evidence (not distance 1 as in ``A``), so neither chaining nor the time
+  span of a track splits it.  Link threshold, objectness gate and minimum cluster size tuned for PQ; the merge
+  order does not depend on the threshold, so one run per gate gives every threshold.
+* ``A-gaec`` (learned links + greedy additive edge contraction, a correlation clustering): merge the two clusters
+  with the largest sum of ``logit(P) + bias`` over the pairs between them while it is positive; bias, gate and
+  minimum size tuned.
 * ``A-mutual`` (learned links, no hierarchy): a link counts if P(link) > p_min and it is among the top-k links of
   both ends; connected components of those links; tuned like ``A``.
 * ``B`` (centre voting, Liu et al. 2022): two regressors predict each detection's offset to its object's centre
   (the mean of the object's detections within 0.15 s) along and across its line of sight; the shifted detections
   are clustered by DBSCAN on (x, y, a_t t) per sequence; eps, min_samples, a_t and the objectness threshold tuned.
+  ``--vote-control`` adds ``B0``, the same gate and DBSCAN search without the shift.
 
 Tuning (never on the test half): every threshold is chosen on out-of-fold predictions of the training half
 (``GroupKFold`` by sequence; later stages see out-of-fold outputs of earlier ones, as at test time); the models are
@@ -41,11 +50,12 @@ Times: ``fit`` is features + final model fits on the training half; ``tune`` the
 search; ``predict`` the test half end to end (front excluded) per scan (one sensor's cycle), batch-amortised, one
 core.
 
-Run (one core, niced)::
+Run (one core, niced; the first line is a smoke run of a minute or two, the second about 5-8 minutes per preset
+and seed on a busy 2-core machine; ``--designs`` picks designs, default ``A-mean A-mutual B``)::
 
     OMP_NUM_THREADS=1 nice -n 19 python benchmarks/experiment_learned_grouping.py --quick
     OMP_NUM_THREADS=1 nice -n 19 python benchmarks/experiment_learned_grouping.py --data realistic radarscenes \
-        --seeds 0 1 2 --baselines
+        --seeds 0 1 2 --designs A-mean B --vote-control --baselines
 """
 
 from __future__ import annotations
@@ -520,6 +530,50 @@ def score(sequences, labels_of):
     )
 
 
+def anatomy(sequences, labels_of):
+    """Missed ground-truth segments (0.5 s frames, as PQ) by cause, and the median size of missed and matched ones.
+
+    A segment is missed when no cluster's segment reaches IoU > 0.5 with it: ``noise`` when more than half of its
+    detections are noise; else ``merged`` when the cluster holding most of it covers more than half of it (so the
+    cluster is too large: other objects or background joined); else ``split`` (pieces, none large enough).
+    """
+    counts = {"matched": 0, "noise": 0, "merged": 0, "split": 0}
+    sizes = {"matched": [], "missed": []}
+    for s in sequences:
+        pred = np.full(s["n_rows"], -1, np.int64)
+        pred[s["keep"]] = labels_of(s)
+        frame = np.floor((s["t_all"] - s["t_all"].min()) / 0.5).astype(np.int64)
+        truth = s["target_all"]
+        _, pred_code = np.unique(np.column_stack([frame, pred]), axis=0, return_inverse=True)
+        pred_code = np.where(pred >= 0, pred_code.ravel(), -1)
+        pred_size = np.bincount(pred_code[pred_code >= 0])
+        obj = np.flatnonzero(truth >= 0)
+        _, gt_code = np.unique(np.column_stack([frame[obj], truth[obj]]), axis=0, return_inverse=True)
+        gt_code = gt_code.ravel()
+        gt_size = np.bincount(gt_code)
+        noise = np.bincount(gt_code, weights=pred[obj] < 0, minlength=len(gt_size))
+        hit = pred_code[obj] >= 0
+        cells, inter = np.unique(np.column_stack([gt_code[hit], pred_code[obj][hit]]), axis=0, return_counts=True)
+        iou = inter / (gt_size[cells[:, 0]] + pred_size[cells[:, 1]] - inter)
+        best_iou = np.zeros(len(gt_size))
+        np.maximum.at(best_iou, cells[:, 0], iou)
+        best_inter = np.zeros(len(gt_size))
+        np.maximum.at(best_inter, cells[:, 0], inter)
+        matched = best_iou > 0.5
+        counts["matched"] += int(matched.sum())
+        missed_noise = ~matched & (noise > gt_size / 2)
+        missed_merged = ~matched & ~missed_noise & (best_inter > gt_size / 2)
+        counts["noise"] += int(missed_noise.sum())
+        counts["merged"] += int(missed_merged.sum())
+        counts["split"] += int((~matched & ~missed_noise & ~missed_merged).sum())
+        sizes["matched"].append(gt_size[matched])
+        sizes["missed"].append(gt_size[~matched])
+    for key, values in sizes.items():
+        values = np.concatenate(values)
+        counts[f"median size {key}"] = float(np.median(values)) if len(values) else float("nan")
+    return counts
+
+
 def tune(train, grid, labels_for):
     """Best setting of ``grid`` for PQ on the training sequences' out-of-fold outputs."""
     best, best_pq = None, -1.0
@@ -585,6 +639,7 @@ def _record(design, test, labels_of, clock, n_scans, setting, cv_pq):
     clock["predict"] += time.perf_counter() - start
     scores = score(test, lambda s: labels[s["number"]])
     return {
+        "anatomy": anatomy(test, lambda s: labels[s["number"]]),
         "design": design,
         "pq": scores.pq,
         "recall": scores.recall,
@@ -787,19 +842,54 @@ def _print(rec):
         f" predict {rec['predict_ms_per_scan']:.2f} ms/scan setting {rec['setting']}",
         flush=True,
     )
+    print(f"    test ground-truth segments: {rec['anatomy']}", flush=True)
 
 
 def run_baselines(preset, seed, options):
-    """The object-level ablation's SequenceDBSCAN and object experiment on the same data and split."""
+    """The object-level ablation's SequenceDBSCAN and object experiment on the same data and split.
+
+    Returns ``{name: (test PQ, anatomy or None)}``; the object experiment's tuned pipeline is applied again to each
+    test sequence for its error anatomy (its PQ from these labels is printed as a check).
+    """
     sys.path.insert(0, str(Path(__file__).resolve().parent))
     import ablation_object_level as ablation
+
+    from sklearn_radar.experiments import object_pipeline
 
     chosen = [v for v in ablation.variants() if v.name in ("SequenceDBSCAN", "objects (stage 1)", "objects")]
     args = argparse.Namespace(
         n_sequences=options.n_sequences, duration=options.duration, n_iter=options.n_iter, cv_folds=3
     )
     found = ablation.run_one(preset, seed, chosen, args)
-    return {name: found[name]["pq"] for name in ("SequenceDBSCAN", "objects")}
+    scenes = make_scenes(
+        n_sequences=options.n_sequences, duration=options.duration, difficulty=preset, random_state=seed
+    )
+    target = precluster_target(scenes.data, scenes.target)
+    _, test_rows = sequence_train_test_split(scenes.groups, test_size=0.5, random_state=seed)
+    pipeline = object_pipeline(2, stage1_params=found["objects (stage 1)"]["params"], params=found["objects"]["params"])
+    sequences = []
+    for number in np.unique(scenes.groups[test_rows]):
+        rows = np.flatnonzero(scenes.groups == number)
+        labels = pipeline.fit_predict(scenes.data.iloc[rows])
+        t = scenes.data["timestamp"].to_numpy()[rows] * 1e-6
+        sequences.append(
+            {
+                "number": int(number),
+                "n_rows": len(rows),
+                "keep": np.ones(len(rows), bool),
+                "t_all": t,
+                "target_all": target[rows],
+                "labels": np.asarray(labels),
+            }
+        )
+    check = score(sequences, lambda s: s["labels"]).pq
+    print(f"  objects: PQ from the re-applied pipeline {check:.3f} (ablation {found['objects']['pq']:.3f})")
+    objects_anatomy = anatomy(sequences, lambda s: s["labels"])
+    print(f"    test ground-truth segments: {objects_anatomy}", flush=True)
+    return {
+        "SequenceDBSCAN": (found["SequenceDBSCAN"]["pq"], None),
+        "objects": (found["objects"]["pq"], objects_anatomy),
+    }
 
 
 def main(argv=None):
@@ -836,8 +926,8 @@ def main(argv=None):
                 for rec in run(preset, seed, options):
                     rows.append((preset, seed, rec))
                 if options.baselines:
-                    for name, pq in run_baselines(preset, seed, options).items():
-                        rows.append((preset, seed, {"design": name, "pq": pq}))
+                    for name, (pq, errors) in run_baselines(preset, seed, options).items():
+                        rows.append((preset, seed, {"design": name, "pq": pq, "anatomy": errors}))
     print(f"\n{'design':<26} {'preset':<12} seed  test PQ  recall  precision  fit s  tune s  predict ms/scan")
     for preset, seed, rec in rows:
         if "recall" in rec:
