@@ -132,7 +132,7 @@ DIFFICULTY_PRESETS["radarscenes"] = {
 }
 #: The knobs of the radarscenes preset: off in "easy" and in "realistic" (so both stay as they were); "radarscenes"
 #: turns on all but ``annotation_margin``, whose box labels drop the glinted detections (see the simulator guide).
-ISSUE_32_KNOBS = ("road_user_share", "stop_and_go", "annotation_margin", "glint")
+RADARSCENES_KNOBS = ("road_user_share", "stop_and_go", "annotation_margin", "glint")
 #: The knobs that are shares or probabilities, in [0, 1].
 UNIT_INTERVAL_KNOBS = ("object_detection_probability", "wheel_micro_doppler", "road_user_share", "stop_and_go", "glint")
 

@@ -7,7 +7,7 @@ import pytest
 from sklearn_radar._schema import STATIC_LABEL
 from sklearn_radar.datasets import make_scenes
 from sklearn_radar.datasets._scenario import EgoMotion, _turn_path, make_road
-from sklearn_radar.datasets._simulator import DIFFICULTY_PRESETS, ISSUE_32_KNOBS
+from sklearn_radar.datasets._simulator import DIFFICULTY_PRESETS, RADARSCENES_KNOBS
 
 EASY = DIFFICULTY_PRESETS["easy"]
 REALISTIC = DIFFICULTY_PRESETS["realistic"]
@@ -15,7 +15,7 @@ REALISTIC = DIFFICULTY_PRESETS["realistic"]
 #: realistic, which stays as it was), and a box annotator's 0.2 m for annotation_margin (off in every preset).
 ON = {
     **REALISTIC,
-    **{name: DIFFICULTY_PRESETS["radarscenes"][name] for name in ISSUE_32_KNOBS},
+    **{name: DIFFICULTY_PRESETS["radarscenes"][name] for name in RADARSCENES_KNOBS},
     "annotation_margin": 0.2,
 }
 
@@ -38,7 +38,7 @@ def easy():
 def test_the_presets_have_the_same_knobs_and_realistic_turns_every_one_on_but_issue_32s():
     assert set(EASY) == set(REALISTIC) == set(DIFFICULTY_PRESETS["radarscenes"])
     for name, value in EASY.items():
-        if name in ISSUE_32_KNOBS:
+        if name in RADARSCENES_KNOBS:
             assert value == REALISTIC[name], name
         else:
             assert value != REALISTIC[name], name

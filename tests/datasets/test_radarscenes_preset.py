@@ -21,7 +21,7 @@ from sklearn_radar.datasets._scenario import (
 )
 from sklearn_radar.datasets._simulator import (
     DIFFICULTY_PRESETS,
-    ISSUE_32_KNOBS,
+    RADARSCENES_KNOBS,
     _box_annotation,
     _glint,
     _object_detections,
@@ -40,7 +40,7 @@ def _easy(knobs=None, seed=4, n=2, duration=10.0):
 def test_radarscenes_is_realistic_with_fewer_longer_lived_road_users_and_the_new_knobs():
     realistic = DIFFICULTY_PRESETS["realistic"]
     changed = {name for name in realistic if realistic[name] != RADARSCENES[name]}
-    on = set(ISSUE_32_KNOBS) - {"annotation_margin"}
+    on = set(RADARSCENES_KNOBS) - {"annotation_margin"}
     assert changed == {"traffic", "occlusion", "object_detection_probability", *on}
     assert RADARSCENES["traffic"] < realistic["traffic"] and RADARSCENES["occlusion"] < realistic["occlusion"]
     assert RADARSCENES["road_user_share"] < 1 and RADARSCENES["stop_and_go"] > 0 and RADARSCENES["glint"] > 0
