@@ -94,8 +94,9 @@ def test_baselines_tuned_for_another_objective_are_not_set_beside_the_object_exp
 
     results = RunResults.read(objects_report / "results.json")
     assert results.meta.objective == "v1"
-    offline = SimpleNamespace(repeats=None, search=None, instance_test=SimpleNamespace(pq=0.116), v1_test=0.5)
-    causal = SimpleNamespace(repeats=None, search=None, instance_test=SimpleNamespace(pq=0.09), v1_test=0.4)
+    search = SimpleNamespace(cv_best=0.1)  # every baseline has a search; the choice reads its CV score
+    offline = SimpleNamespace(repeats=None, search=search, instance_test=SimpleNamespace(pq=0.116), v1_test=0.5)
+    causal = SimpleNamespace(repeats=None, search=search, instance_test=SimpleNamespace(pq=0.09), v1_test=0.4)
     baselines = {"offline baseline": offline, f"causal baseline, {_objects.CAUSAL_MARK}": causal}
     v1_run = dataclasses.replace(results, baselines=baselines)
     section = "\n".join(_objects.markdown(v1_run))
