@@ -141,18 +141,8 @@ def devkit_class_index(classes):
     """The RadarScenes devkit's ``ClassificationLabel`` value of each road-user class code.
 
     The classifiers predict the codes of :func:`road_user_class`; the devkit
-    numbers the same classes otherwise (:data:`DEVKIT_CLASS_INDEX`):
-
-    ====  ================  ==============================
-    code  class             devkit ``ClassificationLabel``
-    ====  ================  ==============================
-    0     car               CAR 0
-    1     large vehicle     LARGE_VEHICLE 4
-    2     two-wheeler       TWO_WHEELER 3
-    3     pedestrian        PEDESTRIAN 1
-    4     pedestrian group  PEDESTRIAN_GROUP 2
-    -1    background        STATIC 5
-    ====  ================  ==============================
+    numbers the same classes otherwise (:data:`DEVKIT_CLASS_INDEX`; the table
+    of both is in :class:`ClusterClassifier`'s description).
 
     Read more in the :ref:`User Guide <user-guide-classification>`.
 

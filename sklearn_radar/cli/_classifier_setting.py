@@ -20,13 +20,12 @@ import numpy as np
 from sklearn.base import clone
 from sklearn.pipeline import Pipeline
 
-from ..classification import DEVKIT_CLASS_INDEX, load_classifier
+from ..classification import devkit_class_index, load_classifier
 from ..classification._persist import final_classifier
 from ..cluster import RadarDBSCAN
 from ..datasets import load_radarscenes
 
 #: Our class code -> the devkit's ClassificationLabel value, as a lookup indexed by ``code + 1``.
-_DEVKIT_LOOKUP = np.array([DEVKIT_CLASS_INDEX[code] for code in range(-1, len(DEVKIT_CLASS_INDEX) - 1)])
 
 
 @dataclass
@@ -161,11 +160,6 @@ def _same(a, b):
         return bool(a == b)
     except (TypeError, ValueError):  # arrays: element-wise
         return np.array_equal(a, b)
-
-
-def devkit_class_index(classes):
-    """The devkit's ClassificationLabel value of each class code (-1 background -> STATIC, 5)."""
-    return _DEVKIT_LOOKUP[np.asarray(classes, dtype=np.int64) + 1]
 
 
 def classify_sequence(task):

@@ -14,11 +14,12 @@ from sklearn.utils._param_validation import validate_params
 from .._executor import connect_executor
 from .._files import atomic_write, check_ours_to_replace
 from .._schema import LABELS, STATIC_LABEL
+from ..classification import devkit_class_index
 from ..classification._classes import CLASS_OF_LABEL, DEVKIT_CLASS_INDEX, DEVKIT_CLASS_NAMES, IGNORED
 from ..datasets import load_radarscenes
 from ..datasets._radarscenes import _read_sensors_json, _read_sequences_json, _resolve_data_dir
 from ..experiments._saved import SAVED_EXPERIMENT, params_setting
-from ._classifier_setting import classifier_setting, classify_sequence, devkit_class_index
+from ._classifier_setting import classifier_setting, classify_sequence
 
 #: Our two "classes" in the devkit's per-point prediction file: clustered or noise.
 CLASS_NAMES = {0: "NOISE", 1: "CLUSTERED"}
