@@ -15,6 +15,11 @@ TEMPORARY_PREFIX = ".sklearn-radar-tmp-"
 _TEMPORARY = re.compile(re.escape(TEMPORARY_PREFIX) + r"(\d+)-")
 
 
+def shown_path(path) -> str:
+    """A path as text that can be printed and written as UTF-8: undecodable bytes appear as ``\\xff``."""
+    return os.fsencode(path).decode("utf-8", "backslashreplace")
+
+
 def current_umask() -> int:
     """The process's umask, read without changing it where Linux's /proc tells it (``os.umask`` is process-wide)."""
     try:

@@ -13,6 +13,7 @@ import sys
 import time
 
 from .. import __version__
+from .._files import shown_path as _shown
 
 
 def main(argv=None) -> int:
@@ -87,11 +88,6 @@ def _silence_stdout():
 def _named(experiment):
     """``#13`` for a paper experiment, ``'objects'`` for the object experiment."""
     return f"#{experiment}" if isinstance(experiment, int) else repr(experiment)
-
-
-def _shown(path):
-    """A path as text that can be printed and written as UTF-8: undecodable bytes appear as ``\\xff``."""
-    return os.fsencode(path).decode("utf-8", "backslashreplace")
 
 
 def _parser():

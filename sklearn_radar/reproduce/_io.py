@@ -12,7 +12,7 @@ import json
 import os
 from pathlib import Path
 
-from .._files import sha256
+from .._files import sha256, shown_path
 
 #: The ``tool`` of a run marker: the marker of a folder that a reproduce run wrote.
 RUN_TOOL = "sklearn-radar reproduce"
@@ -59,14 +59,9 @@ def check_apart(data, out, data_name="data", out_name="out"):
     else:
         return
     raise ValueError(
-        f"{out_name} {_shown(out)} {where} the {data_name} folder {_shown(data)}: the report would mix with the "
-        f"data; choose an {out_name} apart from {data_name}"
+        f"{out_name} {shown_path(out)} {where} the {data_name} folder {shown_path(data)}: the report would mix with "
+        f"the data; choose an {out_name} apart from {data_name}"
     )
-
-
-def _shown(path):
-    """A path as printable text (undecodable bytes as ``\\xff``)."""
-    return os.fsencode(path).decode("utf-8", "backslashreplace")
 
 
 def check_run_folder(folder, marker_name, run_files):

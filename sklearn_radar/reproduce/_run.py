@@ -46,6 +46,7 @@ from .._files import (
     remove_empty_folders,
     remove_stale_temporaries,
     sha256,
+    shown_path,
     temporary_prefix,
 )
 from ..classification import save_classifier
@@ -574,10 +575,7 @@ def _data(data, budget, seed, difficulty, executor):
             f"simulated ({budget.n_sequences} sequences x {budget.duration:g} s, seed {seed}, difficulty {difficulty})"
         )
     # The source goes into report.md (UTF-8): an undecodable byte of the path is shown as \xff.
-    return (
-        RunSequences.from_folder(data, executor),
-        f"RadarScenes folder {os.fsencode(data).decode('utf-8', 'backslashreplace')}",
-    )
+    return RunSequences.from_folder(data, executor), f"RadarScenes folder {shown_path(data)}"
 
 
 def _save(run):
