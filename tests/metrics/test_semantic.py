@@ -501,7 +501,12 @@ def test_a_perfect_prediction_scores_one(data):
         confidence=[1.0] * len(data["times"]),
     )
     scores = _scores(perfect)
-    has_road_user = bool(class_panoptic_quality(**{k: perfect[k] for k in CASE}, times=perfect["times"])["per_class"])
+    # With the sequences: an instance id of two sequences is two instances, each with its own class vote.
+    has_road_user = bool(
+        class_panoptic_quality(**{k: perfect[k] for k in CASE}, times=perfect["times"], groups=perfect["groups"])[
+            "per_class"
+        ]
+    )
     for key in ("pq", "sq", "rq", "map", "mcov"):
         assert scores[key] == (1.0 if has_road_user else 0.0), key
     kept_rows = any(c != -2 for c in data["classes_true"])
