@@ -2,10 +2,11 @@
 
 The radar V-measure and the pre-clustered target of Scheiner et al. 2019 (Sec. "Parameter Optimization"), and
 object-level scores per time frame: panoptic quality, coverage and the share of background-only clusters; and
-the tracking quality of object ids over frames: ID switches, MOTA and IDF1; and the semantic scores of
+the tracking quality of object ids over frames: ID switches, MOTA, IDF1 and HOTA; and the semantic scores of
 classified road users: class-aware panoptic quality, mAP, point-wise macro-F1 and coverage.
 """
 
+from ._hota import hota_scores
 from ._instance import (
     background_share,
     instance_coverage,
@@ -28,6 +29,7 @@ from ._v_measure import radar_homogeneity_completeness_v_measure, radar_v_measur
 __all__ = [
     "background_share",
     "class_panoptic_quality",
+    "hota_scores",
     "instance_coverage",
     "instance_scores",
     "make_instance_scorer",
