@@ -79,6 +79,7 @@ PARAM_VALIDATION_FUNCTION_LIST = [
     "sklearn_radar.metrics.class_panoptic_quality",
     "sklearn_radar.metrics.hota_scores",
     "sklearn_radar.metrics.instance_coverage",
+    "sklearn_radar.metrics.instance_errors",
     "sklearn_radar.metrics.instance_scores",
     "sklearn_radar.metrics.make_instance_scorer",
     "sklearn_radar.metrics.make_semantic_scorer",

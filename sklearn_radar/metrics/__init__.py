@@ -1,11 +1,13 @@
 """Scores and targets for radar clustering.
 
 The radar V-measure and the pre-clustered target of Scheiner et al. 2019 (Sec. "Parameter Optimization"), and
-object-level scores per time frame: panoptic quality, coverage and the share of background-only clusters; and
+object-level scores per time frame: panoptic quality, coverage, the share of background-only clusters and the
+missed and false segments by cause; and
 the tracking quality of object ids over frames: ID switches, MOTA, IDF1 and HOTA; and the semantic scores of
 classified road users: class-aware panoptic quality, mAP, point-wise macro-F1 and coverage.
 """
 
+from ._errors import instance_errors
 from ._hota import hota_scores
 from ._instance import (
     background_share,
@@ -31,6 +33,7 @@ __all__ = [
     "class_panoptic_quality",
     "hota_scores",
     "instance_coverage",
+    "instance_errors",
     "instance_scores",
     "make_instance_scorer",
     "make_semantic_scorer",

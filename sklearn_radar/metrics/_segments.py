@@ -75,8 +75,13 @@ def _frame_cells(n, times, groups, frame):
     return seq, n_seq, cell, n_cell
 
 
-def _segment_counts(labels_true, labels_pred, *, times=None, groups=None, frame=0.5):
-    """The sums and counts of :data:`COUNT_KEYS` of a labelling, in one pass, as a dict."""
+def _segments(labels_true, labels_pred, *, times=None, groups=None, frame=0.5):
+    """The segments of both labellings and their overlaps, vectorised.
+
+    Returns a Bunch: ``seq``, ``n_seq``, per detection; ``true_seg``, ``pred_seg`` (segment id per detection, -1
+    for background or noise), ``n_true``, ``n_pred``, ``true_size``, ``pred_size``; and per overlapping pair of
+    segments ``pair_true``, ``pair_pred``, ``inter``, ``union`` and ``iou``.
+    """
     labels_true = np.asarray(labels_true)
     labels_pred = np.asarray(labels_pred)
     n = labels_true.shape[0] if labels_true.ndim == 1 else -1
@@ -110,7 +115,31 @@ def _segment_counts(labels_true, labels_pred, *, times=None, groups=None, frame=
     first[pair_code[::-1]] = np.flatnonzero(both)[::-1]  # one row of each pair (which one does not matter)
     pair_true, pair_pred = true_seg[first], pred_seg[first]
     union = true_size[pair_true] + pred_size[pair_pred] - inter
-    iou = inter / np.maximum(union, 1)
+    return Bunch(
+        seq=seq,
+        n_seq=n_seq,
+        true_seg=true_seg,
+        pred_seg=pred_seg,
+        n_true=n_true,
+        n_pred=n_pred,
+        true_size=true_size,
+        pred_size=pred_size,
+        pair_true=pair_true,
+        pair_pred=pair_pred,
+        inter=inter,
+        union=union,
+        iou=inter / np.maximum(union, 1),
+    )
+
+
+def _segment_counts(labels_true, labels_pred, *, times=None, groups=None, frame=0.5):
+    """The sums and counts of :data:`COUNT_KEYS` of a labelling, in one pass, as a dict."""
+    found = _segments(labels_true, labels_pred, times=times, groups=groups, frame=frame)
+    labels_true, labels_pred = np.asarray(labels_true), np.asarray(labels_pred)
+    is_object, is_cluster = labels_true != -1, labels_pred != -1
+    seq, n_seq, n_true, n_pred = found.seq, found.n_seq, found.n_true, found.n_pred
+    true_size, inter, union, iou = found.true_size, found.inter, found.union, found.iou
+    pair_true, pair_pred = found.pair_true, found.pair_pred
 
     # Panoptic quality: IoU > 0.5, i.e. 2 |g ∩ p| > |g ∪ p| in integers, makes every match unique.
     matched = 2 * inter > union
