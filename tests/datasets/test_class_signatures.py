@@ -9,8 +9,9 @@ from hypothesis import strategies as st
 from sklearn_radar import FrameTransform
 from sklearn_radar.classification import cluster_features
 from sklearn_radar.datasets import make_scenes
+from sklearn_radar.datasets._detections import WHEEL_RADIUS, _wheel_reflections
+from sklearn_radar.datasets._presets import DIFFICULTY_PRESETS
 from sklearn_radar.datasets._scenario import ROAD_USER_CLASSES, aspect_rcs
-from sklearn_radar.datasets._simulator import DIFFICULTY_PRESETS, WHEEL_RADIUS, _wheel_reflections
 
 from .test_preset_pins import digest
 

@@ -6,8 +6,8 @@ import pytest
 
 from sklearn_radar._schema import STATIC_LABEL
 from sklearn_radar.datasets import make_scenes
+from sklearn_radar.datasets._presets import DIFFICULTY_PRESETS, RADARSCENES_KNOBS
 from sklearn_radar.datasets._scenario import EgoMotion, _turn_path, make_road
-from sklearn_radar.datasets._simulator import DIFFICULTY_PRESETS, RADARSCENES_KNOBS
 
 EASY = DIFFICULTY_PRESETS["easy"]
 REALISTIC = DIFFICULTY_PRESETS["realistic"]
@@ -136,7 +136,7 @@ def test_rain_falls_mostly_at_short_range(easy):
 
 
 def test_second_bounce_ghosts_sit_at_twice_the_range_with_twice_the_radial_velocity():
-    from sklearn_radar.datasets._simulator import _second_bounce
+    from sklearn_radar.datasets._phenomena import _second_bounce
 
     objects = {
         "scan": np.array([0, 1, 2]),
@@ -206,7 +206,7 @@ def test_detection_range_thins_far_objects_more_than_near_ones(easy):
 
 
 def test_angular_noise_grows_with_range_up_to_a_bound():
-    from sklearn_radar.datasets._simulator import AZIMUTH_NOISE_GROWTH, _measure
+    from sklearn_radar.datasets._sensor_model import AZIMUTH_NOISE_GROWTH, _measure
 
     rng = np.random.default_rng(0)
     n = 4000

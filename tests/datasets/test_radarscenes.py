@@ -20,8 +20,9 @@ from sklearn_radar._schema import (
     make_frame,
     nearest_odometry_index,
 )
-from sklearn_radar.datasets import _radarscenes, make_scenes
-from sklearn_radar.datasets._radarscenes import load_radarscenes, write_radarscenes
+from sklearn_radar.datasets import _radarscenes_format, _radarscenes_writer, make_scenes
+from sklearn_radar.datasets._radarscenes_reader import load_radarscenes
+from sklearn_radar.datasets._radarscenes_writer import write_radarscenes
 
 SEQUENCES = {2: "train", 5: "validation"}
 ODOMETRY_PERIOD = 20_000  # µs, 50 Hz
@@ -231,8 +232,8 @@ def test_written_layout_and_json_keys(written):
     ]
     assert first["prev_timestamp"] is None and first["radar_indices"][0] == 0
     radar_data, odometry = read_h5(root / "sequence_2" / "radar_data.h5")
-    assert radar_data.dtype == _radarscenes.RADAR_DATA_H5_DTYPE
-    assert odometry.dtype == _radarscenes.ODOMETRY_H5_DTYPE
+    assert radar_data.dtype == _radarscenes_format.RADAR_DATA_H5_DTYPE
+    assert odometry.dtype == _radarscenes_format.ODOMETRY_H5_DTYPE
     assert radar_data.dtype.names == tuple(c.name for c in RADAR_DATA_COLUMNS)
 
 
@@ -610,7 +611,7 @@ def test_write_string_where_float_belongs(tmp_path):
 
 
 def failing_on_second_call(monkeypatch):
-    original = _radarscenes._write_radar_data_h5
+    original = _radarscenes_writer._write_radar_data_h5
     calls = []
 
     def write_then_fail(*args):
@@ -619,7 +620,7 @@ def failing_on_second_call(monkeypatch):
             raise OSError("disk full (simulated)")
         original(*args)
 
-    monkeypatch.setattr(_radarscenes, "_write_radar_data_h5", write_then_fail)
+    monkeypatch.setattr(_radarscenes_writer, "_write_radar_data_h5", write_then_fail)
 
 
 def test_failed_write_leaves_nothing_behind(tmp_path, monkeypatch):

@@ -8,6 +8,9 @@ from hypothesis import strategies as st
 
 from sklearn_radar._schema import STATIC_LABEL
 from sklearn_radar.datasets import make_scenes
+from sklearn_radar.datasets._annotation import _box_annotation
+from sklearn_radar.datasets._detections import _glint, _object_detections
+from sklearn_radar.datasets._presets import DIFFICULTY_PRESETS, RADARSCENES_KNOBS
 from sklearn_radar.datasets._scenario import (
     OVERTAKING_LANE,
     STOP_DECELERATION,
@@ -19,15 +22,7 @@ from sklearn_radar.datasets._scenario import (
     make_road,
     simulate_ego,
 )
-from sklearn_radar.datasets._simulator import (
-    DIFFICULTY_PRESETS,
-    RADARSCENES_KNOBS,
-    _box_annotation,
-    _glint,
-    _object_detections,
-    _scan_schedule,
-    _sensor_states,
-)
+from sklearn_radar.datasets._sensor_model import _scan_schedule, _sensor_states
 
 EASY = DIFFICULTY_PRESETS["easy"]
 RADARSCENES = DIFFICULTY_PRESETS["radarscenes"]

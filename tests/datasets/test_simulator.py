@@ -8,7 +8,8 @@ from sklearn.metrics import v_measure_score
 
 from sklearn_radar._schema import DETECTION_COLUMNS, RADARSCENES_MOUNTING, STATIC_LABEL
 from sklearn_radar.datasets import make_scenes, scene_statistics
-from sklearn_radar.datasets._simulator import FOV, MAX_RANGE, _measure, _track_ids, _uuids
+from sklearn_radar.datasets._annotation import _track_ids, _uuids
+from sklearn_radar.datasets._sensor_model import FOV, MAX_RANGE, _measure
 
 
 @pytest.fixture(scope="module")
