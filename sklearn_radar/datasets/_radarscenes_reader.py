@@ -25,10 +25,10 @@ from .._schema import (
     ODOMETRY_COLUMNS,
     RADAR_DATA_COLUMNS,
     attach_context,
-    instance_target,
     make_frame,
 )
 from .._validation import check_plausible
+from ._bunch import data_bunch
 from ._radarscenes_checks import (
     _DOPPLER_COLUMNS,
     _check_finite,
@@ -108,15 +108,11 @@ def load_radarscenes(path, sequences=None) -> Bunch:
     parts = [_load_sequence(data_dir / f"sequence_{n}", n, mounting) for n in numbers]
     data = _concat([detections for detections, _ in parts], DETECTION_COLUMNS)
     odometry = _concat([odometry for _, odometry in parts], ODOMETRY_COLUMNS)
-    return Bunch(
-        data=data,
-        target=instance_target(data["track_id"], data["sequence"]),
-        groups=data["sequence"].to_numpy(dtype=np.int64),
-        odometry=odometry,
-        sensors=_sensors_frame(mounting),
-        sequences=_sequences_frame(numbers, [catalogue[n] for n in numbers]),
-        DESCR=(f"RadarScenes detections loaded from {data_dir}: {len(numbers)} sequence(s), {len(data)} detection(s)."),
+    categories = [catalogue[n] for n in numbers]
+    description = (
+        f"RadarScenes detections loaded from {data_dir}: {len(numbers)} sequence(s), {len(data)} detection(s)."
     )
+    return data_bunch(data, odometry, mounting, numbers, categories, description)
 
 
 def _resolve_data_dir(path: Path) -> Path:
@@ -272,21 +268,3 @@ def _concat(frames: list, columns) -> pd.DataFrame:
         empty = {c.name: np.array([], dtype="U1" if c.dtype == "str" else c.dtype) for c in columns}
         return make_frame(empty, columns, table="empty")
     return pd.concat(frames, ignore_index=True)
-
-
-def _sensors_frame(mounting: dict) -> pd.DataFrame:
-    index = pd.Index(list(mounting), dtype=np.int64, name="sensor_id")
-    return pd.DataFrame(
-        {key: np.array([m[key] for m in mounting.values()], dtype=np.float64) for key in ("x", "y", "yaw")},
-        index=index,
-    )
-
-
-def _sequences_frame(numbers, categories) -> pd.DataFrame:
-    return pd.DataFrame(
-        {
-            "sequence": np.asarray(numbers, dtype=np.int64),
-            "name": pd.array([f"sequence_{n}" for n in numbers], dtype="str"),
-            "category": pd.array(list(categories), dtype="str"),
-        }
-    )

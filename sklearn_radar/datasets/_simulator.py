@@ -13,7 +13,7 @@ import numbers
 
 import numpy as np
 import pandas as pd
-from sklearn.utils import Bunch, check_random_state
+from sklearn.utils import check_random_state
 from sklearn.utils._param_validation import Interval, StrOptions, validate_params
 
 from .._schema import (
@@ -21,11 +21,11 @@ from .._schema import (
     RADAR_DATA_COLUMNS,
     RADARSCENES_MOUNTING,
     attach_context,
-    instance_target,
     make_frame,
     nearest_odometry_index,
 )
 from ._annotation import _box_annotation, _track_ids, _uuids
+from ._bunch import data_bunch
 from ._detections import _clutter, _ghosts, _object_detections, _static_detections
 from ._phenomena import _phenomena
 from ._presets import DIFFICULTY_PRESETS, _check_knobs, _overrides
@@ -304,32 +304,7 @@ def simulate_sequences(numbers, seeds, duration, n_objects, static_density, knob
         odometry.append(odo)
     data = pd.concat(data, ignore_index=True)
     odometry = pd.concat(odometry, ignore_index=True)
-    numbers = np.asarray(numbers, dtype=np.int64)
-    return Bunch(
-        data=data,
-        target=instance_target(data["track_id"], data["sequence"]),
-        groups=data["sequence"].to_numpy(dtype=np.int64),
-        odometry=odometry,
-        sensors=mounting_frame(RADARSCENES_MOUNTING),
-        sequences=pd.DataFrame(
-            {
-                "sequence": numbers,
-                "name": pd.array([f"sequence_{n}" for n in numbers], dtype="str"),
-                "category": pd.array(["train"] * len(numbers), dtype="str"),
-            }
-        ),
-        DESCR=description,
-    )
-
-
-def mounting_frame(mounting) -> pd.DataFrame:
-    """The sensor mounting as a DataFrame indexed by ``sensor_id`` (columns x, y in m, yaw in rad)."""
-    ids = sorted(int(k) for k in mounting)
-    frame = pd.DataFrame(
-        {field: np.array([float(mounting[k][field]) for k in ids]) for field in ("x", "y", "yaw")},
-        index=pd.Index(np.array(ids, dtype=np.int64), name="sensor_id"),
-    )
-    return frame
+    return data_bunch(data, odometry, RADARSCENES_MOUNTING, numbers, ["train"] * len(numbers), description)
 
 
 def _check_n_objects(n_objects):
