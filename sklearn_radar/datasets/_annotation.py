@@ -16,15 +16,11 @@ NEW_TRACK_GAP = 0.5  # s, RadarScenes: a new track id after longer absence
 def _box_annotation(truth, measured, users, sensor, margin):
     """The labels of an annotator who marks each road user, scan by scan, by its box enlarged by ``margin`` (m).
 
-    RadarScenes' labels come from a semi-automatic process in which the
-    detections of a road user are selected by its extent (Schumann et al.,
-    "RadarScenes", FUSION 2021, section III).  Such a label follows where a
-    detection was *measured*, not what reflected it: an own detection that
-    the azimuth noise (0.1-0.5 m across at 20-50 m) pushed beyond the box
-    becomes background, and a background detection measured inside the box
-    (a ghost, spray, clutter, a kerb or a parked car beside a pedestrian)
-    joins the object.  Only scans in which the object has a detection of its
-    own are marked, and never while it stands (it is not a moving road user).
+    A label follows where a detection was *measured*, not what reflected it:
+    an own detection measured beyond the box becomes background, and a
+    background detection measured inside the box joins the object.  Only
+    scans in which the object has a detection of its own are marked, and
+    never while it stands.  Read more in the :ref:`User Guide <simulator-knobs>`.
     """
     scan = truth["scan"]
     angle = measured["azimuth_sc"].astype(float) + sensor["boresight"][scan]

@@ -165,10 +165,8 @@ def _one_object(index, user, sensor, rng, knobs=None, extra=None, signature=None
 def _glint(azimuth, r, user, share, rng):
     """Angle glint: a ``share`` of the detections' azimuths wander by about the object's angular extent.
 
-    Where several scattering centres of one object fall into the same range-Doppler cell, their echoes interfere
-    and the angle estimate of the cell leaves the line of any of them, by up to the object's angular extent and
-    beyond (glint; Skolnik, "Introduction to Radar Systems", 3rd ed., sec. 4.4).  The error is normal, its
-    standard deviation half the angular extent ``hypot(length, width) / r`` (rad).
+    The error is normal, its standard deviation half the angular extent ``hypot(length, width) / r`` (rad); see
+    ``glint`` in the :ref:`User Guide <simulator-knobs>`.
     """
     hit = rng.random(len(azimuth)) < share
     extent = np.hypot(user.length, user.width) / np.maximum(r[hit], 1.0)
@@ -196,17 +194,11 @@ def _wheel_reflections(user, scan, motion, points, sin_aspect, knobs, rng):
     A wheel rolling without slip at hub velocity ``v`` turns about its
     contact point: the rim point at angle ``phi`` (``R cos phi`` ahead of the
     hub, ``R sin phi`` above it) moves horizontally at ``v (1 + sin phi)``,
-    from 0 at the bottom to ``2 v`` at the top.  The wheels are seen from
-    the side only (the body hides them from ahead and behind), so a
-    detection lies on a wheel of the visible side with probability
-    ``wheel_micro_doppler * |sin aspect|``; it keeps its scan and gets a
-    uniform ``phi``, an axle of the class (``ROAD_USER_CLASSES[...]["axles"]``)
-    and the velocity of that rim point.  Kellner et al., "Wheel extraction
-    based on micro Doppler distribution using high-resolution radar"
-    (ICMIM 2015), find a car's wheels in 77 GHz radar data by exactly this
-    spread of Doppler about the body's; cyclist models carry scatterers on
-    the rims and spokes (Stolz et al., "Multi-target reflection point model
-    of cyclists for automotive radar", EuRAD 2017).
+    from 0 at the bottom to ``2 v`` at the top.  A detection lies on a wheel
+    of the visible side with probability ``wheel_micro_doppler * |sin aspect|``;
+    it keeps its scan and gets a uniform ``phi``, an axle of the class
+    (``ROAD_USER_CLASSES[...]["axles"]``) and the velocity of that rim point.
+    Read more in the :ref:`User Guide <simulator-knobs>`.
     """
     cx, cy, vx, vy, heading, yaw_rate = motion
     px, py, pvx, pvy = points

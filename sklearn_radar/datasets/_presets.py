@@ -9,10 +9,9 @@ import numbers
 
 import numpy as np
 
-#: The knobs of the simulator's phenomena and their values in the two ``difficulty`` presets.  "easy" turns
-#: every phenomenon off and is the simulator of sklearn-radar 0.x; "realistic" sets each to a physically argued
-#: value (see :func:`make_scenes` and the user guide's "Simulated data" page for the arguments and the
-#: calibration against published figures).
+#: The knobs of the simulator's phenomena and their values in the ``difficulty`` presets.  "easy" turns every
+#: phenomenon off; "realistic" sets each to a physically argued value (see :func:`make_scenes`, and the user
+#: guide's "Simulated data" page for the arguments and the calibration against published figures).
 DIFFICULTY_PRESETS = {
     "easy": {
         "odometry_speed_scale": 0.0,

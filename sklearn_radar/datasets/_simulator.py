@@ -1,10 +1,11 @@
 """Scene simulator: realistic radar recordings in the RadarScenes layout.
 
-The ground truth (ego drive, road, static world, road users) comes from
-:mod:`._scenario`; this module turns it into radar detections of four
-unsynchronised sensors with the RadarScenes mounting, adds measurement
-noise, clutter and multipath ghosts, and writes the detection table of
-:mod:`sklearn_radar._schema`.
+:func:`make_scenes` takes the ground truth (ego drive, road, static world,
+road users) from :mod:`._scenario`, the sensors from :mod:`._sensor_model`,
+the true detections from :mod:`._detections` and :mod:`._phenomena`, the
+labels from :mod:`._annotation`, and returns the detection table of
+:mod:`sklearn_radar._schema`.  Read more in the
+:ref:`User Guide <user-guide-simulator>`.
 """
 
 from __future__ import annotations
@@ -89,6 +90,8 @@ def make_scenes(
     with size.  Coordinates and Doppler obey the formulas of
     :mod:`sklearn_radar._schema` exactly.
 
+    Read more in the :ref:`User Guide <user-guide-simulator>`.
+
     Parameters
     ----------
     n_sequences : int, default=4
@@ -107,140 +110,91 @@ def make_scenes(
     first_sequence : int, default=1
         Number N >= 1 of the first sequence (folder ``sequence_N``).
     difficulty : {"easy", "realistic", "radarscenes"}, default="realistic"
-        Preset of the phenomena that make real radar data hard.  "easy" turns
-        them all off (the simulator described above); "realistic" turns each
-        on at a physically argued value
+        Preset of the knobs below.  "easy" turns every phenomenon off (the
+        simulator described above); "realistic" turns each on
         (``sklearn_radar.datasets._presets.DIFFICULTY_PRESETS``);
         "radarscenes" is "realistic" with RadarScenes' traffic statistics
-        (about 31 road users per minute with about 470 annotated detections
-        each, instead of about 83 with 240), road users that stop and start
-        and box annotation (:ref:`User Guide <simulator-radarscenes-statistics>`).
-        Equal seeds give the same drive, road, static world
-        and base road users in all presets ("radarscenes" keeps a share of
-        them).
+        (fewer, longer-lived road users), road users that stop and start and
+        angle glint (:ref:`User Guide <simulator-radarscenes-statistics>`).
+        Equal seeds give the same drive, road, static world and base road
+        users in all presets ("radarscenes" keeps a share of them).
     knobs : dict, default=None
-        Values that override single knobs of the preset (all seedable
-        through ``random_state``):
+        Values that override single knobs of the preset, all seeded by
+        ``random_state``.  The value of "realistic" is in brackets; what each
+        knob models and why it has that value is in the
+        :ref:`User Guide <simulator-knobs>`.
 
         * ``odometry_speed_scale``: standard deviation of the relative
-          wheel-speed scale error, one draw per sequence (realistic 0.005:
-          tyre circumference within +-1 %).
+          wheel-speed scale error, one draw per sequence (0.005).
         * ``odometry_speed_noise``: m/s, white noise of the 50 Hz odometry
-          speed (0.04: wheel-tick quantisation).
+          speed (0.04).
         * ``odometry_yaw_rate_bias``: rad/s, standard deviation of the gyro
-          bias per sequence (0.002: about 0.1 deg/s after offset learning).
+          bias per sequence (0.002).
         * ``odometry_yaw_rate_noise``: rad/s, white noise of the yaw rate
           (0.003).
           The reported pose is dead-reckoned from the erroneous speed and
           yaw rate; ``vr_compensated`` uses them, so static Doppler spreads.
         * ``mounting_error``: rad, standard deviation of each sensor's yaw
-          error per sequence (0.5 deg: alignment tolerance of series
-          radars); it smears static structure between sensors in FCS.
+          error per sequence (0.5 deg).
         * ``time_offset``: s, standard deviation of each sensor's time-stamp
-          offset per sequence (0.005: CAN latency of unsynchronised sensors).
+          offset per sequence (0.005).
         * ``multipath``: ghosts per object detection and per strong static
           detection (>= 10 dBsm) mirrored at the wall or guard rail nearer to
           the reflector (0.05); a moving object's ghost moves and carries the
           mirrored Doppler.
         * ``second_bounce``: ghosts per object detection at twice the range
-          and twice the radial velocity (the path sensor-object-car-object,
-          0.02).
+          and twice the radial velocity (0.02).
         * ``rain``: rain and spray clutter per scan, mostly at short range,
-          with a radial velocity of its own (1.0; s.d. 0.8 m/s of wind).
+          with a radial velocity of its own, s.d. 0.8 m/s (1.0).
         * ``spray``: spray detections per vehicle detection, behind the rear
           wheels, moving with 30-90 % of the vehicle's velocity (0.05).
         * ``sidelobes``: sidelobe detections per detection of >= 10 dBsm,
           2-6 deg beside it at its range and Doppler, 15-25 dB weaker (0.2).
         * ``traffic``: close situations of dense urban traffic per minute
-          (12, about 40 road users per minute in all; RadarScenes averages
-          at most 31 over its 4 h, quieter stretches included): turning
-          vehicles (their Doppler varies across the body), convoys
-          1.5-4 m apart, a pedestrian beside a pedestrian group, pedestrians
-          and cyclists passing parked cars 0.3-0.7 m away.
+          (12): turning vehicles, convoys 1.5-4 m apart, a pedestrian beside
+          a pedestrian group, pedestrians and cyclists passing parked cars
+          0.3-0.7 m away.
         * ``occlusion``: mean number of 1-4 s occlusions per road user (0.3).
         * ``detection_range``: m, range at which a 10 dBsm Swerling-1 target
-          is detected with probability 0.5 (100, the sensors' specified
-          range; a 5 dBsm car: 84 m, a -8 dBsm pedestrian: 36 m); object detections are
+          is detected with probability 0.5 (100); object detections are
           thinned by ``exp(-ln 2 (r / r_50)^4)`` with ``r_50`` scaled by the
-          class RCS as ``10^((rcs - 10) / 40)`` (radar equation), which
-          leaves lone detections at range.  ``inf``: no thinning.
-        * ``object_detection_probability``: probability, in [0, 1], that a
+          object's RCS as ``10^((rcs - 10) / 40)``.  ``inf``: no thinning.
+        * ``object_detection_probability``: in [0, 1], probability that a
           road user's scattering point in view is detected in a scan at
-          close range (0.5); calibrated to the published RadarScenes figure
-          of about 4 million annotated detections in 4 h of 4 sensors, about
-          4 per scan.
+          close range (0.5).
         * ``angular_noise_range``: m, beyond it the azimuth noise grows with
-          the square of the range (SNR falls with r^4), up to 2.5 times its
-          value near the detection threshold (40).  ``inf``: no growth.
+          the square of the range, up to 2.5 times its value (40).  ``inf``:
+          no growth.
         * ``rcs_fluctuation``: bool, Swerling-1 fluctuation (exponential
-          power, 5.6 dB spread) on top of the aspect noise of the RCS (True).
+          power) on top of the aspect noise of the RCS (True).
         * ``rcs_object_spread``: dB, standard deviation of a road user's own
-          offset of its mean RCS, one draw per object (3): objects of one
-          class differ in shape, size and material (a small hatchback and a
-          van, a child and an adult, clothing), and measured 77 GHz RCS
-          distributions differ from vehicle to vehicle and person to person
-          (Lee et al., "Radar cross section measurement with 77 GHz
-          automotive FMCW radar", PIMRC 2016, four people and four vehicles;
-          Fortuny-Guasch and Chareau, JRC report EUR 25762, 2013, people and
-          dummies at 24 and 77 GHz).  Without it every object of a class has
-          the same mean RCS and the mean RCS is an unrealistically clean
-          class feature.
-        * ``rcs_aspect``: scale, >= 0, of the classes' aspect dependence of
+          offset of its class's mean RCS, one draw per object (3).
+        * ``rcs_aspect``: >= 0, scale of the classes' aspect dependence of
           the RCS (1: the amplitudes ``rcs_side`` and ``rcs_oblique`` of
-          ``_scenario.ROAD_USER_CLASSES``; see ``_scenario.aspect_rcs``).  Flat
-          panels reflect specularly: a vehicle is strongest broadside and
-          head- or tail-on and weakest at oblique aspects (a car about 5 dB
-          above its average broadside, 4 dB below it at 45 deg), a bicycle's
-          frame and wheels are strong broadside and thin from ahead (+-5 dB);
-          a pedestrian looks alike from all sides (0).  The detection
-          threshold sees this RCS: ``detection_range``'s ``r_50`` follows the
-          object's offset and aspect.
+          ``_scenario.ROAD_USER_CLASSES``; see ``_scenario.aspect_rcs``).
+          ``detection_range``'s ``r_50`` follows the object's offset and
+          aspect.
         * ``wheel_micro_doppler``: in [0, 1], the share of the detections of a
           car, truck, bus or bicycle seen broadside that come from its wheels
-          (0.25); a share ``|sin aspect|`` of that from other aspects, none
-          head-on, where the body hides the wheels.  A rolling wheel's rim
-          point moves at ``v (1 + sin phi)``, from 0 at the road to ``2 v`` at
-          the top, so wheel detections spread the object's Doppler over
-          ``[0, 2 v]`` times the line-of-sight projection (Kellner et al.,
-          "Wheel extraction based on micro Doppler distribution using
-          high-resolution radar", ICMIM 2015).  Pedestrians' limbs already
-          swing every detection's velocity over 0.1-1.9 times the body's (in
-          both presets).
+          (0.25); ``|sin aspect|`` times that share from other aspects.  A
+          wheel detection at rim angle ``phi`` moves at ``v (1 + sin phi)``,
+          between 0 at the road and ``2 v`` at the top.
         * ``road_user_share``: in [0, 1], the share of the base road users
-          (``n_objects``) kept, each drawn alone (1 in "realistic", 0.6 in
-          "radarscenes"): the simulated sequences are 20-30 s of busy urban
-          streets, while RadarScenes' mean of at most 31 road users per minute
-          (7,500 in more than 4 h) includes quieter stretches.
-        * ``stop_and_go``: in [0, 1], the share of the road users that keep
-          to a lane or a pavement which brake to a standstill near the time
-          they are closest to the ego car, stand for 2-8 s and start again
-          (0.3 in "radarscenes"): pedestrians waiting to cross, cars at a
-          light, cyclists at a junction, at 1-2 m/s^2.  RadarScenes annotates
-          moving road users only and gives a new track id after more than
-          500 ms of standstill (radar-scenes.com): a standing road user's
-          detections are static background, and it is annotated again, with
-          low Doppler, as it starts.
+          (``n_objects``) kept, each drawn alone (1; "radarscenes" 0.6).
+        * ``stop_and_go``: in [0, 1], the share of the road users keeping to
+          a lane or a pavement that brake to a standstill at 1-2 m/s^2 near
+          the time they are closest to the ego car, stand for 2-8 s and start
+          again (0; "radarscenes" 0.3).  A standing road user's detections
+          are static background; it is annotated again as it starts.
         * ``annotation_margin``: m, >= 0, the labels of a box annotator:
           in each scan in which a road user has a detection, the detections
           *measured* within its box enlarged by this margin are its own, and
-          only those (``inf``: the simulation's truth).
-          RadarScenes' labels come from a semi-automatic process that selects
-          a road user's detections by its extent (Schumann et al.,
-          "RadarScenes", FUSION 2021), so an own detection that the azimuth
-          noise pushed out of the box (0.1-0.5 m across at 20-50 m) is
-          background, and a ghost, spray or clutter detection inside it
-          belongs to the object.  Off (``inf``) in every preset: with
-          ``glint`` it drops about half of the annotated detections, far below
-          RadarScenes' 530 per road user (the simulator guide).
+          only those (``inf``, the simulation's truth, in every preset).
         * ``glint``: in [0, 1], the share of a road user's detections whose
-          azimuth estimate wanders by about the object's angular extent
-          (0.75 in "radarscenes"): several scattering centres of one object
-          in one range-Doppler cell interfere, and the cell's angle estimate
-          leaves the line of any of them (angle glint of extended targets;
-          Skolnik, "Introduction to Radar Systems", 3rd ed.).  The error is
-          normal with a standard deviation of half the extent,
-          ``hypot(length, width) / (2 r)`` rad; range, Doppler and whether
-          the detection is seen stay as they were.
+          azimuth estimate is off by a normal error with a standard deviation
+          of half the object's angular extent, ``hypot(length, width) / (2 r)``
+          rad; range, Doppler and whether the detection is seen stay as they
+          were (0; "radarscenes" 0.75).
 
         Unknown names raise a ValueError.
 
