@@ -103,7 +103,7 @@ EXTRA_EFFECTS = {"annotation_margin": 0.2}
 
 def knob_effects(difficulty, seeds, n_sequences, duration):
     """Each knob's effect: the means over ``seeds`` with the knob set back to its realistic value, one at a time."""
-    from sklearn_radar.datasets._simulator import DIFFICULTY_PRESETS
+    from sklearn_radar.datasets._presets import DIFFICULTY_PRESETS
 
     preset, realistic = DIFFICULTY_PRESETS[difficulty], DIFFICULTY_PRESETS["realistic"]
     changes = {"none": {}}
@@ -154,7 +154,7 @@ def main():
         print(knob_effects(args.difficulty, args.seeds, args.n_sequences, args.duration))
         return
     if args.ablation:
-        from sklearn_radar.datasets._simulator import DIFFICULTY_PRESETS
+        from sklearn_radar.datasets._presets import DIFFICULTY_PRESETS
 
         groups = {
             "ego-motion": [k for k in DIFFICULTY_PRESETS["easy"] if k.startswith("odometry")],

@@ -19,7 +19,7 @@ import numpy as np
 import pandas as pd
 
 from sklearn_radar.datasets import format_statistics, make_scenes, scene_statistics
-from sklearn_radar.datasets._simulator import DIFFICULTY_PRESETS
+from sklearn_radar.datasets._presets import DIFFICULTY_PRESETS
 
 REALISTIC = DIFFICULTY_PRESETS["realistic"]
 GROUPS = {

@@ -147,14 +147,14 @@ def replace(src, dst, *args, **kwargs):
     return real_replace(src, dst, *args, **kwargs)
 os.replace = replace
 if kill_at == "h5":
-    from sklearn_radar.datasets import _radarscenes
-    real_write, calls = _radarscenes._write_radar_data_h5, []
+    from sklearn_radar.datasets import _radarscenes_writer
+    real_write, calls = _radarscenes_writer._write_radar_data_h5, []
     def write(*args):
         calls.append(args)
         if len(calls) == 2:
             os.kill(os.getpid(), signal.SIGKILL)
         real_write(*args)
-    _radarscenes._write_radar_data_h5 = write
+    _radarscenes_writer._write_radar_data_h5 = write
 from sklearn_radar.cli import main
 sys.exit(main(argv))
 """

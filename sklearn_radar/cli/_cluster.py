@@ -17,7 +17,7 @@ from .._schema import LABELS, STATIC_LABEL
 from ..classification import devkit_class_index
 from ..classification._classes import CLASS_OF_LABEL, DEVKIT_CLASS_INDEX, DEVKIT_CLASS_NAMES, IGNORED
 from ..datasets import load_radarscenes
-from ..datasets._radarscenes import _read_sensors_json, _read_sequences_json, _resolve_data_dir
+from ..datasets._radarscenes_reader import _read_sensors_json, _read_sequences_json, _resolve_data_dir
 from ..experiments._saved import SAVED_EXPERIMENT, params_setting
 from ._classifier_setting import classifier_setting, classify_sequence
 

@@ -405,7 +405,7 @@ def _duration(text, flag):
 
 def _simulate(args) -> int:
     from ..datasets import format_statistics, make_scenes, scene_statistics, write_radarscenes
-    from ..datasets._radarscenes import check_output_folder
+    from ..datasets._output_folder import check_output_folder
 
     check_output_folder(args.out, args.overwrite, flag="--overwrite")  # before the simulation, which takes a while
     start = time.perf_counter()

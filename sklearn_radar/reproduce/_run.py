@@ -50,7 +50,7 @@ from .._files import (
     temporary_prefix,
 )
 from ..classification import save_classifier
-from ..datasets._simulator import DIFFICULTY_PRESETS
+from ..datasets._presets import DIFFICULTY_PRESETS
 from ..experiments import SKLEARN_BASELINES, get_experiment
 from ..metrics._parts import OBJECTIVES  # what the searches can maximise: "v1", "pq"
 from ._classification import CLASSIFIER_FILES

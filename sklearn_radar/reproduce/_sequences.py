@@ -24,8 +24,9 @@ from sklearn.utils import Bunch
 
 from .._executor import LocalExecutor
 from ..datasets import load_radarscenes
-from ..datasets._radarscenes import _read_sensors_json, _read_sequences_json, _resolve_data_dir
-from ..datasets._simulator import _check_knobs, sequence_seeds, simulate_sequences
+from ..datasets._presets import _check_knobs
+from ..datasets._radarscenes_reader import _read_sensors_json, _read_sequences_json, _resolve_data_dir
+from ..datasets._simulator import sequence_seeds, simulate_sequences
 from ..metrics import precluster_target
 from ..model_selection._sequence_search import SearchData
 from ..model_selection._split import sequence_sides

@@ -79,7 +79,7 @@ def test_bad_simulation_parameter_is_a_one_line_error_naming_the_option(tmp_path
 
 def test_reproduce_accepts_every_difficulty_preset():
     from sklearn_radar.cli._main import _parser
-    from sklearn_radar.datasets._simulator import DIFFICULTY_PRESETS
+    from sklearn_radar.datasets._presets import DIFFICULTY_PRESETS
 
     for difficulty in DIFFICULTY_PRESETS:
         assert _parser().parse_args(["reproduce", "--difficulty", difficulty]).difficulty == difficulty

@@ -12,7 +12,7 @@ import pytest
 
 from sklearn_radar.cli import main
 from sklearn_radar.datasets import make_scenes, write_radarscenes
-from sklearn_radar.datasets._radarscenes import MANIFEST
+from sklearn_radar.datasets._output_folder import MANIFEST
 from sklearn_radar.experiments import paper_params
 
 

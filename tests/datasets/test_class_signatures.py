@@ -9,8 +9,8 @@ from hypothesis import strategies as st
 from sklearn_radar import FrameTransform
 from sklearn_radar.classification import cluster_features
 from sklearn_radar.datasets import make_scenes
+from sklearn_radar.datasets._presets import DIFFICULTY_PRESETS
 from sklearn_radar.datasets._scenario import ROAD_USER_CLASSES, aspect_rcs
-from sklearn_radar.datasets._simulator import DIFFICULTY_PRESETS, WHEEL_RADIUS, _wheel_reflections
 
 from .test_preset_pins import digest
 
@@ -77,41 +77,6 @@ def test_aspect_rcs_averages_to_zero_and_is_symmetric(side, oblique, angle):
     value = aspect_rcs(params, np.cos(angle), np.sin(angle))
     for mirrored in (-angle, np.pi - angle):
         assert aspect_rcs(params, np.cos(mirrored), np.sin(mirrored)) == pytest.approx(value, abs=1e-9)
-
-
-class _Car:
-    kind, length, width = "car", 4.5, 1.8
-
-
-def _broadside_car(n, sin_aspect, share=1.0):
-    """A car at the origin heading along x at 10 m/s, no yaw; ``n`` detections at its centre, all in scan 0."""
-    motion = (np.zeros(1), np.zeros(1), np.full(1, 10.0), np.zeros(1), np.zeros(1), np.zeros(1))
-    points = (np.zeros(n), np.zeros(n), np.full(n, 10.0), np.zeros(n))
-    knobs = {"wheel_micro_doppler": share}
-    return _wheel_reflections(
-        _Car, np.zeros(n, int), motion, points, np.full(n, sin_aspect), knobs, np.random.default_rng(0)
-    )
-
-
-def test_wheel_points_move_between_zero_and_twice_the_car_speed():
-    n = 20_000
-    x, y, vx, vy = _broadside_car(n, sin_aspect=1.0)
-    assert vx.min() >= 0.0 and vx.max() <= 20.0 and np.all(vy == 0.0)
-    # Rim point at angle phi: 1 + sin(phi); uniform phi gives mean v and half the points above it.
-    assert np.mean(vx) == pytest.approx(10.0, abs=0.15)
-    assert np.mean(vx > 10.0) == pytest.approx(0.5, abs=0.02)
-    assert np.mean(vx > 19.0) == pytest.approx(np.arccos(0.9) / np.pi, abs=0.02)  # sin(phi) > 0.9
-    # On the visible (left, +y) side, within a wheel radius of the axles at +-0.6 of the half-length.
-    np.testing.assert_array_equal(y, 0.9)
-    assert np.all(np.abs(np.abs(x) - 0.6 * 2.25) <= WHEEL_RADIUS + 1e-12)
-
-
-def test_wheels_are_hidden_head_on_and_a_share_shows_at_an_angle():
-    n = 20_000
-    _, _, vx, _ = _broadside_car(n, sin_aspect=0.0)
-    np.testing.assert_array_equal(vx, 10.0)
-    _, _, vx, _ = _broadside_car(n, sin_aspect=-0.5, share=0.4)  # the right side: 0.4 * 0.5 on the wheels
-    assert np.mean(vx != 10.0) == pytest.approx(0.2, abs=0.015)
 
 
 @pytest.fixture(scope="module")

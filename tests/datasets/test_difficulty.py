@@ -6,8 +6,8 @@ import pytest
 
 from sklearn_radar._schema import STATIC_LABEL
 from sklearn_radar.datasets import make_scenes
+from sklearn_radar.datasets._presets import DIFFICULTY_PRESETS, RADARSCENES_KNOBS
 from sklearn_radar.datasets._scenario import EgoMotion, _turn_path, make_road
-from sklearn_radar.datasets._simulator import DIFFICULTY_PRESETS, RADARSCENES_KNOBS
 
 EASY = DIFFICULTY_PRESETS["easy"]
 REALISTIC = DIFFICULTY_PRESETS["realistic"]
@@ -135,23 +135,6 @@ def test_rain_falls_mostly_at_short_range(easy):
     assert near(other) - near(easy) > 3 * (far(other) - far(easy))
 
 
-def test_second_bounce_ghosts_sit_at_twice_the_range_with_twice_the_radial_velocity():
-    from sklearn_radar.datasets._simulator import _second_bounce
-
-    objects = {
-        "scan": np.array([0, 1, 2]),
-        "range": np.array([10.0, 20.0, 60.0]),
-        "azimuth": np.array([0.1, -0.2, 0.0]),
-        "vr": np.array([3.0, -1.5, 2.0]),
-        "rcs": np.array([5.0, 5.0, 5.0]),
-    }
-    ghost = _second_bounce(objects, 1.0, np.random.default_rng(0))
-    assert len(ghost["scan"]) == 2  # 120 m is beyond the sensors' range
-    np.testing.assert_allclose(ghost["range"], [20.0, 40.0], atol=0.5)
-    np.testing.assert_array_equal(ghost["vr"], [6.0, -3.0])
-    np.testing.assert_array_equal(ghost["azimuth"], [0.1, -0.2])
-
-
 def test_dense_traffic_adds_road_users_of_every_situation(easy):
     other = _scenes({"traffic": 40.0})
     count = lambda s: s.data.loc[s.target >= 0, "track_id"].str[:16].nunique()  # noqa: E731
@@ -203,31 +186,6 @@ def test_detection_range_thins_far_objects_more_than_near_ones(easy):
 
     assert count(other, 0, 15) > 0.9 * count(easy, 0, 15)
     assert count(other, 50, 100) < 0.5 * count(easy, 50, 100)
-
-
-def test_angular_noise_grows_with_range_up_to_a_bound():
-    from sklearn_radar.datasets._simulator import AZIMUTH_NOISE_GROWTH, _measure
-
-    rng = np.random.default_rng(0)
-    n = 4000
-    scans = {"timestamp": np.array([0]), "sensor_id": np.array([3]), "odometry_index": np.array([0])}
-    odometry = pd.DataFrame(
-        {"timestamp": [0], "x_seq": [0.0], "y_seq": [0.0], "yaw_seq": [0.0], "vx": [0.0], "yaw_rate": [0.0]}
-    )
-    spread = []
-    for r in (20.0, 40.0, 60.0, 95.0):
-        truth = {
-            "scan": np.zeros(n, int),
-            "range": np.full(n, r),
-            "azimuth": np.zeros(n),
-            "vr": np.zeros(n),
-            "rcs": np.zeros(n),
-        }
-        measured = _measure(truth, scans, odometry, rng, angular_noise_range=40.0)
-        spread.append(np.std(measured["azimuth_sc"].astype(float)))
-    assert spread[0] == pytest.approx(spread[1], rel=0.1)
-    assert spread[2] == pytest.approx(spread[0] * (60 / 40) ** 2, rel=0.1)
-    assert spread[3] == pytest.approx(spread[0] * AZIMUTH_NOISE_GROWTH, rel=0.1)
 
 
 def test_rcs_fluctuation_widens_the_rcs_spread(easy):

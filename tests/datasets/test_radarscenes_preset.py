@@ -8,6 +8,8 @@ from hypothesis import strategies as st
 
 from sklearn_radar._schema import STATIC_LABEL
 from sklearn_radar.datasets import make_scenes
+from sklearn_radar.datasets._detections import _object_detections
+from sklearn_radar.datasets._presets import DIFFICULTY_PRESETS, RADARSCENES_KNOBS
 from sklearn_radar.datasets._scenario import (
     OVERTAKING_LANE,
     STOP_DECELERATION,
@@ -19,15 +21,7 @@ from sklearn_radar.datasets._scenario import (
     make_road,
     simulate_ego,
 )
-from sklearn_radar.datasets._simulator import (
-    DIFFICULTY_PRESETS,
-    RADARSCENES_KNOBS,
-    _box_annotation,
-    _glint,
-    _object_detections,
-    _scan_schedule,
-    _sensor_states,
-)
+from sklearn_radar.datasets._sensor_model import _scan_schedule, _sensor_states
 
 EASY = DIFFICULTY_PRESETS["easy"]
 RADARSCENES = DIFFICULTY_PRESETS["radarscenes"]
@@ -190,27 +184,6 @@ def test_stopping_road_users_give_fewer_annotated_and_more_still_background_dete
 # ---------------------------------------------------------------------------------------------------------------
 # annotation_margin
 # ---------------------------------------------------------------------------------------------------------------
-def test_box_annotation_labels_what_is_measured_inside_the_enlarged_box():
-    # A standing-still 4 m x 2 m car centred at (20, 0), heading 0; one sensor at the origin looking along x.
-    road = _straight_road()
-    user = RoadUser(kind="car", length=4.0, width=2.0, road=road, s0=20.0, speed=0.0, d0=0.0)
-    sensor = {"x": np.zeros(1), "y": np.zeros(1), "boresight": np.zeros(1), "t": np.zeros(1)}
-    points = np.array([[21.0, 0.0], [20.0, 1.3], [18.1, 0.5], [25.0, 0.0]])  # own, own, background, background
-    truth = {
-        "scan": np.zeros(4, dtype=int),
-        "label": np.array([0, 0, STATIC_LABEL, STATIC_LABEL]),
-        "object": np.array([0, 0, -1, -1]),
-    }
-    measured = {
-        "range_sc": np.hypot(points[:, 0], points[:, 1]).astype(np.float32),
-        "azimuth_sc": np.arctan2(points[:, 1], points[:, 0]).astype(np.float32),
-    }
-    labelled = _box_annotation(truth, measured, [user], sensor, margin=0.2)
-    # Half width 1 + 0.2 = 1.2 < 1.3: the second leaves; half length 2 + 0.2 = 2.2 > 1.9: the third joins.
-    np.testing.assert_array_equal(labelled["object"], [0, -1, 0, -1])
-    np.testing.assert_array_equal(labelled["label"], [0, STATIC_LABEL, 0, STATIC_LABEL])
-    wider = _box_annotation(truth, measured, [user], sensor, margin=0.35)
-    np.testing.assert_array_equal(wider["object"], [0, 0, 0, -1])
 
 
 def test_box_annotation_changes_labels_only_both_ways():
@@ -226,16 +199,6 @@ def test_box_annotation_changes_labels_only_both_ways():
 # ---------------------------------------------------------------------------------------------------------------
 # glint
 # ---------------------------------------------------------------------------------------------------------------
-@pytest.mark.parametrize("share", [0.3, 1.0])
-def test_glint_moves_a_share_of_the_azimuths_by_half_the_angular_extent(share):
-    user = RoadUser(kind="car", length=4.0, width=3.0, road=_straight_road(), s0=0.0, speed=10.0, d0=0.0)
-    azimuth, r = np.full(40_000, 0.1), np.full(40_000, 10.0)
-    moved = _glint(azimuth, r, user, share, np.random.default_rng(0)) - azimuth
-    assert (moved != 0).mean() == pytest.approx(share, abs=0.01)
-    # Extent hypot(4, 3) / 10 m = 0.5 rad, so a standard deviation of 0.25 rad: hand-computed.
-    assert moved[moved != 0].std() == pytest.approx(0.25, rel=0.03)
-    assert abs(moved[moved != 0].mean()) < 0.01
-    np.testing.assert_array_equal(azimuth, 0.1)  # the input is left alone
 
 
 def test_glint_moves_the_object_azimuths_and_nothing_else():

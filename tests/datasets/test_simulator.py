@@ -8,7 +8,7 @@ from sklearn.metrics import v_measure_score
 
 from sklearn_radar._schema import DETECTION_COLUMNS, RADARSCENES_MOUNTING, STATIC_LABEL
 from sklearn_radar.datasets import make_scenes, scene_statistics
-from sklearn_radar.datasets._simulator import FOV, MAX_RANGE, _measure, _track_ids, _uuids
+from sklearn_radar.datasets._sensor_model import FOV, MAX_RANGE
 
 
 @pytest.fixture(scope="module")
@@ -129,29 +129,6 @@ def test_detections_stay_in_the_field_of_view_and_range(scenes):
     assert scenes.data["range_sc"].min() > 0
 
 
-def test_azimuth_noise_grows_towards_the_edge_of_the_field_of_view():
-    rng = np.random.default_rng(0)
-    n = 4000
-    scans = {"timestamp": np.array([0]), "sensor_id": np.array([3]), "odometry_index": np.array([0])}
-    odometry = pd.DataFrame(
-        {"timestamp": [0], "x_seq": [0.0], "y_seq": [0.0], "yaw_seq": [0.0], "vx": [0.0], "yaw_rate": [0.0]}
-    )
-    spread = {}
-    for azimuth in (0.0, np.deg2rad(55.0)):
-        truth = {
-            "scan": np.zeros(n, int),
-            "range": np.full(n, 20.0),
-            "azimuth": np.full(n, azimuth),
-            "vr": np.zeros(n),
-            "rcs": np.zeros(n),
-        }
-        measured = _measure(truth, scans, odometry, rng)
-        spread[azimuth] = np.std(measured["azimuth_sc"].astype(float) - azimuth)
-    boresight, edge = spread.values()
-    assert np.deg2rad(0.1) < boresight < np.deg2rad(0.5)
-    assert edge > 2.5 * boresight
-
-
 def test_most_detections_are_static_background():
     # The share varies with the number of road users drawn per sequence (3-12).
     shares = [
@@ -203,25 +180,10 @@ def test_ego_drives_curves_changes_speed_and_stops(scenes):
         assert odo["yaw_rate"].abs().max() > 0.02
 
 
-def test_track_id_changes_after_more_than_half_a_second_of_absence():
-    t = np.array([0.0, 0.06, 0.7, 0.76, 1.2, 0.3])
-    obj = np.array([0, 0, 0, 0, 0, -1])
-    track = _track_ids(obj, t, sequence=1)
-    assert track[0] == track[1] != track[2] == track[3] == track[4]
-    assert track[5] == ""
-
-
 def test_no_track_has_a_gap_longer_than_half_a_second(scenes):
     objects = scenes.data[scenes.target >= 0]
     for _, rows in objects.groupby("track_id"):
         assert np.diff(np.unique(rows["timestamp"].to_numpy())).max(initial=0) <= 500_000
-
-
-def test_uuids_are_hexadecimal_and_deterministic():
-    a = _uuids(5, np.random.default_rng(1))
-    b = _uuids(5, np.random.default_rng(1))
-    np.testing.assert_array_equal(a, b)
-    assert all(len(u) == 32 and int(u, 16) >= 0 for u in a)
 
 
 def test_plain_dbscan_scores_well_between_0_and_1(scenes):
