@@ -121,7 +121,7 @@ def _parser():
         default="realistic",
         help="phenomena of real radar data: realistic (ego-motion errors, multipath, clutter, dense traffic, "
         "sensing limits), radarscenes (realistic with RadarScenes' traffic statistics, road users that stop and "
-        "box annotation) or easy (none) (default: realistic)",
+        "start, and angle glint) or easy (none) (default: realistic)",
     )
 
     stats = commands.add_parser(
