@@ -63,3 +63,17 @@ def test_importing_a_core_subpackage_loads_neither_the_runner_nor_the_command_li
     )
     loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
     assert loaded == "[]", loaded
+
+
+def test_the_stages_import_nothing_of_the_online_package():
+    # online composes the stages (it imports cluster and preprocessing), so stage 1's scan-by-scan state, which
+    # RadarDBSCAN.partial_fit uses, lives in cluster/_radar_dbscan_stream.py: a stage importing online is a cycle.
+    offending = []
+    for stage in ("cluster", "preprocessing"):
+        for path in sorted((PACKAGE / stage).rglob("*.py")):
+            offending += [
+                f"{path.relative_to(PACKAGE)}:{line} imports {module}"
+                for line, module in _imported_modules(path)
+                if module == "sklearn_radar.online" or module.startswith("sklearn_radar.online.")
+            ]
+    assert not offending, "\n".join(offending)

@@ -1,7 +1,8 @@
 """Stage 1 (RadarDBSCAN, Eqs. 2-5) and stage 2 (ClusterMerger, Eq. 6 and continuation)."""
 
 from ._cluster_merger import ClusterMerger
-from ._radar_dbscan import RadarDBSCAN, ScanStream, min_points_at_range
+from ._radar_dbscan import RadarDBSCAN, min_points_at_range
+from ._radar_dbscan_stream import ScanStream
 from ._velocity import estimate_velocities, estimate_velocity
 from ._windowed import SequenceDBSCAN, SequenceHDBSCAN, SlidingDBSCAN, WindowedDBSCAN, WindowedHDBSCAN
 

@@ -14,6 +14,7 @@ from sklearn.utils.validation import check_is_fitted
 from .._neighbors import build_grid, count_neighbors
 from .._schema import FILTER_READS
 from .._validation import check_filter_rule, read_columns, sequence_slices, write_columns
+from ._doppler_density_kernels import removed_by_eq1, speed_limits
 from ._output_names import feature_names_out, work_array_width
 
 
@@ -93,11 +94,12 @@ def _doppler_density_keep(v_r, n_neighbors, vr_threshold, threshold_ratios, min_
     :func:`~sklearn_radar._validation.check_filter_rule`.
     """
     speed = np.abs(np.asarray(v_r, dtype=np.float64))
-    n = np.asarray(n_neighbors)
-    remove = n < 1
-    for ratio, n_min in zip(threshold_ratios, min_neighbors, strict=True):
-        remove |= (speed < vr_threshold / ratio) & (n < n_min)
-    return ~remove
+    limits = speed_limits(vr_threshold, threshold_ratios)
+    if len(limits) != len(min_neighbors):
+        raise ValueError(
+            f"threshold_ratios and min_neighbors must be of equal length, got {len(limits)} and {len(min_neighbors)}"
+        )
+    return ~removed_by_eq1(speed, np.asarray(n_neighbors), limits, min_neighbors)
 
 
 @validate_params(
