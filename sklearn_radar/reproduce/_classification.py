@@ -22,6 +22,7 @@ length.
 from __future__ import annotations
 
 import time
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -31,7 +32,7 @@ from ..classification import ROAD_USER_CLASSES, ClusterClassifier, PointClassifi
 from ..experiments import BASELINE_INPUT, SKLEARN_BASELINES, SLIDING_BASELINE, baseline_pipeline, experiment_pipeline
 from ..metrics import background_share, semantic_scores
 from ._constants import BEST_STAGE1, CLASSIFIED
-from ._results import ClassificationResult, ClassifiedSetting, SemanticScores
+from ._records import JsonRecord, record
 from ._tracking import run_setting_pipeline, tracked_setting
 
 #: Frame of the semantic scores and of the classifier's segments, s (as the object-level scores').
@@ -53,6 +54,96 @@ PER_SEQUENCE = ("pq", "map", "macro_f1", "mcov")
 
 #: Columns of the detection table the models do not read.
 _NOT_INPUT = ("uuid", "label_id")
+
+
+@record
+class SemanticScores(JsonRecord):
+    """Semantic instance-segmentation scores (:func:`~sklearn_radar.metrics.semantic_scores`), per 0.5 s frame.
+
+    Attributes
+    ----------
+    frame_s : float
+        Frame length, s.
+    pq, sq, rq : float
+        Class-aware panoptic quality and its factors, the mean over the classes.
+    map : float
+        Mean average precision at IoU 0.5 over the classes (COCO's 101-point interpolation).
+    macro_f1 : float
+        Point-wise F1 per class (background included), their mean.
+    mcov : float
+        Mean coverage of the annotated instances' segments, class-agnostic.
+    per_class : dict of str to dict of str to float
+        By class name: ``{"pq", "ap", "f1"}``.
+    """
+
+    frame_s: float
+    pq: float
+    sq: float
+    rq: float
+    map: float
+    macro_f1: float
+    mcov: float
+    per_class: dict[str, dict[str, float]]
+
+
+@record
+class ClassifiedSetting(JsonRecord):
+    """One clustering with the classifier trained on its clusters, or the point-wise classifier, on the test half.
+
+    Attributes
+    ----------
+    name : str
+        ``"#8"``, a baseline's name, or ``"point-wise (no clustering)"``.
+    setting_source : str
+        Where the clustering's setting comes from (``"tuned #8"``, ``"paper's #13"``, ``"tuned baseline"``, ...).
+    params : dict
+        The clustering's setting, as pipeline parameters (empty for the point-wise classifier).
+    scores : SemanticScores
+        On the whole test half.
+    per_sequence : dict of str to list of float
+        ``pq``, ``map``, ``macro_f1`` and ``mcov`` of each test sequence, in order (the paired comparisons'
+        data).
+    background_share_before : float or None
+        Share of the clustering's segments (per frame) with no detection of an annotated road user; None for the
+        point-wise classifier, which has no clusters.
+    background_share_after : float
+        The same share among the segments the classifier keeps as road users.
+    n_training_examples : int
+        The classifier's training examples: segments, or detections for the point-wise classifier.
+    classifier_file : str or None, default=None
+        The saved classifier, in the run's folder.
+    repeats : list of SemanticScores or None, default=None
+        With ``--repeats``: the scores of the classifier on the clusters of each repeat's setting (the first is
+        ``scores``); None for a single run, the fixed #1 and the point-wise classifier.
+    """
+
+    name: str
+    setting_source: str
+    params: dict[str, Any]
+    scores: SemanticScores
+    per_sequence: dict[str, list[float]]
+    background_share_before: float | None
+    background_share_after: float
+    n_training_examples: int
+    classifier_file: str | None = None
+    repeats: list[SemanticScores] | None = None
+
+
+@record
+class ClassificationResult(JsonRecord):
+    """The classification step: the classifier on the clusters of several settings and the point-wise one.
+
+    Attributes
+    ----------
+    settings : dict of str to ClassifiedSetting
+        By name, in the order of the report's table.
+    test_sequences : list of int
+    wall_time_s : float
+    """
+
+    settings: dict[str, ClassifiedSetting]
+    test_sequences: list[int]
+    wall_time_s: float
 
 
 def classified_settings(needed):

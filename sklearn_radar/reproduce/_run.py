@@ -53,6 +53,7 @@ from ..classification import save_classifier
 from ..datasets._simulator import DIFFICULTY_PRESETS
 from ..experiments import SKLEARN_BASELINES, get_experiment
 from ..metrics._parts import OBJECTIVES  # what the searches can maximise: "v1", "pq"
+from ._budget import Budget
 from ._classification import CLASSIFIER_FILES
 from ._constants import (
     ALL_EXPERIMENTS,
@@ -68,7 +69,7 @@ from ._context import RunContext
 from ._io import RUN_TOOL, check_apart, check_run_folder, previous_run_files, run_marker
 from ._progress import DATA, REPORT, RunProgress, duration, uncompiled_kernels
 from ._report import write_report
-from ._results import Budget, DataMeta, RunMeta, RunResults
+from ._results import DataMeta, RunMeta, RunResults
 from ._sections._base import counted
 from ._sections._figures import CONVERGENCE, SCENE, V1_BARS
 from ._sections._filter import FILTER_SCENE, HEATMAP

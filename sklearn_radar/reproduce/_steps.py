@@ -81,13 +81,18 @@ from ._constants import (
     TRACKED,
     TRACKING,
 )
-from ._progress import SCORING
-from ._results import (
+from ._experiment_records import (
     BaselineResult,
+    ExperimentResult,
+    InstanceScores,
+    ObjectExperimentResult,
+    ObjectRepeat,
+    RepeatResult,
+    SearchRecord,
+)
+from ._filter_records import (
     BestRemoval,
     ClusteringCost,
-    DataStatistics,
-    ExperimentResult,
     FilterEffectFigures,
     FilterEffectResult,
     FilterGridResult,
@@ -95,13 +100,10 @@ from ._results import (
     FilterSettingRow,
     FilterWindows,
     GridTable,
-    InstanceScores,
-    ObjectExperimentResult,
-    ObjectRepeat,
-    RepeatResult,
-    SearchRecord,
     time_savings_percent,
 )
+from ._progress import SCORING
+from ._results import DataStatistics
 from ._tracking import combine_tracking, streamable, track_sequence, tracked_setting
 
 #: Length of the frames of the object-level scores, s (Scheiner et al. 2021 evaluate 500 ms).

@@ -249,7 +249,8 @@ def test_the_report_says_reduced_budget_only_for_a_reduced_run(tiny_report, tmp_
 
 
 def test_results_json_round_trips_through_the_typed_results_byte_for_byte(tiny_report):
-    from sklearn_radar.reproduce._results import ExperimentResult, RunResults, SearchRecord
+    from sklearn_radar.reproduce._experiment_records import ExperimentResult, SearchRecord
+    from sklearn_radar.reproduce._results import RunResults
 
     text = (tiny_report / "results.json").read_text()
     results = RunResults.from_json_dict(json.loads(text))
@@ -300,7 +301,8 @@ def test_every_section_renders_the_tiny_run_and_stays_out_when_its_step_did_not_
 
 
 def test_a_missing_or_renamed_field_fails_where_the_results_are_built(tiny_report):
-    from sklearn_radar.reproduce._results import ExperimentResult, RunResults
+    from sklearn_radar.reproduce._experiment_records import ExperimentResult
+    from sklearn_radar.reproduce._results import RunResults
 
     document = json.loads((tiny_report / "results.json").read_text())
     renamed = json.loads(json.dumps(document))
@@ -410,7 +412,7 @@ def test_results_without_an_objective_read_back_as_the_papers():
 
 
 def _typed_budget():
-    from sklearn_radar.reproduce._results import Budget
+    from sklearn_radar.reproduce._budget import Budget
 
     return Budget.default(2)
 
@@ -654,8 +656,8 @@ def test_tune_searches_exactly_as_the_plain_pipeline_search(number):
     from sklearn_radar.experiments import experiment_pipeline, search_space
     from sklearn_radar.metrics import precluster_target, radar_v_measure_scorer
     from sklearn_radar.model_selection import make_bayes_search
+    from sklearn_radar.reproduce._budget import Budget
     from sklearn_radar.reproduce._progress import RunProgress
-    from sklearn_radar.reproduce._results import Budget
     from sklearn_radar.reproduce._sequences import RunSequences
     from sklearn_radar.reproduce._steps import RunEnv, TrainingData, tune
 
@@ -767,7 +769,7 @@ def test_coinciding_convergence_curves_differ_in_marker_and_the_legend_is_readab
 
 
 def test_the_filters_time_saving_is_a_finding_only_beyond_the_noise_of_its_timing_rounds():
-    from sklearn_radar.reproduce._results import ClusteringCost, FilterEffectFigures, FilterEffectResult
+    from sklearn_radar.reproduce._filter_records import ClusteringCost, FilterEffectFigures, FilterEffectResult
     from sklearn_radar.reproduce._sections._filter_effect import time_saving_text
 
     def effect(filtered, unfiltered):

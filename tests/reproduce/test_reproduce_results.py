@@ -11,6 +11,7 @@ commit's reader reads and writes back unchanged).
 
 import dataclasses
 import json
+import sys
 import types
 import typing
 from pathlib import Path
@@ -19,25 +20,20 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from sklearn_radar.reproduce import _results
-from sklearn_radar.reproduce._results import (
-    Budget,
-    ExperimentResult,
-    FigureRecord,
-    RunMeta,
-    RunResults,
-    SearchRecord,
-)
+from sklearn_radar.reproduce._budget import Budget
+from sklearn_radar.reproduce._experiment_records import ExperimentResult, SearchRecord
+from sklearn_radar.reproduce._records import JsonRecord
+from sklearn_radar.reproduce._results import FigureRecord, RunMeta, RunResults
 
 DATA = Path(__file__).parents[1] / "data"
 DEFAULT_RUN = DATA / "results_default_run.json"
 OLD_LAYOUT = DATA / "results_3bcbd36_layout.json"
 FULL_RUN_PARTIAL = DATA / "results_full_run_partial.json"
-RECORDS = [
-    value
-    for value in vars(_results).values()
-    if isinstance(value, type) and dataclasses.is_dataclass(value) and value.__module__ == _results.__name__
-]
+# Every record (importing RunResults imports them all); a slotted dataclass replaces the class it was made from.
+RECORDS = sorted(
+    {getattr(sys.modules[cls.__module__], cls.__name__) for cls in JsonRecord.__subclasses__()},
+    key=lambda cls: cls.__name__,
+)
 
 # ----------------------------------------------------------------------------- files of real runs
 

@@ -12,7 +12,9 @@ import numpy as np
 from ..._files import atomic_write
 from .._constants import BEST_STAGE1, FRAME_NAMES, SOURCE_PAPER
 from .._context import RunContext
-from .._results import ExperimentResult, GridTable, RunResults, repeated_scores
+from .._experiment_records import ExperimentResult, repeated_scores
+from .._filter_records import GridTable
+from .._results import RunResults
 
 #: Markdown of a section: its lines, each starting a new line of report.md; [] leaves the section out.
 Markdown = Callable[[RunResults], list[str]]

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._results import RunResults, repeated_scores
+from .._experiment_records import repeated_scores
+from .._results import RunResults
 from ._base import Section, format_params, values_cell
 from ._comparison import DOES_NOT_HOLD, HOLDS, N_STANDARD_ERRORS, paired_verdict
 
