@@ -56,9 +56,9 @@ from ..metrics._parts import combine_instance_parts, combine_parts, instance_par
 from ..model_selection import ProgressPrinter
 from ..model_selection._sequence_search import (
     SearchData,
+    bayes_search,
     candidate_scores,
     fixed_prefix,
-    search_and_score_start,
     sized_sequence_folds,
 )
 from ..preprocessing import DopplerDensityFilter, FrameTransform
@@ -764,31 +764,26 @@ def tune(env, key, estimator, space, label, start_from=None, seed=None):
     estimator = _without_cache(estimator)
     searched, searched_space, data, prefix = estimator, space, raw, ""
     fixed = fixed_prefix(estimator, space)
-    if fixed is not None:
-        # Stage 0 once for every candidate and fold, per sequence (it never crosses sequences; tested).
-        stage0, searched, prefix = fixed
+    if fixed is not None:  # stage 0 once for every candidate and fold, per sequence
+        stage0, searched, searched_space, prefix = fixed
         data = env.training.prepared(env.executor, stage0)
-        searched_space = {name[len(prefix) :]: dimension for name, dimension in space.items()}
-    # The paper's setting is scored as one more candidate on the same folds (on the data as searched, when it
-    # sets only the searched step).
+    # The paper's setting is scored on the same folds (on the data as searched, when it sets only the searched step).
     start_here = bool(start_from) and all(name.startswith(prefix) for name in start_from)
-    start_candidate = {name[len(prefix) :]: value for name, value in start_from.items()} if start_here else None
     options = {
         "objective": env.objective,
         "n_iter": env.budget.n_iter,
         "n_initial_points": env.budget.n_initial_points,
         "n_points": env.n_points,
         "random_state": env.seed if seed is None else seed,
+        "start_from": {name[len(prefix) :]: value for name, value in start_from.items()} if start_here else None,
     }
     printer = None
     if env.executor.alone:
         status = env.progress.search_status(key)
         printer = ProgressPrinter(env.budget.n_iter, label=label, stream=env.progress.stream, status=status)
-    found, known = env.executor.on_a_worker(
-        _search, data.blocks, data.ids, searched, searched_space, folds, start_candidate, options, printer
-    )
+    found = env.executor.on_a_worker(_search, data.blocks, data.ids, searched, searched_space, folds, options, printer)
     best = {prefix + name: value for name, value in _native(found.best_params).items()}
-    cv_best, source = found.best_score, SOURCE_SEARCH
+    cv_best, source, known = found.best_score, SOURCE_SEARCH, found.start_score
     if start_from:
         if not start_here:
             known = candidate_scores(raw, estimator, [start_from], folds, env.objective)[0]
@@ -805,10 +800,9 @@ def tune(env, key, estimator, space, label, start_from=None, seed=None):
     return best, record
 
 
-def _search(executor, blocks, ids, estimator, space, folds, start_from, options, callback):
-    """:func:`search_and_score_start` on the blocks, where ``executor`` runs (a worker, or here)."""
-    data = SearchData(blocks, ids, executor)
-    return search_and_score_start(estimator, space, data, folds, start_from, callback=callback, **options)
+def _search(executor, blocks, ids, estimator, space, folds, options, callback):
+    """:func:`~sklearn_radar.model_selection._sequence_search.bayes_search` on the blocks, where ``executor`` runs."""
+    return bayes_search(estimator, space, SearchData(blocks, ids, executor), folds, callback=callback, **options)
 
 
 class TrainingData:
