@@ -74,7 +74,8 @@ from ._sections._base import counted
 from ._sections._figures import CONVERGENCE, SCENE, V1_BARS
 from ._sections._filter import FILTER_SCENE, HEATMAP
 from ._sequences import RunSequences
-from ._steps import STEPS, RunEnv, TrainingData, data_statistics, units
+from ._steps import STEPS, RunEnv, data_statistics, units
+from ._tuning import TrainingData
 
 #: The largest seed numpy's random generators take; a run uses the seeds seed ... seed + repeats - 1.
 SEED_MAX = 2**32 - 1
