@@ -38,49 +38,19 @@ class Budget(JsonRecord):
 
     @classmethod
     def default(cls, n_iter=None):
-        """The default run's budget: 4 sequences x 20 s, 10 iterations (30 % random), 2 folds.
-
-        Parameters
-        ----------
-        n_iter : int, default=None
-            Iterations instead of 10.
-
-        Returns
-        -------
-        budget : Budget
-        """
+        """The default run's budget: 4 sequences x 20 s, ``n_iter`` iterations (None: 10; 30 % random), 2 folds."""
         n_iter = 10 if n_iter is None else n_iter
-        return cls(
-            label="reduced (default run)",
-            n_iter=n_iter,
-            n_initial_points=max(1, round(0.3 * n_iter)),
-            cv_folds=2,
-            n_sequences=4,
-            duration=20.0,
-        )
+        return cls._of("reduced (default run)", n_iter, cv_folds=2, n_sequences=4, duration=20.0)
 
     @classmethod
     def full(cls, n_iter=None):
-        """The paper's budget (``--full``): 17 sequences x 30 s, 100 iterations (30 random), 3 folds.
-
-        Parameters
-        ----------
-        n_iter : int, default=None
-            Iterations instead of 100.
-
-        Returns
-        -------
-        budget : Budget
-        """
+        """The paper's budget (``--full``): 17 sequences x 30 s, ``n_iter`` iterations (None: 100), 3 folds."""
         n_iter = PAPER_N_ITER if n_iter is None else n_iter
-        return cls(
-            label="the paper's (--full)",
-            n_iter=n_iter,
-            n_initial_points=max(1, round(0.3 * n_iter)),
-            cv_folds=3,
-            n_sequences=17,
-            duration=30.0,
-        )
+        return cls._of("the paper's (--full)", n_iter, cv_folds=3, n_sequences=17, duration=30.0)
+
+    @classmethod
+    def _of(cls, label, n_iter, **sizes):
+        return cls(label=label, n_iter=n_iter, n_initial_points=max(1, round(0.3 * n_iter)), **sizes)
 
     @property
     def reduced(self):

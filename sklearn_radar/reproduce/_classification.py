@@ -1,22 +1,11 @@
-"""The classification step: the paper's next stage, a classifier trained on each setting's clusters.
+"""The classification step (the paper's next stage) and its records: a classifier trained on each setting's clusters.
 
-The paper clusters so that a classifier can name road users (Sec. I, and its
-future work: "the impact of the proposed clustering framework on a
-classifier shall be investigated").  For each setting of
-:data:`~._constants.CLASSIFIED` (the run's tuned one where its experiment
-ran, the paper's otherwise) and for the strongest offline scikit-learn
-baseline, a :class:`~sklearn_radar.classification.ClusterClassifier` is
-trained on the clusters of the training half (matched to the annotated
-road users) and scored on the test half with the semantic metrics of
-:func:`~sklearn_radar.metrics.semantic_scores`; the
-:class:`~sklearn_radar.classification.PointClassifier` (no clustering) is
-the baseline a user would try instead.
-
-The classifiers are fitted where the command runs, on the whole training
-half (one table: a classifier needs all its examples at once), and applied to
-each test sequence where it lives; each test sequence returns its
-detections' true and predicted classes and instances, a few arrays of its
-length.
+For each setting of :data:`~._constants.CLASSIFIED` (the run's tuned one where its experiment ran, the paper's
+otherwise) and the strongest offline scikit-learn baseline, a
+:class:`~sklearn_radar.classification.ClusterClassifier` is trained on the clusters of the training half (in this
+process: it needs all its examples at once) and scored on each test sequence where it lives with
+:func:`~sklearn_radar.metrics.semantic_scores`; beside them the
+:class:`~sklearn_radar.classification.PointClassifier` (no clustering).  Why: :ref:`user-guide-classification`.
 """
 
 from __future__ import annotations
@@ -357,6 +346,3 @@ def _background_share(arrays, labels, groups):
         arrays["target"], labels, times=arrays["times"], groups=groups, frame=CLASSIFICATION_FRAME_S
     )
     return float(share.background_segment_share)
-
-
-__all__ = ["CLASSIFICATION_FRAME_S", "CLASSIFIER_FILES", "POINT_WISE", "classified_settings", "run_classification"]

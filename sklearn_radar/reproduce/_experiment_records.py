@@ -74,7 +74,7 @@ class RepeatResult(JsonRecord):
     ----------
     seed : int
         The repeat's seed (the run's seed plus the repeat's index); its search's seed is derived from it and the
-        experiment or baseline (``reproduce._steps.search_seed``).
+        experiment or baseline (``reproduce._tuning.search_seed``).
     search : SearchRecord or None, default=None
         The repeat's search; None for #10 and #11, which take the same repeat's #8 setting.
     params : dict

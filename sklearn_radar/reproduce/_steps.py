@@ -1,18 +1,8 @@
 """The steps of a reproduce run: each a function from its inputs to its typed result, their dependencies in one table.
 
-A step is ``run(env, key, needed) -> Outcome``: ``env`` says what every step
-reads (the data, the split, the budget, where the work runs), ``needed`` holds
-the results of the steps it depends on (:data:`STEPS`) that the run ran.  A
-step never writes anything; the run (:mod:`._run`) stores its result and
-saves after each step.
-
-Stages 0-2 never cross sequences, so every figure is combined from
-per-sequence summaries computed where each sequence lives (:mod:`._sequences`),
-and a search's candidate is one task per block of training sequences
-(:mod:`sklearn_radar.model_selection._sequence_search`).  The repeats of a
-search are one :meth:`map` over the executor (:mod:`sklearn_radar._executor`);
-repeat ``k`` of a search has the seed :func:`search_seed` ``(seed + k, its
-experiment or baseline)``.
+A step is ``run(env, key, needed) -> Outcome``: ``env`` says what every step reads, ``needed`` holds the results
+of the steps it depends on (:data:`STEPS`) that the run ran.  A step writes nothing; the run (:mod:`._run`) stores
+its result.  How the steps are laid out over the data: :ref:`contributing-runner`.
 """
 
 from __future__ import annotations
@@ -90,6 +80,7 @@ from ._filter_records import (
 )
 from ._progress import SCORING
 from ._results import DataStatistics
+from ._sections._base import values_cell
 from ._tracking import combine_tracking, streamable, track_sequence, tracked_setting
 from ._tuning import native_params, search_seed, tune, with_cluster_gate
 
@@ -99,9 +90,7 @@ FRAME_S = 0.5
 INSTANCE_FIELDS = tuple(name for name in InstanceScores.__dataclass_fields__ if name != "frame_s")
 #: The error windows' setting: the paper's chosen filter (FCS, eta_1 = 0.10 m/s, d_xy = 1.4 m).
 WINDOWS_FRAME, WINDOW_S, WINDOW_MIN_KEPT = "frame", 0.15, 0.75
-#: Rounds of the filter effect's timing: each clusters every test sequence filtered and unfiltered once (after a
-#: warm-up), so that the saving has a spread over the rounds.  The default run's clustering takes 0.03-0.06 s a
-#: round, 10 rounds about a second.
+#: Rounds of the filter effect's timing, each clustering every test sequence filtered and unfiltered once.
 TIMING_ROUNDS = 10
 
 
@@ -322,7 +311,7 @@ def run_experiment(env, key, needed):
     found = env.executor.map(
         _ExperimentRepeat(env, number, repeats, stage1s),
         range(repeats),
-        on_done=_said_ended(env, f"#{number}", repeats) if experiment.tuned else None,
+        on_done=_said_ended(env, repeats, f"#{number}") if experiment.tuned else None,
     )
     first = found[0]
     derived = None
@@ -415,28 +404,18 @@ def _repeat_records(env, found, defaults=None):
 
 def _spread(found, score="pq"):
     """``"71.55 %"`` / ``"0.412"`` for one repeat, mean and sd over several (``"71.20 +- 0.35 %"``)."""
-    return _mean_sd([f.test.v1 if score == "v1" else f.test.instance.pq for f in found], score)
-
-
-def _mean_sd(values, score="pq"):
-    """Scores of the repeats as :func:`_spread` says them: V1 in percent with 2 decimals, PQ with 3."""
-    values = np.asarray(values, dtype=np.float64)
-    scale, unit, digits = (100, " %", 2) if score == "v1" else (1, "", 3)
-    text = f"{scale * values.mean():.{digits}f}"
-    if len(values) > 1:
-        text += f" +- {scale * values.std(ddof=1):.{digits}f}"
-    return text + unit
+    return values_cell([f.test.v1 if score == "v1" else f.test.instance.pq for f in found], score, sign="+-")
 
 
 def _repeat_label(label, k, repeats):
     return label if repeats == 1 else f"{label} repeat {k + 1}/{repeats}"
 
 
-def _said_ended(env, label, repeats):
-    """``on_done`` of a step's repeats when they run beside other work: a line as each ends (none when alone)."""
+def _said_ended(env, repeats, label=None):
+    """``on_done`` of a step's repeats ``k`` (or jobs ``(label, k)``) beside other work: a line as each ends."""
     if env.executor.alone:
         return None
-    return lambda k, _: env.progress.search_ended(_repeat_label(label, k, repeats))
+    return lambda job, _: env.progress.search_ended(_repeat_label(*((label, job) if label else job), repeats))
 
 
 # ----------------------------------------------------------------------------- the filter's effect
@@ -507,7 +486,7 @@ def run_baselines(env, key, needed):
     """
     names = list(SKLEARN_BASELINES)
     jobs = [(name, k) for name in names for k in range(env.repeats)]
-    found = env.executor.map(_BaselineRepeat(env), jobs, on_done=_said_baseline_ended(env))
+    found = env.executor.map(_BaselineRepeat(env), jobs, on_done=_said_ended(env, env.repeats))
     baselines, lines = {}, []
     for i, name in enumerate(names):
         repeats = found[i * env.repeats : (i + 1) * env.repeats]
@@ -543,12 +522,6 @@ class _BaselineRepeat:
         return Repeat(params, search, test, time.perf_counter() - start)
 
 
-def _said_baseline_ended(env):
-    if env.executor.alone:
-        return None
-    return lambda job, _: env.progress.search_ended(_repeat_label(job[0], job[1], env.repeats))
-
-
 # ----------------------------------------------------------------------------- the object experiment
 
 
@@ -559,7 +532,7 @@ def run_objects(env, key, needed):
     repeat is one :meth:`map` job.
     """
     start = time.perf_counter()
-    found = env.executor.map(_ObjectRepeat(env), range(env.repeats), on_done=_said_ended(env, OBJECTS, env.repeats))
+    found = env.executor.map(_ObjectRepeat(env), range(env.repeats), on_done=_said_ended(env, env.repeats, OBJECTS))
     result = ObjectExperimentResult(
         stage1_search=found[0].stage1_search,
         search=found[0].search,
@@ -569,7 +542,9 @@ def run_objects(env, key, needed):
     )
     offline = [f.record.instance_test.pq for f in found]
     causal = [f.record.causal_instance_test.pq for f in found]
-    summary = f"    objects: test PQ {_mean_sd(offline)} offline, {_mean_sd(causal)} causal"
+    summary = (
+        f"    objects: test PQ {values_cell(offline, 'pq', '+-')} offline, {values_cell(causal, 'pq', '+-')} causal"
+    )
     return Outcome(result, summary)
 
 
@@ -731,6 +706,3 @@ def units(key, budget, repeats):
     if experiment is not None and experiment.derived_from is not None:
         return repeats
     return 1
-
-
-__all__ = ["STEPS", "Outcome", "RunEnv", "Step", "data_statistics", "units"]

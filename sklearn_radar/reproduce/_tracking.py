@@ -1,14 +1,8 @@
 """The tracking step: settings of the run streamed through the online pipeline, their object ids scored over time.
 
-Each setting of :data:`~._constants.TRACKED` (the run's tuned one where its
-experiment ran, the paper's otherwise) is replayed scan by scan through
-:class:`~sklearn_radar.online.OnlinePipeline` on every test sequence, where
-the sequence lives; :func:`~sklearn_radar.metrics.tracking_scores` scores
-the ids against the annotated moving road users, per 0.5 s frame.  The
-online pipeline rather than the offline causal one (whose merged clusters it
-equals): it alone gives the ids as reported at each scan, with the stage-1
-meetings as aliases, which is what a tracker downstream sees (its cost per
-scan: :ref:`online-speed`).
+Each setting of :data:`~._constants.TRACKED` (the run's tuned one where its experiment ran, the paper's otherwise)
+is replayed scan by scan through :class:`~sklearn_radar.online.OnlinePipeline` on every test sequence, where it
+lives, and :func:`~sklearn_radar.metrics.tracking_scores` scores the ids per 0.5 s frame (:ref:`online-speed`).
 """
 
 from __future__ import annotations

@@ -105,14 +105,14 @@ def score_cell(result, score="v1"):
     return values_cell(repeated_scores(result, score), score)
 
 
-def values_cell(values, score="v1"):
-    """Scores of the repeats as :func:`score_cell` writes them: one value, or mean \u00b1 sd; ``"-"`` for none."""
+def values_cell(values, score="v1", sign="\u00b1"):
+    """Scores of the repeats as :func:`score_cell` writes them: one value, or mean ``sign`` sd; ``"-"`` for none."""
     if len(values) == 0:
         return "-"
     scale, unit, digits = (100, " %", 2) if score == "v1" else (1, "", 3)
     if len(values) == 1:
         return f"{scale * values[0]:.{digits}f}{unit}"
-    return f"{scale * np.mean(values):.{digits}f} \u00b1 {scale * np.std(values, ddof=1):.{digits}f}{unit}"
+    return f"{scale * np.mean(values):.{digits}f} {sign} {scale * np.std(values, ddof=1):.{digits}f}{unit}"
 
 
 def mean_score(result, results: RunResults):
@@ -326,34 +326,3 @@ def save_figure(fig, path):
     fig.savefig(buffer, format="png", dpi=90)
     plt.close(fig)
     atomic_write(path, lambda stream: stream.write(buffer.getvalue()))
-
-
-__all__ = [
-    "OVERFIT_GAP",
-    "SETTING_DERIVED",
-    "SETTING_FIXED",
-    "SETTING_PAPER",
-    "SETTING_SEARCH",
-    "Figures",
-    "Markdown",
-    "Section",
-    "column_legend",
-    "counted",
-    "cv_cell",
-    "experiment_row",
-    "experiment_table",
-    "format_params",
-    "format_score",
-    "frame_name",
-    "grid_markdown",
-    "mean_score",
-    "objective_name",
-    "overfit_lines",
-    "percent",
-    "repeats_legend",
-    "save_figure",
-    "scene_size",
-    "score_cell",
-    "setting_source",
-    "test_score",
-]

@@ -262,5 +262,3 @@ def _percent(value):
 
 
 SECTION = Section("classification", markdown)
-
-__all__ = ["PUBLISHED", "SECTION"]

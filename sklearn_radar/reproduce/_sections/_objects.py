@@ -140,5 +140,3 @@ def _row(name, decides_from, objective, pq, v1):
 
 
 SECTION = Section("objects", markdown)
-
-__all__ = ["SECTION", "verdict"]
