@@ -245,33 +245,14 @@ class JsonRecord:
     __slots__ = ()
 
     def to_json_dict(self):
-        """The record's JSON form (see the module's rules).
-
-        Returns
-        -------
-        document : dict
-        """
+        """The record's JSON form, a dict (see the module's rules)."""
         return to_json(self)
 
     @classmethod
     def from_json_dict(cls, document, *, source="results.json"):
-        """Read :meth:`to_json_dict`'s form back.
+        """The record of :meth:`to_json_dict`'s form ``document`` (parsed JSON) read from ``source``.
 
-        Parameters
-        ----------
-        document : dict
-            Parsed JSON.
-        source : str, default="results.json"
-            Where it was read, for the error messages.
-
-        Returns
-        -------
-        record : instance of the class
-
-        Raises
-        ------
-        ValueError
-            Naming ``source`` and the key, if a key is missing or not known, or a value has the wrong type.
+        A key missing or not known, or a value of the wrong type, raises a ValueError naming ``source`` and the key.
         """
         record = _from_json(cls, document, source)
         cls._check_read(document, source)

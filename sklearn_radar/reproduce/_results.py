@@ -156,40 +156,20 @@ class RunResults(JsonRecord):
     figures: FigureRecord = field(default_factory=FigureRecord, metadata=NOT_WRITTEN)
 
     def v1_test(self):
-        """Test V1 by experiment number, for the experiments that ran.
-
-        Returns
-        -------
-        scores : dict of int to float
-        """
+        """Test V1 by experiment number (a dict of int to float), for the experiments that ran."""
         return {number: result.v1_test for number, result in self.experiments.items()}
 
     def saved_classifiers(self):
-        """The files of the classifiers the classification step saved in the run's folder, in order.
-
-        Returns
-        -------
-        names : list of str
-        """
+        """The file names of the classifiers the classification step saved in the run's folder, in order."""
         if self.classification is None:
             return []
         return [row.classifier_file for row in self.classification.settings.values() if row.classifier_file]
 
     def to_json_dict(self, *, figures=False):
-        """What ``results.json`` holds.
+        """What ``results.json`` holds, a dict; with ``figures``, also the figures drawn (which it does not hold).
 
-        Parameters
-        ----------
-        figures : bool, default=False
-            Also add the ``figures`` entry (the figures drawn), which
-            ``results.json`` does not hold.
-
-        Returns
-        -------
-        document : dict
-            ``meta``, ``statistics`` (when measured), ``experiments`` (keyed by the number as a string), then
-            ``filter``, ``filter_effect``, ``baselines``, ``objects``, ``tracking`` and ``classification``
-            where they ran.
+        ``meta``, ``statistics`` (when measured), ``experiments`` (keyed by the number as a string), then
+        ``filter``, ``filter_effect``, ``baselines``, ``objects``, ``tracking`` and ``classification`` where they ran.
         """
         document = to_json(self)
         if figures:
@@ -204,20 +184,9 @@ class RunResults(JsonRecord):
 
     @classmethod
     def read(cls, path):
-        """Read a ``results.json`` file.
+        """The :class:`RunResults` of the ``results.json`` file at ``path``.
 
-        Parameters
-        ----------
-        path : str or Path
-
-        Returns
-        -------
-        results : RunResults
-
-        Raises
-        ------
-        ValueError
-            Naming the file and the key, if the file is not valid JSON or not a run's results.
+        A file that is not valid JSON or not a run's results raises a ValueError naming the file and the key.
         """
         path = Path(path)
         try:

@@ -27,25 +27,11 @@ PREPARED_KEPT = 4
 
 
 def search_seed(run_seed, key):
-    """The random seed of the search of ``key`` (an experiment's number or a baseline's name) in repeat ``run_seed``.
+    """The seed in ``[0, 2**32)`` of the search of ``key`` (``"3"``, or a baseline's name) in repeat ``run_seed``.
 
-    Each search has its own stream, ``SeedSequence(run_seed, spawn_key=(id,))``
-    with ``id`` the experiment's number or, for a name, its CRC-32 (stable
-    across processes and Python versions, unlike ``hash``), so that searches
-    with equal spaces (#2-#5) draw different random candidates
-    (:ref:`user-guide-tuning`).
-
-    Parameters
-    ----------
-    run_seed : int
-        The run's seed plus the repeat's index.
-    key : str
-        ``"3"``, or a baseline's name.
-
-    Returns
-    -------
-    seed : int
-        In ``[0, 2**32)``.
+    ``run_seed`` is the run's seed plus the repeat's index.  Each search has its own stream,
+    ``SeedSequence(run_seed, spawn_key=(id,))`` with ``id`` the experiment's number or, for a name, its CRC-32
+    (stable across processes, unlike ``hash``): :ref:`user-guide-tuning`.
     """
     stream = int(key) if key.isdigit() else zlib.crc32(key.encode("utf-8"))
     return int(np.random.SeedSequence(run_seed, spawn_key=(stream,)).generate_state(1)[0])
@@ -69,16 +55,9 @@ def with_cluster_gate(space, stage, objective):
 def tune(env, key, estimator, space, label, start_from=None, seed=None):
     """Bayesian optimisation on the training half with grouped CV; returns (best params, SearchRecord).
 
-    A candidate is one task per block of training sequences
-    (:mod:`sklearn_radar.model_selection._sequence_search`)
-    and the search's loop one task where the executor runs it
-    (:meth:`~sklearn_radar._executor.DaskExecutor.on_a_worker`); its
-    iterations are printed (and counted as units of step ``key``) when it
-    runs alone here.  ``seed`` is the search's random seed (None: the run's).
-
-    ``start_from`` (e.g. the paper's optimum) is scored on the same folds as
-    one more candidate and wins when the search found nothing better: a
-    short search should not report a worse setting than a known one.
+    The search's loop is one task where the executor runs it; its iterations are printed (and counted as units of
+    step ``key``) when it runs alone here.  ``seed`` is its random seed (None: the run's).  ``start_from`` (e.g.
+    the paper's optimum) is scored on the same folds and kept when the search found nothing better.
     """
     start = time.perf_counter()
     folds = sized_sequence_folds(env.train, [env.sequences.size([s]) for s in env.train], env.budget.cv_folds)
