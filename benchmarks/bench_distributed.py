@@ -129,8 +129,7 @@ def speedup(scales, n_iter, repeats, number=8):
     with connect_executor(workers=2) as cluster, threadpool_limits(limits=1, user_api="blas"):
         for scale in scales:
             X, target, groups = _training_half(scale)
-            stage0, searched, prefix = fixed_prefix(experiment_pipeline(number), search_space(number))
-            space = {key[len(prefix) :]: dimension for key, dimension in search_space(number).items()}
+            stage0, searched, space, _ = fixed_prefix(experiment_pipeline(number), search_space(number))
             folds = sequence_folds(groups, 3)
             times = {"1 process": [], "2 workers": []}
             steps, scores = {}, {}

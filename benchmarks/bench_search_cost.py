@@ -78,7 +78,7 @@ def candidate_cost(items, n_candidates, n_sequences):
     from sklearn_radar.metrics import precluster_target
     from sklearn_radar.model_selection import sequence_train_test_split
     from sklearn_radar.reproduce import _run
-    from sklearn_radar.reproduce._results import Budget
+    from sklearn_radar.reproduce._budget import Budget
 
     scenes = make_scenes(n_sequences=n_sequences, duration=30.0, random_state=0, difficulty="easy")
     target = precluster_target(scenes.data, scenes.target)

@@ -478,7 +478,7 @@ def test_local_workers_that_would_slow_a_small_run_down_are_not_started(tmp_path
     # One search at a time on the default run's data: a local cluster was 2x slower than one process, so the run
     # stays here and its first line says so; with searches at once, a folder or --scheduler, the cluster is used.
     from sklearn_radar._executor import LocalExecutor
-    from sklearn_radar.reproduce._results import Budget
+    from sklearn_radar.reproduce._budget import Budget
     from sklearn_radar.reproduce._run import _in_process_reason, parse_experiments
 
     small = _in_process_reason(None, Budget.default(), parse_experiments("3"), 1)

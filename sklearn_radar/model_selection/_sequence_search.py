@@ -47,7 +47,6 @@ __all__ = [
     "SequenceSearchCV",
     "balanced_blocks",
     "bayes_search",
-    "search_and_score_start",
     "sequence_folds",
     "sized_sequence_folds",
 ]
@@ -249,6 +248,8 @@ class SearchResult:
     best_score : float
     fold_scores : list of list of float
         Per candidate, the score of each fold (in the order of the folds).
+    start_score : float or None
+        The mean fold score of the search's ``start_from``; None when it had none.
     """
 
     candidates: list
@@ -256,6 +257,7 @@ class SearchResult:
     best_params: dict
     best_score: float
     fold_scores: list = field(default_factory=list)
+    start_score: float | None = None
 
 
 def candidate_scores(data, estimator, candidates, folds, objective):
@@ -318,8 +320,12 @@ def bayes_search(
     n_points=1,
     random_state=None,
     callback=None,
+    start_from=None,
 ):
     """The paper's Bayesian optimisation (skopt's ask and tell, as ``BayesSearchCV`` runs it) on ``data``.
+
+    The one search engine: :class:`SequenceSearchCV` and ``sklearn-radar reproduce`` both run their searches here
+    (:ref:`contributing-decisions`).
 
     Parameters
     ----------
@@ -340,6 +346,9 @@ def bayes_search(
         Called with skopt's result after every step (e.g. a
         :class:`~sklearn_radar.model_selection.ProgressPrinter`); a true
         return value stops the search.
+    start_from : dict or None, default=None
+        A known setting (e.g. the paper's) scored on the same folds after the search, as
+        :attr:`SearchResult.start_score`; it does not enter the search.
 
     Returns
     -------
@@ -373,12 +382,14 @@ def bayes_search(
         remaining -= len(points)
     scores = [_mean(row) for row in fold_scores]
     best = int(np.argmax(scores))
+    start_score = None if start_from is None else candidate_scores(data, estimator, [start_from], folds, objective)[0]
     return SearchResult(
         candidates=candidates,
         scores=scores,
         best_params=candidates[best],
         best_score=scores[best],
         fold_scores=fold_scores,
+        start_score=start_score,
     )
 
 
@@ -392,27 +403,13 @@ def _step_fold_scores(data, estimator, step, batched, folds, objective):
         yield [_fold_scores(data, row, folds, objective)]
 
 
-def search_and_score_start(estimator, space, data, folds, start_from=None, *, callback=None, **options):
-    """:func:`bayes_search`, then the mean fold score of ``start_from`` (None: not scored) on the same folds.
-
-    Returns
-    -------
-    found : SearchResult
-    known : float or None
-    """
-    found = bayes_search(estimator, space, data, folds, callback=callback, **options)
-    known = None
-    if start_from is not None:
-        known = candidate_scores(data, estimator, [start_from], folds, options["objective"])[0]
-    return found, known
-
-
 def fixed_prefix(estimator, space):
-    """(the pipeline's steps before the last, the last step, its parameter prefix) when ``space`` tunes only the last.
+    """(the steps before the last, the last step, its space, its parameter prefix) when ``space`` tunes only the last.
 
-    The prefix (stage 0: frame transform, filter) then computes the same for
-    every candidate, so the search can apply it to each sequence once and
-    search the last step alone.  None for anything else.
+    The steps before (stage 0: frame transform, filter) then compute the same
+    for every candidate, so the search can apply them to each sequence once
+    and search the last step alone, its space's names without the prefix.
+    None for anything else.
     """
     steps = getattr(estimator, "steps", None)
     if not steps or len(steps) < 2:
@@ -421,7 +418,8 @@ def fixed_prefix(estimator, space):
     prefix = f"{name}__"
     if not all(key.startswith(prefix) for key in space):
         return None
-    return clone(estimator[:-1]).set_params(memory=None), clone(last), prefix
+    searched_space = {key[len(prefix) :]: dimension for key, dimension in space.items()}
+    return clone(estimator[:-1]).set_params(memory=None), clone(last), searched_space, prefix
 
 
 class SequenceSearchCV(MetaEstimatorMixin, BaseEstimator):
@@ -615,9 +613,8 @@ class SequenceSearchCV(MetaEstimatorMixin, BaseEstimator):
         searched, searched_space, prefix = self.estimator, space, ""
         fixed = fixed_prefix(self.estimator, space)
         if fixed is not None:
-            stage0, searched, prefix = fixed
+            stage0, searched, searched_space, prefix = fixed
             data = data.prepare(stage0)
-            searched_space = {key[len(prefix) :]: dimension for key, dimension in space.items()}
         with threadpool_limits(limits=1, user_api="blas"):
             found = bayes_search(
                 searched,

@@ -1,27 +1,17 @@
-"""The classification step: the paper's next stage, a classifier trained on each setting's clusters.
+"""The classification step (the paper's next stage) and its records: a classifier trained on each setting's clusters.
 
-The paper clusters so that a classifier can name road users (Sec. I, and its
-future work: "the impact of the proposed clustering framework on a
-classifier shall be investigated").  For each setting of
-:data:`~._constants.CLASSIFIED` (the run's tuned one where its experiment
-ran, the paper's otherwise) and for the strongest offline scikit-learn
-baseline, a :class:`~sklearn_radar.classification.ClusterClassifier` is
-trained on the clusters of the training half (matched to the annotated
-road users) and scored on the test half with the semantic metrics of
-:func:`~sklearn_radar.metrics.semantic_scores`; the
-:class:`~sklearn_radar.classification.PointClassifier` (no clustering) is
-the baseline a user would try instead.
-
-The classifiers are fitted where the command runs, on the whole training
-half (one table: a classifier needs all its examples at once), and applied to
-each test sequence where it lives; each test sequence returns its
-detections' true and predicted classes and instances, a few arrays of its
-length.
+For each setting of :data:`~._constants.CLASSIFIED` (the run's tuned one where its experiment ran, the paper's
+otherwise) and the strongest offline scikit-learn baseline, a
+:class:`~sklearn_radar.classification.ClusterClassifier` is trained on the clusters of the training half (in this
+process: it needs all its examples at once) and scored on each test sequence where it lives with
+:func:`~sklearn_radar.metrics.semantic_scores`; beside them the
+:class:`~sklearn_radar.classification.PointClassifier` (no clustering).  Why: :ref:`user-guide-classification`.
 """
 
 from __future__ import annotations
 
 import time
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -31,7 +21,7 @@ from ..classification import ROAD_USER_CLASSES, ClusterClassifier, PointClassifi
 from ..experiments import BASELINE_INPUT, SKLEARN_BASELINES, SLIDING_BASELINE, baseline_pipeline, experiment_pipeline
 from ..metrics import background_share, semantic_scores
 from ._constants import BEST_STAGE1, CLASSIFIED
-from ._results import ClassificationResult, ClassifiedSetting, SemanticScores
+from ._records import JsonRecord, record
 from ._tracking import run_setting_pipeline, tracked_setting
 
 #: Frame of the semantic scores and of the classifier's segments, s (as the object-level scores').
@@ -53,6 +43,96 @@ PER_SEQUENCE = ("pq", "map", "macro_f1", "mcov")
 
 #: Columns of the detection table the models do not read.
 _NOT_INPUT = ("uuid", "label_id")
+
+
+@record
+class SemanticScores(JsonRecord):
+    """Semantic instance-segmentation scores (:func:`~sklearn_radar.metrics.semantic_scores`), per 0.5 s frame.
+
+    Attributes
+    ----------
+    frame_s : float
+        Frame length, s.
+    pq, sq, rq : float
+        Class-aware panoptic quality and its factors, the mean over the classes.
+    map : float
+        Mean average precision at IoU 0.5 over the classes (COCO's 101-point interpolation).
+    macro_f1 : float
+        Point-wise F1 per class (background included), their mean.
+    mcov : float
+        Mean coverage of the annotated instances' segments, class-agnostic.
+    per_class : dict of str to dict of str to float
+        By class name: ``{"pq", "ap", "f1"}``.
+    """
+
+    frame_s: float
+    pq: float
+    sq: float
+    rq: float
+    map: float
+    macro_f1: float
+    mcov: float
+    per_class: dict[str, dict[str, float]]
+
+
+@record
+class ClassifiedSetting(JsonRecord):
+    """One clustering with the classifier trained on its clusters, or the point-wise classifier, on the test half.
+
+    Attributes
+    ----------
+    name : str
+        ``"#8"``, a baseline's name, or ``"point-wise (no clustering)"``.
+    setting_source : str
+        Where the clustering's setting comes from (``"tuned #8"``, ``"paper's #13"``, ``"tuned baseline"``, ...).
+    params : dict
+        The clustering's setting, as pipeline parameters (empty for the point-wise classifier).
+    scores : SemanticScores
+        On the whole test half.
+    per_sequence : dict of str to list of float
+        ``pq``, ``map``, ``macro_f1`` and ``mcov`` of each test sequence, in order (the paired comparisons'
+        data).
+    background_share_before : float or None
+        Share of the clustering's segments (per frame) with no detection of an annotated road user; None for the
+        point-wise classifier, which has no clusters.
+    background_share_after : float
+        The same share among the segments the classifier keeps as road users.
+    n_training_examples : int
+        The classifier's training examples: segments, or detections for the point-wise classifier.
+    classifier_file : str or None, default=None
+        The saved classifier, in the run's folder.
+    repeats : list of SemanticScores or None, default=None
+        With ``--repeats``: the scores of the classifier on the clusters of each repeat's setting (the first is
+        ``scores``); None for a single run, the fixed #1 and the point-wise classifier.
+    """
+
+    name: str
+    setting_source: str
+    params: dict[str, Any]
+    scores: SemanticScores
+    per_sequence: dict[str, list[float]]
+    background_share_before: float | None
+    background_share_after: float
+    n_training_examples: int
+    classifier_file: str | None = None
+    repeats: list[SemanticScores] | None = None
+
+
+@record
+class ClassificationResult(JsonRecord):
+    """The classification step: the classifier on the clusters of several settings and the point-wise one.
+
+    Attributes
+    ----------
+    settings : dict of str to ClassifiedSetting
+        By name, in the order of the report's table.
+    test_sequences : list of int
+    wall_time_s : float
+    """
+
+    settings: dict[str, ClassifiedSetting]
+    test_sequences: list[int]
+    wall_time_s: float
 
 
 def classified_settings(needed):
@@ -266,6 +346,3 @@ def _background_share(arrays, labels, groups):
         arrays["target"], labels, times=arrays["times"], groups=groups, frame=CLASSIFICATION_FRAME_S
     )
     return float(share.background_segment_share)
-
-
-__all__ = ["CLASSIFICATION_FRAME_S", "CLASSIFIER_FILES", "POINT_WISE", "classified_settings", "run_classification"]

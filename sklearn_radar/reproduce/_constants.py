@@ -69,29 +69,3 @@ FRAME_NAMES = {"frame": "FCS", "car": "CCS"}
 #: ``best_source`` of a search record: the search's own optimum, or the paper's setting scored beside it.
 SOURCE_SEARCH = "search"
 SOURCE_PAPER = "the paper's setting (scored beside the search)"
-
-__all__ = [
-    "ALL_EXPERIMENTS",
-    "BASELINES",
-    "BEST_STAGE1",
-    "BEST_STAGE1_UNFILTERED",
-    "CLASSIFICATION",
-    "CLASSIFIED",
-    "DERIVED_FROM_BEST",
-    "EXPERT",
-    "FCS_BASELINE",
-    "FILTER",
-    "FILTER_EFFECT",
-    "FRAMES",
-    "FRAME_NAMES",
-    "NUMBERS",
-    "OBJECTS",
-    "PAPER_FILTER_SETTING",
-    "PAPER_N_ITER",
-    "SOURCE_PAPER",
-    "SOURCE_SEARCH",
-    "STAGE1",
-    "STAGE2",
-    "TRACKED",
-    "TRACKING",
-]

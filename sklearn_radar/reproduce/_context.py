@@ -25,6 +25,3 @@ class RunContext:
     sequences: Any
     drawn_sequence: int
     labels: dict[int, np.ndarray] = field(default_factory=dict)
-
-
-__all__ = ["RunContext"]

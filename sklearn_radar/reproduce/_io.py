@@ -30,24 +30,10 @@ def run_marker(file):
 
 
 def check_apart(data, out, data_name="data", out_name="out"):
-    """Refuse an output folder that is the data folder, lies inside it or holds it.
+    """Refuse (ValueError naming both) an output folder ``out`` that is the folder ``data``, lies inside it or holds it.
 
-    A report written into the data would mix a run's files with the
-    recordings (and a later ``simulate --overwrite`` would refuse the folder).
-    Both paths are compared resolved (symbolic links followed, ``..``
-    removed), whether they exist or not.
-
-    Parameters
-    ----------
-    data, out : str or path-like
-        The data folder (or its parent) and the output folder.
-    data_name, out_name : str, default="data", "out"
-        How the error names them (the command line's options).
-
-    Raises
-    ------
-    ValueError
-        Naming both.
+    Both paths are compared resolved (symbolic links followed, ``..`` removed), whether they exist or not;
+    ``data_name`` and ``out_name`` are how the error names them (the command line's options).
     """
     data_path, out_path = Path(data).resolve(), Path(out).resolve()
     if out_path == data_path:
@@ -65,17 +51,10 @@ def check_apart(data, out, data_name="data", out_name="out"):
 
 
 def check_run_folder(folder, marker_name, run_files):
-    """Refuse an output folder where a run would replace a file that no run wrote.
+    """Refuse (FileExistsError naming it) a folder where a run would replace a file that no run wrote.
 
-    A run may write into any folder; it replaces the files named
-    ``marker_name`` and ``run_files`` there, so they must be absent or the
-    folder must be a run's (its marker written by a run).  Other files
-    stay either way.
-
-    Raises
-    ------
-    FileExistsError
-        Naming the folder and the first such file.
+    A run replaces the files ``marker_name`` and ``run_files`` in ``folder``: they must be absent, or the folder a
+    run's (its marker written by a run).  Other files stay either way.
     """
     folder = Path(folder)
     if not folder.is_dir() or run_marker(folder / marker_name) is not None:

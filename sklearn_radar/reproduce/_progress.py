@@ -1,22 +1,8 @@
-"""The overall progress of a reproduce run: the work done so far, the time elapsed and the time left.
+"""The overall progress of a reproduce run in plain lines: the work done so far, the time elapsed and the time left.
 
-Plain lines only (no carriage returns, no terminal control), so the output
-reads the same in a terminal and piped to a file.  The run counts its work
-in units of a few kinds (an iteration of a stage-1, stage-2 or baseline
-search, one pass of a step without a search over its data) and measures the
-seconds each kind took so far.
-
-The time left is the work left at those measured rates, and only while
-every kind of work still to come has been measured: a kind not timed yet is
-named instead (its first step may take seconds or minutes), with the time
-left of the rest.  When work ran concurrently, its seconds add up to more
-than the time elapsed, and the rates are scaled by that overlap.
-
-The share done weighs each unit by its expected cost: its kind's measured
-rate, or for a kind not timed yet :data:`EXPECTED_S_PER_UNIT` scaled by how
-fast the kinds measured so far ran against their expected rates.  It counts
-the steps: the data and the report are outside it, so a run whose steps all
-ended is at 100 %.
+The work is counted in units of a few kinds (an iteration of a stage-1, stage-2 or baseline search, one pass of a
+step without a search), each kind timed as it goes; how the share done and the time left follow from those rates:
+:ref:`contributing-runner`.
 """
 
 from __future__ import annotations
@@ -275,15 +261,3 @@ class RunProgress:
 
 def _expected(kind):
     return EXPECTED_S_PER_UNIT.get(kind, EXPECTED_S_OTHER)
-
-
-__all__ = [
-    "DATA",
-    "EXPECTED_S_PER_UNIT",
-    "KERNELS",
-    "REPORT",
-    "SCORING",
-    "RunProgress",
-    "duration",
-    "uncompiled_kernels",
-]

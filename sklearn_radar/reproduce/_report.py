@@ -11,21 +11,9 @@ from ._sections import SECTIONS
 
 
 def write_figures(out, results: RunResults, context: RunContext, sections=SECTIONS):
-    """Draw every section's figures into ``out`` and record them in ``results.figures``.
+    """Draw every section's figures into the folder ``out``; return ``results.figures``, where they are recorded.
 
-    Parameters
-    ----------
-    out : path-like
-        Output folder.
-    results : RunResults
-    context : RunContext
-        The run's in-memory state (data, labels, filter grids).
-    sections : tuple of Section, default=SECTIONS
-
-    Returns
-    -------
-    figures : FigureRecord
-        ``results.figures``: the figures drawn, or why none was (matplotlib missing).
+    Without matplotlib none is drawn, and ``results.figures.missing`` says so.
     """
     out = Path(out)
     try:
@@ -42,17 +30,7 @@ def write_figures(out, results: RunResults, context: RunContext, sections=SECTIO
 
 
 def report_markdown(results: RunResults, sections=SECTIONS):
-    """The text of ``report.md``: every section's lines, in order.
-
-    Parameters
-    ----------
-    results : RunResults
-    sections : tuple of Section, default=SECTIONS
-
-    Returns
-    -------
-    text : str
-    """
+    """The text of ``report.md``: every section's lines, in order."""
     lines = []
     for section in sections:
         lines += section.markdown(results)
@@ -60,23 +38,10 @@ def report_markdown(results: RunResults, sections=SECTIONS):
 
 
 def write_report(out, results: RunResults, context: RunContext | None = None, sections=SECTIONS):
-    """Write ``report.md`` (atomically) from ``results``; with ``context``, draw the figures first.
+    """Write ``report.md`` into the folder ``out`` (atomically) and return its path; with ``context``, figures first.
 
-    Parameters
-    ----------
-    out : path-like
-        Output folder.
-    results : RunResults
-        E.g. ``RunResults.from_json_dict(json.load(open("results.json")))``.
-    context : RunContext, default=None
-        The run's in-memory state; None writes the text only, with the
-        figures already recorded in ``results.figures``.
-    sections : tuple of Section, default=SECTIONS
-
-    Returns
-    -------
-    path : Path
-        The report written.
+    Without ``context`` (e.g. ``results`` read back from ``results.json``) the text refers to the figures
+    already recorded in ``results.figures``.
     """
     out = Path(out)
     if context is not None:
@@ -84,6 +49,3 @@ def write_report(out, results: RunResults, context: RunContext | None = None, se
     path = out / "report.md"
     atomic_write_text(path, report_markdown(results, sections))
     return path
-
-
-__all__ = ["report_markdown", "write_figures", "write_report"]

@@ -1,25 +1,9 @@
 """``sklearn-radar reproduce``: re-run the paper's experiments and write a report.
 
-Every experiment is a Pipeline of this package's estimators
-(:func:`sklearn_radar.experiments.experiment_pipeline`) tuned by Bayesian
-optimisation on the training half of the sequences (grouped cross-validation)
-and scored on the held-out half with the radar V-measure against the
-pre-clustered target.  Results are written after every step, atomically,
-so an interrupted run keeps what it finished.
-
-The output folder holds one run at a time, and ``run.json`` says which and
-whether it is complete: it is written first (``"complete": false``), then
-the previous run's files are removed, and it is rewritten with
-``"complete": true`` and the SHA-256 of every file of the run only after
-``report.md`` and the figures.  ``results.json`` gets ``meta.wall_time_s``
-only then, too.  Temporary files and the pipeline cache are named
-``.sklearn-radar-tmp-<pid>-...``; a run removes those of processes that no
-longer run.
-
-The steps and their dependencies are :data:`._steps.STEPS`; this module runs
-them in one loop (:func:`run_steps`), where the executor
-(:mod:`sklearn_radar._executor`) runs their work; the results are typed
-(:mod:`._results`) and the report is built from the sections of :mod:`._sections`.
+The steps (:data:`._steps.STEPS`) run in one loop (:func:`run_steps`), their work where the executor
+(:mod:`sklearn_radar._executor`) runs it; ``results.json`` (:mod:`._results`) is written after every step,
+atomically, so an interrupted run keeps what it finished.  The output folder holds one run at a time, and
+``run.json`` says which and whether it is complete (:ref:`contributing-runner`).
 """
 
 from __future__ import annotations
@@ -53,6 +37,7 @@ from ..classification import save_classifier
 from ..datasets._presets import DIFFICULTY_PRESETS
 from ..experiments import SKLEARN_BASELINES, get_experiment
 from ..metrics._parts import OBJECTIVES  # what the searches can maximise: "v1", "pq"
+from ._budget import Budget
 from ._classification import CLASSIFIER_FILES
 from ._constants import (
     ALL_EXPERIMENTS,
@@ -68,12 +53,13 @@ from ._context import RunContext
 from ._io import RUN_TOOL, check_apart, check_run_folder, previous_run_files, run_marker
 from ._progress import DATA, REPORT, RunProgress, duration, uncompiled_kernels
 from ._report import write_report
-from ._results import Budget, DataMeta, RunMeta, RunResults
+from ._results import DataMeta, RunMeta, RunResults
 from ._sections._base import counted
 from ._sections._figures import CONVERGENCE, SCENE, V1_BARS
 from ._sections._filter import FILTER_SCENE, HEATMAP
 from ._sequences import RunSequences
-from ._steps import STEPS, RunEnv, TrainingData, data_statistics, units
+from ._steps import STEPS, RunEnv, data_statistics, units
+from ._tuning import TrainingData
 
 #: The largest seed numpy's random generators take; a run uses the seeds seed ... seed + repeats - 1.
 SEED_MAX = 2**32 - 1
@@ -92,9 +78,7 @@ RUN_FILES = (
     *CLASSIFIER_FILES.values(),
 )
 #: Simulated data of at most this many sequence-seconds (the default run's 4 x 20 s) with one search at a time
-#: runs in this process although ``--workers`` asks for a local cluster: measured on 2 cores, such a run
-#: (``--experiments 3 --n-iter 24``) took 20 s in one process against 39 s on 2 local workers, whose start and
-#: per-candidate round trips cost more than the second core gains.
+#: runs in this process although ``--workers`` asks for a local cluster (why: :ref:`contributing-runner`).
 IN_PROCESS_MAX_SEQUENCE_S = 80.0
 
 
@@ -478,21 +462,11 @@ def _started(run, env, found):
 
 
 def _store(results, key, result):
-    """A step's result, where ``results.json`` holds it."""
-    if key == FILTER:
-        results.filter = result
-    elif key == FILTER_EFFECT:
-        results.filter_effect = result
-    elif key == BASELINES:
-        results.baselines = result
-    elif key == OBJECTS:
-        results.objects = result
-    elif key == TRACKING:
-        results.tracking = result
-    elif key == CLASSIFICATION:
-        results.classification = result
-    else:
+    """A step's result, where ``results.json`` holds it: an experiment by number, another step at its key."""
+    if key.isdigit():
         results.experiments[int(key)] = result
+    else:
+        setattr(results, key.replace("-", "_"), result)
 
 
 def _say_the_work(run, keys, budget, repeats):
@@ -610,6 +584,3 @@ def _title(key):
         TRACKING: "object tracking online (IDF1, ID switches, MOTA of the streamed ids)",
         CLASSIFICATION: "the classifier of clusters (class PQ, mAP@0.5, macro-F1, mCov)",
     }[key]
-
-
-__all__ = ["ALL_EXPERIMENTS", "parse_experiments", "reproduce"]

@@ -1,17 +1,7 @@
-"""The data of a reproduce run, one table per sequence, where the run's executor runs its tasks.
+"""The data of a reproduce run, one table per sequence, made and kept where the run's executor runs its tasks.
 
-Stages 0-2 never cross sequences, and every figure of a run is combined
-from per-sequence summaries (:mod:`sklearn_radar.metrics._parts`, the
-statistics' and the filter evaluation's parts).  So the run never needs
-the whole data set in one place:
-
-each sequence is made (loaded from a RadarScenes folder, which a
-cluster's workers must see at the same path, or simulated) once, where the
-executor keeps data (:meth:`sklearn_radar._executor.LocalExecutor.place`:
-here, or as a task's result on a worker, computed again when that worker is
-lost).  A step's function then runs where the sequence is and returns its
-small summary; the command's process holds the summaries, the results and
-at most the one sequence a figure draws.
+A step's function runs where each sequence is and returns a small summary (:ref:`contributing-runner`); a
+RadarScenes folder must be at the same path on a cluster's workers.
 """
 
 from __future__ import annotations
@@ -30,8 +20,6 @@ from ..datasets._simulator import sequence_seeds, simulate_sequences
 from ..metrics import precluster_target
 from ..model_selection._sequence_search import SearchData
 from ..model_selection._split import sequence_sides
-
-__all__ = ["RunSequences", "Sequence"]
 
 #: Columns of the detection table that are not measurements (labels, strings): not part of the estimators' input.
 LABEL_COLUMNS = ("uuid", "track_id", "label_id")

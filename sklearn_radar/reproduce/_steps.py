@@ -1,35 +1,21 @@
 """The steps of a reproduce run: each a function from its inputs to its typed result, their dependencies in one table.
 
-A step is ``run(env, key, needed) -> Outcome``: ``env`` says what every step
-reads (the data, the split, the budget, where the work runs), ``needed`` holds
-the results of the steps it depends on (:data:`STEPS`) that the run ran.  A
-step never writes anything; the run (:mod:`._run`) stores its result and
-saves after each step.
-
-Stages 0-2 never cross sequences, so every figure is combined from
-per-sequence summaries computed where each sequence lives (:mod:`._sequences`),
-and a search's candidate is one task per block of training sequences
-(:mod:`sklearn_radar.model_selection._sequence_search`).  The repeats of a
-search are one :meth:`map` over the executor (:mod:`sklearn_radar._executor`);
-repeat ``k`` of a search has the seed :func:`search_seed` ``(seed + k, its
-experiment or baseline)``.
+A step is ``run(env, key, needed) -> Outcome``: ``env`` says what every step reads, ``needed`` holds the results
+of the steps it depends on (:data:`STEPS`) that the run ran.  A step writes nothing; the run (:mod:`._run`) stores
+its result.  How the steps are laid out over the data: :ref:`contributing-runner`.
 """
 
 from __future__ import annotations
 
 import dataclasses
-import threading
 import time
-import zlib
 from collections.abc import Callable
 from dataclasses import dataclass
 from typing import Any
 
-import joblib
 import numpy as np
 from sklearn.base import clone
 
-from .._skopt import Real
 from ..datasets import format_statistics
 from ..datasets._statistics import combine_statistics, statistics_parts
 from ..evaluation import FilterEvaluationOptions
@@ -53,14 +39,6 @@ from ..experiments import (
     search_space,
 )
 from ..metrics._parts import combine_instance_parts, combine_parts, instance_parts, score_parts
-from ..model_selection import ProgressPrinter
-from ..model_selection._sequence_search import (
-    SearchData,
-    candidate_scores,
-    fixed_prefix,
-    search_and_score_start,
-    sized_sequence_folds,
-)
 from ..preprocessing import DopplerDensityFilter, FrameTransform
 from ._classification import run_classification
 from ._constants import (
@@ -75,19 +53,22 @@ from ._constants import (
     FRAMES,
     OBJECTS,
     PAPER_FILTER_SETTING,
-    SOURCE_PAPER,
-    SOURCE_SEARCH,
     STAGE2,
     TRACKED,
     TRACKING,
 )
-from ._progress import SCORING
-from ._results import (
+from ._experiment_records import (
     BaselineResult,
+    ExperimentResult,
+    InstanceScores,
+    ObjectExperimentResult,
+    ObjectRepeat,
+    RepeatResult,
+    SearchRecord,
+)
+from ._filter_records import (
     BestRemoval,
     ClusteringCost,
-    DataStatistics,
-    ExperimentResult,
     FilterEffectFigures,
     FilterEffectResult,
     FilterGridResult,
@@ -95,14 +76,13 @@ from ._results import (
     FilterSettingRow,
     FilterWindows,
     GridTable,
-    InstanceScores,
-    ObjectExperimentResult,
-    ObjectRepeat,
-    RepeatResult,
-    SearchRecord,
     time_savings_percent,
 )
+from ._progress import SCORING
+from ._results import DataStatistics
+from ._sections._base import values_cell
 from ._tracking import combine_tracking, streamable, track_sequence, tracked_setting
+from ._tuning import native_params, search_seed, tune, with_cluster_gate
 
 #: Length of the frames of the object-level scores, s (Scheiner et al. 2021 evaluate 500 ms).
 FRAME_S = 0.5
@@ -110,11 +90,7 @@ FRAME_S = 0.5
 INSTANCE_FIELDS = tuple(name for name in InstanceScores.__dataclass_fields__ if name != "frame_s")
 #: The error windows' setting: the paper's chosen filter (FCS, eta_1 = 0.10 m/s, d_xy = 1.4 m).
 WINDOWS_FRAME, WINDOW_S, WINDOW_MIN_KEPT = "frame", 0.15, 0.75
-#: Stage-0 outputs kept per run (:class:`Prepared`): the inputs of the experiments, not of every setting.
-PREPARED_KEPT = 4
-#: Rounds of the filter effect's timing: each clusters every test sequence filtered and unfiltered once (after a
-#: warm-up), so that the saving has a spread over the rounds.  The default run's clustering takes 0.03-0.06 s a
-#: round, 10 rounds about a second.
+#: Rounds of the filter effect's timing, each clustering every test sequence filtered and unfiltered once.
 TIMING_ROUNDS = 10
 
 
@@ -310,7 +286,9 @@ def data_statistics(sequences):
     """The data's statistics (:func:`scene_statistics`) as JSON numbers and as text, from per-sequence parts."""
     summary, table = combine_statistics(sequences.map(_statistics_part))
     # The plain numbers and words of the summary; anything richer stays in the text.
-    numbers = {key: value for key, value in _native(summary).items() if isinstance(value, (bool, int, float, str))}
+    numbers = {
+        key: value for key, value in native_params(summary).items() if isinstance(value, (bool, int, float, str))
+    }
     return DataStatistics(summary=numbers, text=format_statistics(summary, table))
 
 
@@ -333,7 +311,7 @@ def run_experiment(env, key, needed):
     found = env.executor.map(
         _ExperimentRepeat(env, number, repeats, stage1s),
         range(repeats),
-        on_done=_said_ended(env, f"#{number}", repeats) if experiment.tuned else None,
+        on_done=_said_ended(env, repeats, f"#{number}") if experiment.tuned else None,
     )
     first = found[0]
     derived = None
@@ -409,21 +387,6 @@ class _ExperimentRepeat:
         return Repeat(params, search, test, time.perf_counter() - start)
 
 
-def with_cluster_gate(space, stage, objective):
-    """The paper's search space, plus the cluster-level Doppler gate when tuning for PQ.
-
-    The paper's V-measure does not see clusters of static background, so the
-    gate (``cluster_vr_min``, m/s: clusters whose median |v_r| is at most it
-    become noise) only enters the searches for the panoptic quality, which
-    counts them as false positives; tuned for V1 the experiments stay as
-    printed.
-    """
-    if objective != "pq":
-        return space
-    name = f"{'merge' if stage == 2 else 'cluster'}__cluster_vr_min"
-    return {**space, name: Real(0.0, 1.5, name=name)}
-
-
 def _repeat_records(env, found, defaults=None):
     """One :class:`RepeatResult` per repeat, in order."""
     return [
@@ -441,28 +404,18 @@ def _repeat_records(env, found, defaults=None):
 
 def _spread(found, score="pq"):
     """``"71.55 %"`` / ``"0.412"`` for one repeat, mean and sd over several (``"71.20 +- 0.35 %"``)."""
-    return _mean_sd([f.test.v1 if score == "v1" else f.test.instance.pq for f in found], score)
-
-
-def _mean_sd(values, score="pq"):
-    """Scores of the repeats as :func:`_spread` says them: V1 in percent with 2 decimals, PQ with 3."""
-    values = np.asarray(values, dtype=np.float64)
-    scale, unit, digits = (100, " %", 2) if score == "v1" else (1, "", 3)
-    text = f"{scale * values.mean():.{digits}f}"
-    if len(values) > 1:
-        text += f" +- {scale * values.std(ddof=1):.{digits}f}"
-    return text + unit
+    return values_cell([f.test.v1 if score == "v1" else f.test.instance.pq for f in found], score, sign="+-")
 
 
 def _repeat_label(label, k, repeats):
     return label if repeats == 1 else f"{label} repeat {k + 1}/{repeats}"
 
 
-def _said_ended(env, label, repeats):
-    """``on_done`` of a step's repeats when they run beside other work: a line as each ends (none when alone)."""
+def _said_ended(env, repeats, label=None):
+    """``on_done`` of a step's repeats ``k`` (or jobs ``(label, k)``) beside other work: a line as each ends."""
     if env.executor.alone:
         return None
-    return lambda k, _: env.progress.search_ended(_repeat_label(label, k, repeats))
+    return lambda job, _: env.progress.search_ended(_repeat_label(*((label, job) if label else job), repeats))
 
 
 # ----------------------------------------------------------------------------- the filter's effect
@@ -533,7 +486,7 @@ def run_baselines(env, key, needed):
     """
     names = list(SKLEARN_BASELINES)
     jobs = [(name, k) for name in names for k in range(env.repeats)]
-    found = env.executor.map(_BaselineRepeat(env), jobs, on_done=_said_baseline_ended(env))
+    found = env.executor.map(_BaselineRepeat(env), jobs, on_done=_said_ended(env, env.repeats))
     baselines, lines = {}, []
     for i, name in enumerate(names):
         repeats = found[i * env.repeats : (i + 1) * env.repeats]
@@ -569,12 +522,6 @@ class _BaselineRepeat:
         return Repeat(params, search, test, time.perf_counter() - start)
 
 
-def _said_baseline_ended(env):
-    if env.executor.alone:
-        return None
-    return lambda job, _: env.progress.search_ended(_repeat_label(job[0], job[1], env.repeats))
-
-
 # ----------------------------------------------------------------------------- the object experiment
 
 
@@ -585,7 +532,7 @@ def run_objects(env, key, needed):
     repeat is one :meth:`map` job.
     """
     start = time.perf_counter()
-    found = env.executor.map(_ObjectRepeat(env), range(env.repeats), on_done=_said_ended(env, OBJECTS, env.repeats))
+    found = env.executor.map(_ObjectRepeat(env), range(env.repeats), on_done=_said_ended(env, env.repeats, OBJECTS))
     result = ObjectExperimentResult(
         stage1_search=found[0].stage1_search,
         search=found[0].search,
@@ -595,7 +542,9 @@ def run_objects(env, key, needed):
     )
     offline = [f.record.instance_test.pq for f in found]
     causal = [f.record.causal_instance_test.pq for f in found]
-    summary = f"    objects: test PQ {_mean_sd(offline)} offline, {_mean_sd(causal)} causal"
+    summary = (
+        f"    objects: test PQ {values_cell(offline, 'pq', '+-')} offline, {values_cell(causal, 'pq', '+-')} causal"
+    )
     return Outcome(result, summary)
 
 
@@ -674,31 +623,6 @@ def run_classification_step(env, key, needed):
 # ----------------------------------------------------------------------------- scoring and searching
 
 
-def search_seed(run_seed, key):
-    """The random seed of the search of ``key`` (an experiment's number or a baseline's name) in repeat ``run_seed``.
-
-    Each search has its own stream, ``SeedSequence(run_seed, spawn_key=(id,))``
-    with ``id`` the experiment's number or, for a name, its CRC-32 (stable
-    across processes and Python versions, unlike ``hash``), so that searches
-    with equal spaces (#2-#5) draw different random candidates
-    (:ref:`user-guide-tuning`).
-
-    Parameters
-    ----------
-    run_seed : int
-        The run's seed plus the repeat's index.
-    key : str
-        ``"3"``, or a baseline's name.
-
-    Returns
-    -------
-    seed : int
-        In ``[0, 2**32)``.
-    """
-    stream = int(key) if key.isdigit() else zlib.crc32(key.encode("utf-8"))
-    return int(np.random.SeedSequence(run_seed, spawn_key=(stream,)).generate_state(1)[0])
-
-
 def score_on_test(env, pipeline):
     """Fit-predict on each test sequence; radar V-measure and object-level scores against the pre-clustered target.
 
@@ -742,128 +666,6 @@ def _score_sequence(sequence, pipeline, drawn):
     return found
 
 
-def tune(env, key, estimator, space, label, start_from=None, seed=None):
-    """Bayesian optimisation on the training half with grouped CV; returns (best params, SearchRecord).
-
-    A candidate is one task per block of training sequences
-    (:mod:`sklearn_radar.model_selection._sequence_search`)
-    and the search's loop one task where the executor runs it
-    (:meth:`~sklearn_radar._executor.DaskExecutor.on_a_worker`); its
-    iterations are printed (and counted as units of step ``key``) when it
-    runs alone here.  ``seed`` is the search's random seed (None: the run's).
-
-    ``start_from`` (e.g. the paper's optimum) is scored on the same folds as
-    one more candidate and wins when the search found nothing better: a
-    short search should not report a worse setting than a known one.
-    """
-    start = time.perf_counter()
-    folds = sized_sequence_folds(env.train, [env.sequences.size([s]) for s in env.train], env.budget.cv_folds)
-    raw = env.training.raw(env.executor)
-    estimator = _without_cache(estimator)
-    searched, searched_space, data, prefix = estimator, space, raw, ""
-    fixed = fixed_prefix(estimator, space)
-    if fixed is not None:
-        # Stage 0 once for every candidate and fold, per sequence (it never crosses sequences; tested).
-        stage0, searched, prefix = fixed
-        data = env.training.prepared(env.executor, stage0)
-        searched_space = {name[len(prefix) :]: dimension for name, dimension in space.items()}
-    # The paper's setting is scored as one more candidate on the same folds (on the data as searched, when it
-    # sets only the searched step).
-    start_here = bool(start_from) and all(name.startswith(prefix) for name in start_from)
-    start_candidate = {name[len(prefix) :]: value for name, value in start_from.items()} if start_here else None
-    options = {
-        "objective": env.objective,
-        "n_iter": env.budget.n_iter,
-        "n_initial_points": env.budget.n_initial_points,
-        "n_points": env.n_points,
-        "random_state": env.seed if seed is None else seed,
-    }
-    printer = None
-    if env.executor.alone:
-        status = env.progress.search_status(key)
-        printer = ProgressPrinter(env.budget.n_iter, label=label, stream=env.progress.stream, status=status)
-    found, known = env.executor.on_a_worker(
-        _search, data.blocks, data.ids, searched, searched_space, folds, start_candidate, options, printer
-    )
-    best = {prefix + name: value for name, value in _native(found.best_params).items()}
-    cv_best, source = found.best_score, SOURCE_SEARCH
-    if start_from:
-        if not start_here:
-            known = candidate_scores(raw, estimator, [start_from], folds, env.objective)[0]
-        if known >= cv_best:
-            best = {name: start_from[name] for name in space if name in start_from}
-            cv_best, source = known, SOURCE_PAPER
-    record = SearchRecord(
-        cv_best=cv_best,
-        convergence=found.scores,
-        best_source=source,
-        cv_start_from=known,
-        search_wall_time_s=time.perf_counter() - start,
-    )
-    return best, record
-
-
-def _search(executor, blocks, ids, estimator, space, folds, start_from, options, callback):
-    """:func:`search_and_score_start` on the blocks, where ``executor`` runs (a worker, or here)."""
-    data = SearchData(blocks, ids, executor)
-    return search_and_score_start(estimator, space, data, folds, start_from, callback=callback, **options)
-
-
-class TrainingData:
-    """The training half per sequence, placed once per run where its tasks run.
-
-    A search builds its
-    :class:`~sklearn_radar.model_selection._sequence_search.SearchData` from
-    these blocks.  Its stage-0 outputs (:meth:`prepared`) are shared by the searches with
-    the same stage 0 (repeats, experiments on the same input); the last
-    :data:`PREPARED_KEPT` are kept.  Concurrent searches (threads) share it.
-    """
-
-    def __init__(self, sequences, train):
-        self.sequences, self.train = sequences, train
-        self._raw, self._prepared = None, {}
-        self._lock = threading.Lock()
-
-    def __getstate__(self):  # a copy in another process (joblib) places its own
-        return {"sequences": self.sequences, "train": self.train, "_raw": None, "_prepared": {}}
-
-    def __setstate__(self, state):
-        self.__dict__.update(state, _lock=threading.Lock())
-
-    def raw(self, executor):
-        with self._lock:
-            if self._raw is None:
-                self._raw = self.sequences.search_data(self.train)
-            return self._with(self._raw, executor)
-
-    def prepared(self, executor, stage0):
-        raw = self.raw(executor)
-        key = joblib.hash(stage0)
-        with self._lock:
-            found = self._prepared.get(key)
-            if found is None:
-                found = self._prepared[key] = raw.prepare(stage0)
-                while len(self._prepared) > PREPARED_KEPT:
-                    self._prepared.pop(next(iter(self._prepared)))
-        return self._with(found, executor)
-
-    @staticmethod
-    def _with(data, executor):
-        return data.on(executor)
-
-
-def _native(params):
-    """Parameters with numpy scalars as Python numbers."""
-    return {key: (value.item() if isinstance(value, np.generic) else value) for key, value in params.items()}
-
-
-def _without_cache(estimator):
-    """A pipeline without its cache folder (which a worker on another machine cannot reach)."""
-    if hasattr(estimator, "steps"):
-        return clone(estimator).set_params(memory=None)
-    return estimator
-
-
 # ----------------------------------------------------------------------------- the table
 
 
@@ -904,6 +706,3 @@ def units(key, budget, repeats):
     if experiment is not None and experiment.derived_from is not None:
         return repeats
     return 1
-
-
-__all__ = ["STEPS", "Outcome", "RunEnv", "Step", "TrainingData", "data_statistics", "search_seed", "units"]

@@ -1,17 +1,13 @@
 """The tracking step: settings of the run streamed through the online pipeline, their object ids scored over time.
 
-Each setting of :data:`~._constants.TRACKED` (the run's tuned one where its
-experiment ran, the paper's otherwise) is replayed scan by scan through
-:class:`~sklearn_radar.online.OnlinePipeline` on every test sequence, where
-the sequence lives; :func:`~sklearn_radar.metrics.tracking_scores` scores
-the ids against the annotated moving road users, per 0.5 s frame.  The
-online pipeline rather than the offline causal one (whose merged clusters it
-equals): it alone gives the ids as reported at each scan, with the stage-1
-meetings as aliases, which is what a tracker downstream sees (its cost per
-scan: :ref:`online-speed`).
+Each setting of :data:`~._constants.TRACKED` (the run's tuned one where its experiment ran, the paper's otherwise)
+is replayed scan by scan through :class:`~sklearn_radar.online.OnlinePipeline` on every test sequence, where it
+lives, and :func:`~sklearn_radar.metrics.tracking_scores` scores the ids per 0.5 s frame (:ref:`online-speed`).
 """
 
 from __future__ import annotations
+
+from typing import Any
 
 import numpy as np
 
@@ -21,13 +17,75 @@ from ..metrics import tracking_scores
 from ..metrics._tracking import _scores
 from ..online import OnlinePipeline
 from ..online._replay import replay
-from ._results import TrackingResult, TrackingScores
+from ._records import JsonRecord, record
 
 #: Frame of the tracking scores, s (as the object-level scores').
 TRACKING_FRAME_S = 0.5
 
 #: The counts of :func:`tracking_scores` that add up over sequences.
 _COUNTS = ("id_switches", "misses", "false_positives", "n_objects", "n_matches", "idtp", "idfp", "idfn", "n_frames")
+
+
+@record
+class TrackingScores(JsonRecord):
+    """How well object ids follow the moving road users over time (:func:`~sklearn_radar.metrics.tracking_scores`).
+
+    Summed over the test sequences (a track never crosses sequences, so the
+    identity assignment, and every count, is the sum of the sequences').
+
+    Attributes
+    ----------
+    frame_s : float
+        Frame length, s.
+    mota, idf1 : float
+        From the summed counts; NaN without ground-truth objects.
+    id_switches, misses, false_positives, n_objects, n_matches, idtp, idfp, idfn, n_frames : int
+    """
+
+    frame_s: float
+    mota: float
+    idf1: float
+    id_switches: int
+    misses: int
+    false_positives: int
+    n_objects: int
+    n_matches: int
+    idtp: int
+    idfp: int
+    idfn: int
+    n_frames: int
+
+
+@record
+class TrackingResult(JsonRecord):
+    """One setting streamed through :class:`~sklearn_radar.online.OnlinePipeline` on the test half (``tracking``).
+
+    Attributes
+    ----------
+    number : int
+        The experiment whose setting streams.
+    method : str
+    setting_source : str
+        ``"tuned #13"`` or ``"fixed #1"`` (the run's setting), ``"paper's #13"`` (the experiment did not run).
+    params : dict
+        The setting, as pipeline parameters (stage 1's included for stage 2).
+    reported : TrackingScores
+        The ids as given with each detection when its scan was labelled.
+    final : TrackingScores
+        The ids after every alias (stage-1 meetings, stage-2 merges) resolved to the surviving one.
+    n_scans : int
+    n_aliases : int
+        Merges reported as aliases, summed over the test sequences.
+    """
+
+    number: int
+    method: str
+    setting_source: str
+    params: dict[str, Any]
+    reported: TrackingScores
+    final: TrackingScores
+    n_scans: int
+    n_aliases: int
 
 
 def tracked_setting(number, result):

@@ -18,6 +18,7 @@ from sklearn_radar.model_selection import SequenceSearchCV, make_bayes_search
 from sklearn_radar.model_selection._sequence_search import (
     SearchData,
     balanced_blocks,
+    bayes_search,
     candidate_parts,
     candidate_scores,
     fixed_prefix,
@@ -96,6 +97,19 @@ def test_stage0_per_sequence_equals_stage0_on_the_whole_half(scenes):
         assert list(rows.columns) == list(whole.columns)
         np.testing.assert_array_equal(rows.to_numpy(), whole[mask].to_numpy())
         assert np.array_equal(sequence_target, target[mask])
+
+
+def test_a_start_setting_is_scored_after_the_search_on_the_same_folds_and_changes_nothing_else(scenes):
+    X, target, groups = scenes
+    pipeline, space = experiment_pipeline(3), search_space(3)
+    data, folds = SearchData.place(X, target, groups), sequence_folds(groups, 2)
+    options = {"objective": "v1", "n_iter": 3, "n_initial_points": 2, "random_state": 0}
+    start = {"cluster__eps_xy": 1.5, "cluster__min_samples": 3}
+    plain = bayes_search(pipeline, space, data, folds, **options)
+    started = bayes_search(pipeline, space, data, folds, start_from=start, **options)
+    assert plain.start_score is None
+    assert started.start_score == candidate_scores(data, pipeline, [start], folds, "v1")[0]
+    assert (started.candidates, started.fold_scores) == (plain.candidates, plain.fold_scores)
 
 
 def test_blocks_are_balanced_and_hold_every_sequence_once():

@@ -249,7 +249,8 @@ def test_the_report_says_reduced_budget_only_for_a_reduced_run(tiny_report, tmp_
 
 
 def test_results_json_round_trips_through_the_typed_results_byte_for_byte(tiny_report):
-    from sklearn_radar.reproduce._results import ExperimentResult, RunResults, SearchRecord
+    from sklearn_radar.reproduce._experiment_records import ExperimentResult, SearchRecord
+    from sklearn_radar.reproduce._results import RunResults
 
     text = (tiny_report / "results.json").read_text()
     results = RunResults.from_json_dict(json.loads(text))
@@ -300,7 +301,8 @@ def test_every_section_renders_the_tiny_run_and_stays_out_when_its_step_did_not_
 
 
 def test_a_missing_or_renamed_field_fails_where_the_results_are_built(tiny_report):
-    from sklearn_radar.reproduce._results import ExperimentResult, RunResults
+    from sklearn_radar.reproduce._experiment_records import ExperimentResult
+    from sklearn_radar.reproduce._results import RunResults
 
     document = json.loads((tiny_report / "results.json").read_text())
     renamed = json.loads(json.dumps(document))
@@ -410,7 +412,7 @@ def test_results_without_an_objective_read_back_as_the_papers():
 
 
 def _typed_budget():
-    from sklearn_radar.reproduce._results import Budget
+    from sklearn_radar.reproduce._budget import Budget
 
     return Budget.default(2)
 
@@ -421,15 +423,6 @@ def _typed_data():
     return DataMeta(
         source="s", n_detections=1, n_sequences=1, n_train=1, n_test=0, train_sequences=[1], test_sequences=[]
     )
-
-
-def test_the_cluster_gate_is_searched_only_for_pq():
-    from sklearn_radar.experiments import search_space
-    from sklearn_radar.reproduce._steps import with_cluster_gate as _with_cluster_gate
-
-    assert _with_cluster_gate(search_space(8), 1, "v1") == search_space(8)
-    assert set(_with_cluster_gate(search_space(8), 1, "pq")) - set(search_space(8)) == {"cluster__cluster_vr_min"}
-    assert set(_with_cluster_gate(search_space(13), 2, "pq")) - set(search_space(13)) == {"merge__cluster_vr_min"}
 
 
 def test_the_scene_figure_marks_exactly_the_clusters_without_an_object_detection():
@@ -639,70 +632,6 @@ def test_progress_share_never_goes_back(monkeypatch):
     assert progress.status().startswith("run 50 %")
 
 
-@pytest.mark.parametrize("number", [3, 13, "baseline"])
-def test_tune_searches_exactly_as_the_plain_pipeline_search(number):
-    # _tune runs stage 0 once, the search on the last step alone, one task per sequence, and combines a
-    # fold's score from its sequences' parts: the candidates must be those of the plain BayesSearchCV of the
-    # whole pipeline (stage 0 per fold, one fit per fold) with the same seed, the scores equal to rounding.
-    import io
-
-    from sklearn.model_selection import GroupKFold
-
-    from sklearn_radar._executor import LocalExecutor
-    from sklearn_radar.cluster import WindowedDBSCAN
-    from sklearn_radar.experiments import SKLEARN_BASELINES as _BASELINES
-    from sklearn_radar.experiments import experiment_pipeline, search_space
-    from sklearn_radar.metrics import precluster_target, radar_v_measure_scorer
-    from sklearn_radar.model_selection import make_bayes_search
-    from sklearn_radar.reproduce._progress import RunProgress
-    from sklearn_radar.reproduce._results import Budget
-    from sklearn_radar.reproduce._sequences import RunSequences
-    from sklearn_radar.reproduce._steps import RunEnv, TrainingData, tune
-
-    # Seed 6: on the 4 x 3 s data of seed 5, #13's five candidates all score alike since the class signatures
-    # (issue 31) changed the realistic data, and the comparison below would be vacuous.
-    scenes = make_scenes(n_sequences=4, duration=3.0, random_state=6)
-    X = scenes.data[[c for c in scenes.data.columns if c not in ("uuid", "track_id", "label_id")]]
-    target = precluster_target(scenes.data, scenes.target)
-    train = np.flatnonzero(np.isin(scenes.groups, np.unique(scenes.groups)[:3]))
-    if number == "baseline":
-        pipeline = experiment_pipeline(3)
-        pipeline.steps[-1] = ("cluster", WindowedDBSCAN())
-        space = _BASELINES["sklearn DBSCAN per 0.25 s window"][1]
-    else:
-        pipeline, space = experiment_pipeline(number), search_space(number)
-    budget = Budget(label="test", n_iter=5, n_initial_points=2, cv_folds=2)
-    sequences = RunSequences.simulated(4, 3.0, 6)  # the sequences of scenes, simulated one by one
-    train_ids = sequences.ids[:3]
-    progress = RunProgress({"test": ("stage 1", 7)}, started=0.0, stream=io.StringIO())
-    env = RunEnv(
-        LocalExecutor(),
-        sequences,
-        train_ids,
-        sequences.ids[3:],
-        budget,
-        1,
-        "v1",
-        1,
-        1,
-        None,
-        progress,
-        TrainingData(sequences, train_ids),
-    )
-    best, record = tune(env, "test", pipeline, space, "test")
-
-    groups = scenes.groups[train]
-    cv = [(rows, rows) for _, rows in GroupKFold(n_splits=2).split(train, groups=groups)]
-    plain = make_bayes_search(
-        pipeline, space, scoring=radar_v_measure_scorer, n_iter=5, n_initial_points=2, cv=cv, random_state=1
-    ).fit(X.iloc[train], target[train], groups=groups)
-    expected = [float(s) for s in plain.cv_results_["mean_test_score"]]
-    assert record.convergence == pytest.approx(expected, rel=1e-12, abs=1e-12)
-    assert len(set(expected)) > 1  # the candidates score differently: the comparison could fail
-    assert best == {key: (v.item() if hasattr(v, "item") else v) for key, v in plain.best_params_.items()}
-    assert record.cv_best == pytest.approx(plain.best_score_, rel=1e-12)
-
-
 # ----------------------------------------------------------------------------- what the figures show
 
 
@@ -767,7 +696,7 @@ def test_coinciding_convergence_curves_differ_in_marker_and_the_legend_is_readab
 
 
 def test_the_filters_time_saving_is_a_finding_only_beyond_the_noise_of_its_timing_rounds():
-    from sklearn_radar.reproduce._results import ClusteringCost, FilterEffectFigures, FilterEffectResult
+    from sklearn_radar.reproduce._filter_records import ClusteringCost, FilterEffectFigures, FilterEffectResult
     from sklearn_radar.reproduce._sections._filter_effect import time_saving_text
 
     def effect(filtered, unfiltered):

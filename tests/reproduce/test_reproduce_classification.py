@@ -12,13 +12,14 @@ from sklearn_radar.cli import main
 from sklearn_radar.datasets import load_radarscenes
 from sklearn_radar.experiments import SKLEARN_BASELINES
 from sklearn_radar.metrics import semantic_scores
-from sklearn_radar.reproduce._classification import POINT_WISE, strongest_offline_baseline
-from sklearn_radar.reproduce._results import (
+from sklearn_radar.reproduce._classification import (
+    POINT_WISE,
     ClassificationResult,
     ClassifiedSetting,
-    RunResults,
     SemanticScores,
+    strongest_offline_baseline,
 )
+from sklearn_radar.reproduce._results import RunResults
 from sklearn_radar.reproduce._sections._classification import _verdict, answer_lines, markdown
 
 

@@ -143,7 +143,7 @@ def test_the_convergence_band_spans_the_repeats():
 
 
 def test_the_progress_counts_each_repeated_step_once_per_repeat():
-    from sklearn_radar.reproduce._results import Budget
+    from sklearn_radar.reproduce._budget import Budget
     from sklearn_radar.reproduce._steps import units
 
     def _repeated(key, repeats):

@@ -12,7 +12,9 @@ import numpy as np
 from ..._files import atomic_write
 from .._constants import BEST_STAGE1, FRAME_NAMES, SOURCE_PAPER
 from .._context import RunContext
-from .._results import ExperimentResult, GridTable, RunResults, repeated_scores
+from .._experiment_records import ExperimentResult, repeated_scores
+from .._filter_records import GridTable
+from .._results import RunResults
 
 #: Markdown of a section: its lines, each starting a new line of report.md; [] leaves the section out.
 Markdown = Callable[[RunResults], list[str]]
@@ -50,16 +52,7 @@ class Section:
 def format_params(params):
     """``{"cluster__eps_xy": 0.6, ...}`` -> ``"eps_xy=0.6, ..."``: what the experiment sets, 3 significant digits.
 
-    Parameters
-    ----------
-    params : dict or None
-        Pipeline parameters.
-
-    Returns
-    -------
-    text : str
-        Without ``eps_t``, ``n_jobs``, ``mode`` and ``metric``, which every
-        setting of a method shares.
+    Without ``eps_t``, ``n_jobs``, ``mode`` and ``metric``, which every setting of a method shares.
     """
     shown = []
     for key, value in (params or {}).items():
@@ -87,30 +80,21 @@ def percent(value):
 
 
 def score_cell(result, score="v1"):
-    """A test score over the repeats: ``"71.55 %"`` for one run, ``"71.20 \u00b1 0.35 %"`` (mean \u00b1 sd) for more.
+    """A test score (``"v1"`` in percent, ``"pq"`` with 3 decimals) of ``result`` over its repeats, as text.
 
-    Parameters
-    ----------
-    result : ExperimentResult or BaselineResult
-    score : {"v1", "pq"}, default="v1"
-        V1 in percent, or PQ with 3 decimals.
-
-    Returns
-    -------
-    text : str
-        ``"-"`` without the score.
+    ``"71.55 %"`` for one run, ``"71.20 \u00b1 0.35 %"`` (mean \u00b1 sd) for more, ``"-"`` without the score.
     """
     return values_cell(repeated_scores(result, score), score)
 
 
-def values_cell(values, score="v1"):
-    """Scores of the repeats as :func:`score_cell` writes them: one value, or mean \u00b1 sd; ``"-"`` for none."""
+def values_cell(values, score="v1", sign="\u00b1"):
+    """Scores of the repeats as :func:`score_cell` writes them: one value, or mean ``sign`` sd; ``"-"`` for none."""
     if len(values) == 0:
         return "-"
     scale, unit, digits = (100, " %", 2) if score == "v1" else (1, "", 3)
     if len(values) == 1:
         return f"{scale * values[0]:.{digits}f}{unit}"
-    return f"{scale * np.mean(values):.{digits}f} \u00b1 {scale * np.std(values, ddof=1):.{digits}f}{unit}"
+    return f"{scale * np.mean(values):.{digits}f} {sign} {scale * np.std(values, ddof=1):.{digits}f}{unit}"
 
 
 def mean_score(result, results: RunResults):
@@ -186,18 +170,7 @@ def cv_cell(result, results: RunResults):
 
 
 def overfit_lines(named, results: RunResults):
-    """A sentence naming the settings whose CV score is more than :data:`OVERFIT_GAP` above their test score.
-
-    Parameters
-    ----------
-    named : list of (str, ExperimentResult or BaselineResult)
-    results : RunResults
-
-    Returns
-    -------
-    lines : list of str
-        Empty when there is none.
-    """
+    """Lines naming the ``named`` (name, result) whose CV score is more than :data:`OVERFIT_GAP` above their test."""
     over = [
         f"{name} (CV {format_score(r.search.cv_best, results)}, test {format_score(test_score(r, results), results)})"
         for name, r in named
@@ -214,21 +187,9 @@ def overfit_lines(named, results: RunResults):
 
 
 def experiment_table(title, rows: list[ExperimentResult], results: RunResults, stage2=False):
-    """A heading, the table of Table III or IV (one row per experiment, by number) and its legend.
+    """The lines of a heading ``title``, Table III or IV of ``rows`` (one row per experiment, by number), a legend.
 
-    Parameters
-    ----------
-    title : str
-        The heading's text.
-    rows : list of ExperimentResult
-    results : RunResults
-        The run (objective, budget).
-    stage2 : bool, default=False
-        Add the stage-1 clusters and the merges (Table IV).
-
-    Returns
-    -------
-    lines : list of str
+    ``stage2`` adds the stage-1 clusters and the merges (Table IV).
     """
     score = objective_name(results)
     extra = " stage-1 clusters | merges |" if stage2 else ""
@@ -324,34 +285,3 @@ def save_figure(fig, path):
     fig.savefig(buffer, format="png", dpi=90)
     plt.close(fig)
     atomic_write(path, lambda stream: stream.write(buffer.getvalue()))
-
-
-__all__ = [
-    "OVERFIT_GAP",
-    "SETTING_DERIVED",
-    "SETTING_FIXED",
-    "SETTING_PAPER",
-    "SETTING_SEARCH",
-    "Figures",
-    "Markdown",
-    "Section",
-    "column_legend",
-    "counted",
-    "cv_cell",
-    "experiment_row",
-    "experiment_table",
-    "format_params",
-    "format_score",
-    "frame_name",
-    "grid_markdown",
-    "mean_score",
-    "objective_name",
-    "overfit_lines",
-    "percent",
-    "repeats_legend",
-    "save_figure",
-    "scene_size",
-    "score_cell",
-    "setting_source",
-    "test_score",
-]

@@ -4,7 +4,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._results import ClassifiedSetting, RunResults, repeated_scores
+from .._classification import ClassifiedSetting
+from .._experiment_records import repeated_scores
+from .._results import RunResults
 from ._base import Section, format_params, format_score, objective_name
 from ._comparison import DOES_NOT_HOLD, HOLDS, N_STANDARD_ERRORS, paired_verdict
 
@@ -260,5 +262,3 @@ def _percent(value):
 
 
 SECTION = Section("classification", markdown)
-
-__all__ = ["PUBLISHED", "SECTION"]

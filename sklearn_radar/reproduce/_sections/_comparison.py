@@ -8,7 +8,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._constants import BEST_STAGE1, EXPERT, PAPER_FILTER_SETTING
-from .._results import FilterResult, RunResults, repeated_scores
+from .._experiment_records import repeated_scores
+from .._filter_records import FilterResult
+from .._results import RunResults
 from ._base import Section, frame_name, percent
 
 #: The verdicts of a finding.

@@ -9,7 +9,8 @@ import numpy as np
 from ...preprocessing import FrameTransform
 from .._constants import BEST_STAGE1, FCS_BASELINE
 from .._context import RunContext
-from .._results import RunResults, repeated_scores
+from .._experiment_records import repeated_scores
+from .._results import RunResults
 from ._base import (
     SETTING_PAPER,
     Section,

@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from .._results import RunResults, time_savings_percent
+from .._filter_records import time_savings_percent
+from .._results import RunResults
 from ._base import Section
 from ._comparison import DOES_NOT_HOLD, HOLDS, N_STANDARD_ERRORS, paired_verdict
 

@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from .._results import InstanceScores, RunResults
+from .._experiment_records import InstanceScores
+from .._results import RunResults
 from ._base import Section, repeats_legend, score_cell
 
 

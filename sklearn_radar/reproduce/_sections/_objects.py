@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from .._results import RunResults, repeated_scores
+from .._experiment_records import repeated_scores
+from .._results import RunResults
 from ._base import Section, format_params, values_cell
 from ._comparison import DOES_NOT_HOLD, HOLDS, N_STANDARD_ERRORS, paired_verdict
 
@@ -139,5 +140,3 @@ def _row(name, decides_from, objective, pq, v1):
 
 
 SECTION = Section("objects", markdown)
-
-__all__ = ["SECTION", "verdict"]

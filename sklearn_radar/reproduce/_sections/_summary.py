@@ -6,7 +6,8 @@ import numpy as np
 
 from ...experiments import get_experiment
 from .._constants import BEST_STAGE1, STAGE1
-from .._results import RunResults, repeated_scores
+from .._experiment_records import repeated_scores
+from .._results import RunResults
 from ._base import OVERFIT_GAP, SETTING_PAPER, Section, objective_name, score_cell, setting_source, test_score
 from ._comparison import CANNOT_TELL, DOES_NOT_HOLD, HOLDS, N_STANDARD_ERRORS, _chosen_rows, checked
 from ._objects import glance_line

@@ -2,7 +2,8 @@
 
 from __future__ import annotations
 
-from .._results import RunResults, TrackingScores
+from .._results import RunResults
+from .._tracking import TrackingScores
 from ._base import Section, format_params
 
 
