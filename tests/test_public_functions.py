@@ -76,6 +76,7 @@ PARAM_VALIDATION_FUNCTION_LIST = [
     "sklearn_radar.experiments.object_pipeline",
     "sklearn_radar.experiments.object_search_space",
     "sklearn_radar.metrics.background_share",
+    "sklearn_radar.metrics.class_errors",
     "sklearn_radar.metrics.class_panoptic_quality",
     "sklearn_radar.metrics.hota_scores",
     "sklearn_radar.metrics.instance_coverage",

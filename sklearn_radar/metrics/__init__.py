@@ -4,9 +4,11 @@ The radar V-measure and the pre-clustered target of Scheiner et al. 2019 (Sec. "
 object-level scores per time frame: panoptic quality, coverage, the share of background-only clusters and the
 missed and false segments by cause; and
 the tracking quality of object ids over frames: ID switches, MOTA, IDF1 and HOTA; and the semantic scores of
-classified road users: class-aware panoptic quality, mAP, point-wise macro-F1 and coverage.
+classified road users: class-aware panoptic quality, mAP, point-wise macro-F1 and coverage, and where the
+class-aware panoptic quality goes (a confusion matrix of matched segments).
 """
 
+from ._class_errors import class_errors
 from ._errors import instance_errors
 from ._hota import hota_scores
 from ._instance import (
@@ -30,6 +32,7 @@ from ._v_measure import radar_homogeneity_completeness_v_measure, radar_v_measur
 
 __all__ = [
     "background_share",
+    "class_errors",
     "class_panoptic_quality",
     "hota_scores",
     "instance_coverage",
