@@ -153,6 +153,8 @@ CHECKS = _strict(
             # the checks' arrays use the class segments of each frame as the instances, as documented.
             ClusterClassifier(RadarDBSCAN(metric="xy", vr_min=-np.inf), instance_column=None),
             PointClassifier(),
+            PointClassifier(radius=2.0),
+            PointClassifier(radius=2.0, causal=True),
         ],
         expected_failed_checks=_expected_failed_checks,
     )

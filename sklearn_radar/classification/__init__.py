@@ -23,7 +23,7 @@ from ._cluster_classifier import ClusterClassifier
 from ._features import CLUSTER_FEATURES, cluster_features
 from ._instances import predict_instances
 from ._persist import ClassifierVersionWarning, load_classifier, save_classifier
-from ._point_classifier import POINT_FEATURES, PointClassifier
+from ._point_classifier import NEIGHBOURHOOD_FEATURES, POINT_FEATURES, PointClassifier
 
 __all__ = [
     "BACKGROUND",
@@ -32,6 +32,7 @@ __all__ = [
     "DEVKIT_CLASS_INDEX",
     "DEVKIT_CLASS_NAMES",
     "IGNORED",
+    "NEIGHBOURHOOD_FEATURES",
     "POINT_FEATURES",
     "ROAD_USER_CLASSES",
     "ClassifierVersionWarning",

@@ -16,9 +16,10 @@ from .._schema import POINT_FEATURE_READS
 from .._validation import read_columns
 from ..cluster import RadarDBSCAN
 from ._classes import BACKGROUND, IGNORED
+from ._neighbourhood import NEIGHBOURHOOD_FEATURES, neighbourhood_features
 from ._wrapped import check_class_target, class_proba, fit_classifier, macro_f1_score
 
-__all__ = ["POINT_FEATURES", "PointClassifier"]
+__all__ = ["NEIGHBOURHOOD_FEATURES", "POINT_FEATURES", "PointClassifier"]
 
 #: ``{feature: (unit, meaning, columns it needs)}`` of a single detection, in the order of the feature rows.
 POINT_FEATURES = {
@@ -42,6 +43,16 @@ class PointClassifier(BaseEstimator):
     single detection cannot show.  The positions are not features (in the
     sequence frame they say where the recording was made, not what the
     object is).
+
+    With ``radius`` set, each detection also gets the features of its
+    neighbourhood (:data:`NEIGHBOURHOOD_FEATURES`: the number of detections
+    within ``radius`` in x-y and ``time_window`` in time, their x-y spread,
+    the mean and standard deviation of their Doppler and RCS, the largest
+    RCS), as point-wise learners that group each point's surroundings
+    (PointNet++) see them: the fair point-wise rival of the cluster
+    classifier.  Neighbours are the kept detections of the same sequence;
+    offline they lie within ``time_window`` before or after the detection,
+    with ``causal=True`` only before (or at the same time).
 
     The instance metrics need instance ids, so :meth:`predict_instances`
     joins the detections of each sequence that received the same road-user
@@ -68,6 +79,16 @@ class PointClassifier(BaseEstimator):
         instance, m, > 0.
     eps_t : float, default=0.25
         Time within which they may join, s, >= 0 (the paper's eps_t).
+    radius : float or None, default=None
+        x-y radius of a detection's neighbourhood, m, > 0.  None: no
+        neighbourhood features, the four features of a single detection.
+    time_window : float, default=0.25
+        Time within which a neighbour lies, s, > 0: before or after the
+        detection, or only before it with ``causal=True``.  Used only with
+        ``radius``.
+    causal : bool, default=False
+        Neighbours from the past only (what a car can compute scan by scan).
+        Used only with ``radius``.
 
     Attributes
     ----------
@@ -81,7 +102,8 @@ class PointClassifier(BaseEstimator):
         :class:`~sklearn.dummy.DummyClassifier` of the one class, with a
         warning, when the training detections hold a single class).
     feature_names_ : ndarray of str
-        The features of :data:`POINT_FEATURES` it uses.
+        The features of :data:`POINT_FEATURES` it uses, then those of
+        :data:`NEIGHBOURHOOD_FEATURES` with ``radius``.
     n_training_examples_ : int
         The detections it was trained on (kept by the filter, not ignored).
     n_features_in_ : int
@@ -98,7 +120,8 @@ class PointClassifier(BaseEstimator):
     A plain array is read by position in the order of
     :data:`~sklearn_radar._schema.CLASSIFIER_LAYOUT`.  Unlike
     :class:`ClusterClassifier`, :meth:`predict` and :meth:`predict_proba` of
-    a detection do not depend on the other detections; the instance ids do.
+    a detection do not depend on the other detections without ``radius``;
+    the instance ids do.  With ``radius`` they depend on its neighbours.
 
     Examples
     --------
@@ -117,12 +140,18 @@ class PointClassifier(BaseEstimator):
         "classifier": [HasMethods(["fit", "predict_proba"]), None],
         "eps_xy": [Interval(Real, 0, None, closed="neither")],
         "eps_t": [Interval(Real, 0, None, closed="left")],
+        "radius": [Interval(Real, 0, None, closed="neither"), None],
+        "time_window": [Interval(Real, 0, None, closed="neither")],
+        "causal": ["boolean"],
     }
 
-    def __init__(self, classifier=None, *, eps_xy=1.0, eps_t=0.25):
+    def __init__(self, classifier=None, *, eps_xy=1.0, eps_t=0.25, radius=None, time_window=0.25, causal=False):
         self.classifier = classifier
         self.eps_xy = eps_xy
         self.eps_t = eps_t
+        self.radius = radius
+        self.time_window = time_window
+        self.causal = causal
 
     @_fit_context(prefer_skip_nested_validation=False)
     def fit(self, X, y):
@@ -143,7 +172,7 @@ class PointClassifier(BaseEstimator):
         """
         _, c = read_columns(self, X, POINT_FEATURE_READS, reset=True)
         classes = check_class_target(y, len(c["x"]), type(self).__name__)
-        features, self.feature_names_ = _point_features(c)
+        features, self.feature_names_ = self._features(c)
         learn = _kept(c) & (classes != IGNORED)
         self.classifier_ = fit_classifier(self.classifier, features[learn], classes[learn], self.feature_names_, self)
         self.classes_ = np.union1d([BACKGROUND], np.asarray(self.classifier_.classes_, dtype=np.int64))
@@ -235,12 +264,23 @@ class PointClassifier(BaseEstimator):
     def _proba(self, X):
         check_is_fitted(self)
         _, c = read_columns(self, X, POINT_FEATURE_READS, reset=False)
-        features, _ = _point_features(c)
+        features, _ = self._features(c)
         proba = np.zeros((len(c["x"]), len(self.classes_)))
         proba[:, np.searchsorted(self.classes_, BACKGROUND)] = 1.0
         kept = _kept(c)
         proba[kept] = class_proba(self.classifier_, features[kept], self.feature_names_, self.classes_)
         return proba, c
+
+    def _features(self, c):
+        """The feature rows of every detection and their names: the point's, then its neighbourhood's."""
+        features, names = _point_features(c)
+        if self.radius is None:
+            return features, names
+        kept = np.flatnonzero(_kept(c))
+        around = neighbourhood_features(c, kept, self.radius, self.time_window, self.causal)
+        extra = np.full((len(features), len(around)), np.nan)
+        extra[kept] = np.column_stack(list(around.values()))
+        return np.column_stack([features, extra]), np.asarray([*names, *around], dtype=object)
 
     def _components(self, c, classes):
         """Connected components of the detections of each (sequence, class), -1 for background."""

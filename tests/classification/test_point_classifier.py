@@ -129,3 +129,81 @@ def test_bad_targets_name_the_problem():
         PointClassifier().fit(X, [0])
     with pytest.raises(ValueError, match="Unknown label type"):
         PointClassifier().fit(X, [0.5, 1.0])
+
+
+def _neighbourhood_reference(X, radius, time_window, causal):
+    """The neighbourhood features of each kept detection from all pairs, detection by detection."""
+    kept = X["keep"].to_numpy() != 0
+    rows = []
+    for i in np.flatnonzero(kept):
+        near = (
+            kept
+            & (X["sequence"] == X["sequence"].iloc[i]).to_numpy()
+            & (np.hypot(X["x"] - X["x"].iloc[i], X["y"] - X["y"].iloc[i]) <= radius).to_numpy()
+            & (np.abs(X["t"] - X["t"].iloc[i]) <= time_window).to_numpy()
+        )
+        if causal:
+            near &= (X["t"] <= X["t"].iloc[i]).to_numpy()
+        mine = X[near]
+        spread = np.sqrt(mine["x"].var(ddof=0) + mine["y"].var(ddof=0))
+        rows.append(
+            [len(mine), spread, mine["v_r"].mean(), mine["v_r"].std(ddof=0)]
+            + [mine["rcs"].mean(), mine["rcs"].std(ddof=0), mine["rcs"].max()]
+        )
+    return np.asarray(rows)
+
+
+@settings(max_examples=60, deadline=None)
+@given(n=st.integers(2, 40), seed=st.integers(0, 2**31 - 1), causal=st.booleans())
+def test_neighbourhood_features_match_a_pair_by_pair_reference(n, seed, causal):
+    # Positions on a 0.1 m grid and times on a 0.01 s grid; the radius and the window lie between grid steps, so
+    # that no pair sits exactly at a boundary.
+    rng = np.random.default_rng(seed)
+    X = pd.DataFrame(
+        {
+            "x": rng.integers(0, 40, n) / 10,
+            "y": rng.integers(0, 40, n) / 10,
+            "v_r": rng.normal(0.0, 3.0, n),
+            "t": rng.integers(0, 100, n) / 100,
+            "sequence": rng.integers(1, 3, n),
+            "keep": rng.integers(0, 2, n),
+            "rcs": rng.normal(0.0, 5.0, n),
+        }
+    )
+    X.loc[[0, 1], "keep"] = 1  # two kept detections of two classes: a classifier is fitted
+    radius, time_window = 1.23, 0.205
+    model = PointClassifier(MovingIsPedestrian(), radius=radius, time_window=time_window, causal=causal)
+    model.fit(X, np.where(np.arange(n) % 2 == 0, 3, -1))
+    features = model.classifier_.X_  # the kept detections' rows, in order
+    names = ["nb_count", "nb_spread", "nb_vr_mean", "nb_vr_std", "nb_rcs_mean", "nb_rcs_std", "nb_rcs_max"]
+    assert model.feature_names_.tolist() == ["v_r", "rcs", *names]
+    np.testing.assert_allclose(
+        features[names].to_numpy(), _neighbourhood_reference(X, radius, time_window, causal), atol=1e-9
+    )
+
+
+def test_neighbourhood_without_rcs_leaves_its_features_out():
+    X = pd.DataFrame({"x": [0.0, 0.5, 5.0], "y": 0.0, "v_r": [1.0, 3.0, 2.0], "t": [0.0, 0.1, 0.1]})
+    model = PointClassifier(MovingIsPedestrian(), radius=1.0).fit(X, [3, -1, 3])
+    assert model.feature_names_.tolist() == ["v_r", "nb_count", "nb_spread", "nb_vr_mean", "nb_vr_std"]
+    assert model.classifier_.X_["nb_count"].tolist() == [2, 2, 1]
+
+
+def test_neighbourhood_rows_in_rows_out_in_any_order(scenes):
+    train, test = scenes
+    model = make_pipeline(FrameTransform(), PointClassifier(radius=1.5))
+    model.fit(train.data, road_user_class(train.data["label_id"]))
+    Xt = model[0].transform(test.data)
+    proba = model[-1].predict_proba(Xt)
+    assert proba.shape == (len(Xt), len(model[-1].classes_))
+    order = np.random.default_rng(0).permutation(len(Xt))
+    np.testing.assert_allclose(model[-1].predict_proba(Xt.iloc[order]), proba[order])
+
+
+@pytest.mark.parametrize(
+    ("params", "name"), [({"radius": -1.0}, "radius"), ({"radius": 1.0, "time_window": 0.0}, "time_window")]
+)
+def test_bad_neighbourhood_parameters_are_named(params, name):
+    X = pd.DataFrame({"x": [0.0, 1.0], "y": 0.0, "v_r": 1.0, "t": 0.0})
+    with pytest.raises(ValueError, match=name):
+        PointClassifier(**params).fit(X, [3, -1])
