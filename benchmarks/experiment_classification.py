@@ -1,0 +1,319 @@
+"""Classifying the object setting's clusters (issue #43): where class PQ goes, and clustering against point-wise.
+
+For each preset and seed: ``make_scenes`` (``--n-sequences`` x ``--duration`` s), split into a training and a
+test half of whole sequences (``sequence_train_test_split``, the seed's split); the object experiment
+(``experiments.object_pipeline``: #12's velocity merging on #8 with a minimum cluster size) is tuned for
+per-frame PQ on the training half only, with the object-level ablation's search
+(``benchmarks/ablation_object_level.py``, ``run_one``: stage 1, then stage 2 on it; ``--n-iter`` iterations
+each, folds grouped by sequence).  Then, all trained on the training half and scored on the test half:
+
+* ``clusters``: ``ClusterClassifier`` on the tuned setting's clusters (frame, filter, ClusterClassifier(merge));
+* ``point (4 features)``: ``PointClassifier()``, the minimal row: v_r, RCS, range and azimuth of one detection;
+* ``point (neighbourhood)``: ``PointClassifier(radius=--radius, time_window=--time-window)``, the same learner
+  with each detection's neighbourhood (counts, x-y spread, Doppler and RCS statistics of the kept detections
+  within the radius and +- the time window: offline, not causal, as the offline clustering is).
+
+All three see the same frame transform and Doppler-density filter (the tuned setting's).  The scores are
+``metrics.class_panoptic_quality`` per 0.5 s frame (class-mean and per class), the class-agnostic PQ of the
+same predicted instances (``metrics.panoptic_quality``: the road users kept), the clustering's PQ before the
+classifier (every cluster, for the clusters; the agnostic PQ again for the point-wise ones), and
+``metrics.class_errors`` of the clusters (the clusterer's own labels, so that a road user called background
+counts as misclassified, not missed).  The tables give the mean over seeds and the paired differences (mean +-
+standard error over seeds; a difference counts beyond 2 SE).
+
+``--extra-training N`` adds N simulated sequences of the same preset (seed + 1000) to the training data of the
+three classifiers (not to the tuning, which stays on the training half): how much the classes gain from more
+examples.  ``--class-weight balanced`` gives the learner of all three balanced class weights.
+
+``--perfect-clusters`` prints instead the F1 per class of the default learner on perfect clusters (each
+object's own detections per 0.5 s frame) of the test half, trained on ``--training-sizes`` other simulated
+sequences: what the classes' signatures allow, and how it grows with the training data.
+
+Run (the user guide's tables; about 5 minutes each on 2 busy cores, after the tuning, about 1 minute per preset
+and seed at 10 iterations)::
+
+    OMP_NUM_THREADS=1 nice -n 19 python benchmarks/experiment_classification.py --seeds 0 1 2 \\
+        --data realistic easy --tuned-dir /tmp/tuned
+    OMP_NUM_THREADS=1 nice -n 19 python benchmarks/experiment_classification.py --seeds 0 1 2 \\
+        --data realistic easy --tuned-dir /tmp/tuned --extra-training 6
+
+``--tuned-dir`` keeps each tuned setting in a JSON file (``tuned_<preset>_<seed>.json``) and reuses it, so a
+second run (for example before and after a change to the classifier) scores the same clusters.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from sklearn.base import clone
+from sklearn.ensemble import HistGradientBoostingClassifier
+from sklearn.metrics import f1_score
+from sklearn.pipeline import Pipeline
+from threadpoolctl import threadpool_limits
+
+from sklearn_radar import FrameTransform
+from sklearn_radar.classification import (
+    ClusterClassifier,
+    PointClassifier,
+    cluster_features,
+    predict_instances,
+    road_user_class,
+)
+from sklearn_radar.classification._wrapped import DEFAULT_CLASSIFIER_PARAMS, default_classifier
+from sklearn_radar.datasets import make_scenes
+from sklearn_radar.experiments import object_pipeline
+from sklearn_radar.metrics import class_errors, class_panoptic_quality, panoptic_quality
+from sklearn_radar.model_selection import sequence_train_test_split
+
+CLASS_NAMES = {0: "car", 1: "large vehicle", 2: "two-wheeler", 3: "pedestrian", 4: "pedestrian group"}
+ERROR_KEYS = ("n_true", "tp", "misclassified", "missed", "n_pred", "wrong_class", "false")
+
+
+def tuned_setting(preset, seed, options):
+    """The object setting tuned for PQ on the training half: ``(stage-1 params, stage-2 params)``."""
+    path = Path(options.tuned_dir) / f"tuned_{preset}_{seed}.json" if options.tuned_dir else None
+    if path is not None and path.exists():
+        found = json.loads(path.read_text())
+    else:
+        sys.path.insert(0, str(Path(__file__).resolve().parent))
+        import ablation_object_level as ablation
+
+        chosen = [v for v in ablation.variants() if v.name in ("objects (stage 1)", "objects")]
+        args = argparse.Namespace(
+            n_sequences=options.n_sequences, duration=options.duration, n_iter=options.n_iter, cv_folds=2
+        )
+        found = ablation.run_one(preset, seed, chosen, args)
+        found = {name: {"params": record["params"], "pq": record["pq"]} for name, record in found.items()}
+        if path is not None:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text(json.dumps(found))
+    return found["objects (stage 1)"]["params"], found["objects"]["params"]
+
+
+def models(setting, options):
+    """The three classified pipelines, each on the tuned setting's frame transform and filter."""
+    stage1, stage2 = setting
+    pipeline = object_pipeline(2, stage1_params=stage1, params=stage2)
+    front = pipeline.steps[:-1]
+    learner = None
+    if options.class_weight:
+        learner = HistGradientBoostingClassifier(**DEFAULT_CLASSIFIER_PARAMS, class_weight=options.class_weight)
+    point = dict(classifier=learner, eps_xy=1.0, eps_t=0.25)
+    return {
+        "clusters": Pipeline(
+            [*clone(Pipeline(front)).steps, ("classify", ClusterClassifier(pipeline[-1], classifier=learner))]
+        ),
+        "point (4 features)": Pipeline([*clone(Pipeline(front)).steps, ("classify", PointClassifier(**point))]),
+        "point (neighbourhood)": Pipeline(
+            [
+                *clone(Pipeline(front)).steps,
+                ("classify", PointClassifier(**point, radius=options.radius, time_window=options.time_window)),
+            ]
+        ),
+    }
+
+
+def run_one(preset, seed, options):
+    """Tune, train and score every model on one data set; returns ``{model: record}``."""
+    setting = tuned_setting(preset, seed, options)
+    scenes = make_scenes(
+        n_sequences=options.n_sequences, duration=options.duration, difficulty=preset, random_state=seed
+    )
+    X, groups = scenes.data, scenes.groups
+    classes = road_user_class(X["label_id"])
+    instances = np.asarray(scenes.target)
+    train, test = sequence_train_test_split(groups, test_size=0.5, random_state=seed)
+    X_train, y_train = X.iloc[train], classes[train]
+    if options.extra_training:  # more recordings for the classifiers only; the setting stays tuned on the half
+        extra = make_scenes(
+            n_sequences=options.extra_training,
+            duration=options.duration,
+            difficulty=preset,
+            random_state=seed + 1000,
+        ).data
+        extra = extra.assign(sequence=extra["sequence"] + int(groups.max()) + 1)
+        X_train = pd.concat([X_train, extra], ignore_index=True)
+        y_train = np.concatenate([y_train, road_user_class(extra["label_id"])])
+    records = {}
+    for name, model in models(setting, options).items():
+        start = time.perf_counter()
+        model.fit(X_train, y_train)
+        Xt = model[:-1].transform(X.iloc[test])
+        classifier = model[-1]
+        if name == "clusters":
+            labels = clone(classifier.clusterer).fit_predict(Xt)
+            found = classifier.predict_instances_of(Xt, labels)
+        else:
+            found = predict_instances(classifier, Xt)
+            labels = found["instance"].to_numpy()
+        times, sequence = Xt["t"].to_numpy(), Xt["sequence"].to_numpy()
+        truth = (classes[test], instances[test])
+        predicted = (found["class"].to_numpy(), found["instance"].to_numpy())
+        scores = class_panoptic_quality(*truth, *predicted, times=times, groups=sequence)
+        agnostic_true = np.where(classes[test] >= 0, instances[test], -1)
+        agnostic = panoptic_quality(agnostic_true, predicted[1], times=times, groups=sequence).pq
+        errors = class_errors(
+            *truth, predicted[0], labels, times=times, groups=sequence, confidence=found["confidence"].to_numpy()
+        )
+        clustering = panoptic_quality(agnostic_true, labels, times=times, groups=sequence).pq
+        records[name] = {
+            "pq": scores.pq,
+            "clustering_pq": clustering,
+            "per_class": {code: scores.per_class[code].pq if code in scores.per_class else 0.0 for code in CLASS_NAMES},
+            "agnostic_pq": agnostic,
+            "errors": errors,
+            "n_training_examples": int(getattr(classifier, "n_training_examples_", 0)),
+            "seconds": time.perf_counter() - start,
+        }
+        record = records[name]
+        per_class = " ".join(f"{CLASS_NAMES[c].split()[-1][:5]} {v:.2f}" for c, v in record["per_class"].items())
+        print(
+            f"  {preset} seed {seed} {name:<22} class PQ {record['pq']:.3f} agnostic PQ {agnostic:.3f} "
+            f"clustering PQ {clustering:.3f} "
+            f"[{per_class}] ({record['seconds']:.0f} s)",
+            flush=True,
+        )
+    return records
+
+
+def _mean_se(values):
+    values = np.asarray(values, dtype=np.float64)
+    if len(values) < 2:
+        return float(values.mean()), float("nan")
+    return float(values.mean()), float(values.std(ddof=1) / math.sqrt(len(values)))
+
+
+def _fmt(values, signed=False):
+    mean, se = _mean_se(values)
+    text = f"{mean:+.3f}" if signed else f"{mean:.3f}"
+    return text if math.isnan(se) else f"{text} ± {se:.3f}"
+
+
+def report(preset, runs):
+    """The tables of one preset: scores per model, paired differences, the confusion and the error places."""
+    names = list(runs[0])
+    lines = [f"\n{preset}: {len(runs)} seed(s), test half; mean ± SE over seeds"]
+    header = ["model", "class PQ", "agnostic PQ", *(CLASS_NAMES[c] for c in CLASS_NAMES)]
+    rows = []
+    for name in names:
+        cells = [name, _fmt([r[name]["pq"] for r in runs]), _fmt([r[name]["agnostic_pq"] for r in runs])]
+        cells += [_fmt([r[name]["per_class"][c] for r in runs]) for c in CLASS_NAMES]
+        rows.append(cells)
+    lines.append(pd.DataFrame(rows, columns=header).to_string(index=False))
+    for other in names[1:]:
+        differences = [r["clusters"]["pq"] - r[other]["pq"] for r in runs]
+        lines.append(f"class PQ, clusters - {other}: {_fmt(differences, signed=True)} (paired over seeds)")
+    for key in ("agnostic_pq", "clustering_pq"):
+        ratios = [r["clusters"]["pq"] / max(r["clusters"][key], 1e-12) for r in runs]
+        lines.append(f"clusters: class PQ / {key.replace('_', ' ')} {_fmt(ratios)}")
+    confusion = sum(
+        r["clusters"]["errors"]["confusion"].reindex(index=list(CLASS_NAMES), columns=[-1, *CLASS_NAMES], fill_value=0)
+        for r in runs
+    )
+    confusion.index = [CLASS_NAMES[c] for c in confusion.index]
+    confusion.columns = ["background", *(CLASS_NAMES[c] for c in confusion.columns[1:])]
+    lines.append("clusters: matched test segments, true class (rows) x predicted class, summed over seeds")
+    lines.append(confusion.to_string())
+    places = pd.DataFrame(
+        {
+            CLASS_NAMES[c]: [
+                sum(r["clusters"]["errors"]["per_class"].get(c, {}).get(key, 0) for r in runs) for key in ERROR_KEYS
+            ]
+            for c in CLASS_NAMES
+        },
+        index=ERROR_KEYS,
+    ).T
+    lines.append("clusters: where each class's PQ goes (segments, summed over seeds)")
+    lines.append(places.to_string())
+    return "\n".join(lines)
+
+
+def perfect_clusters(preset, options):
+    """Per class F1 on perfect clusters (each object's detections per 0.5 s frame) by the size of the training data.
+
+    The test segments are the test half's of each seed's data; the training segments those of ``n`` other
+    simulated sequences (seed + 100) for each ``n`` of ``--training-sizes``; the learner is the default one.
+    Returns the table as text.
+    """
+    lines = [f"\n{preset}: perfect clusters, F1 per class on the test half's segments; mean over seeds"]
+    rows = []
+    for n in options.training_sizes:
+        f1, to_pedestrian, objects = [], [], []
+        for seed in options.seeds:
+            scenes = make_scenes(options.n_sequences, options.duration, difficulty=preset, random_state=seed)
+            _, test = sequence_train_test_split(scenes.groups, test_size=0.5, random_state=seed)
+            train = make_scenes(n, options.duration, difficulty=preset, random_state=seed + 100)
+            train_table, test_table = _object_segments(train), _object_segments(scenes, test)
+            names = [c for c in train_table.columns if c not in ("sequence", "cluster", "frame", "class")]
+            learner = default_classifier().fit(train_table[names], train_table["class"])
+            predicted = learner.predict(test_table[names])
+            f1.append(f1_score(test_table["class"], predicted, labels=list(CLASS_NAMES), average=None))
+            group = test_table["class"].to_numpy() == 4
+            to_pedestrian.append(float(np.mean(predicted[group] == 3)) if group.any() else float("nan"))
+            objects.append(
+                train_table.loc[train_table["class"] == 4, ["sequence", "cluster"]].drop_duplicates().shape[0]
+            )
+        row = {"training sequences": n, **dict(zip(CLASS_NAMES.values(), np.mean(f1, axis=0).round(3), strict=True))}
+        row["group -> pedestrian"] = round(float(np.nanmean(to_pedestrian)), 3)
+        row["group objects in training"] = objects
+        rows.append(row)
+    lines.append(pd.DataFrame(rows).to_string(index=False))
+    return "\n".join(lines)
+
+
+def _object_segments(scenes, rows=None):
+    """The cluster features of every annotated object's 0.5 s segments (of ``rows``), with the object's class."""
+    X = FrameTransform().fit_transform(scenes.data)
+    target = np.asarray(scenes.target)
+    classes = road_user_class(scenes.data["label_id"])
+    labels = target if rows is None else np.where(np.isin(np.arange(len(X)), rows), target, -1)
+    table = cluster_features(X, labels, frame_length=0.5)
+    class_of = pd.Series(classes[target >= 0], index=target[target >= 0]).groupby(level=0).first()
+    return table.assign(**{"class": class_of.reindex(table["cluster"].to_numpy()).to_numpy()})
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
+    parser.add_argument(
+        "--data", nargs="+", default=["realistic", "easy"], choices=["realistic", "easy", "radarscenes"]
+    )
+    parser.add_argument("--n-sequences", type=int, default=4)
+    parser.add_argument("--duration", type=float, default=20.0, help="s per sequence")
+    parser.add_argument("--n-iter", type=int, default=10, help="iterations of each of the two PQ searches")
+    parser.add_argument("--radius", type=float, default=1.5, help="neighbourhood radius of the point-wise rival, m")
+    parser.add_argument("--time-window", type=float, default=0.25, help="its time window, +- s")
+    parser.add_argument(
+        "--class-weight", choices=["balanced"], help="class weights of the learner of all three (default: none)"
+    )
+    parser.add_argument(
+        "--extra-training",
+        type=int,
+        default=0,
+        help="simulated sequences (another seed) added to the classifiers' training data, not to the tuning",
+    )
+    parser.add_argument(
+        "--perfect-clusters", action="store_true", help="only the F1 per class on perfect clusters by training size"
+    )
+    parser.add_argument("--training-sizes", type=int, nargs="+", default=[2, 4, 8])
+    parser.add_argument("--tuned-dir", help="folder to keep and reuse the tuned settings in")
+    options = parser.parse_args(argv)
+    with threadpool_limits(1):
+        for preset in options.data:
+            if options.perfect_clusters:
+                print(perfect_clusters(preset, options), flush=True)
+                continue
+            runs = [run_one(preset, seed, options) for seed in options.seeds]
+            print(report(preset, runs), flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
