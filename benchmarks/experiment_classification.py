@@ -240,12 +240,13 @@ def perfect_clusters(preset, options):
 
     The test segments are the test half's of each seed's data; the training segments those of ``n`` other
     simulated sequences (seed + 100) for each ``n`` of ``--training-sizes``; the learner is the default one.
-    Returns the table as text.
+    Also the median number of detections and range of the group segments called pedestrian and of those called
+    group.  Returns the table as text.
     """
     lines = [f"\n{preset}: perfect clusters, F1 per class on the test half's segments; mean over seeds"]
     rows = []
     for n in options.training_sizes:
-        f1, to_pedestrian, objects = [], [], []
+        f1, to_pedestrian, objects, sizes = [], [], [], []
         for seed in options.seeds:
             scenes = make_scenes(options.n_sequences, options.duration, difficulty=preset, random_state=seed)
             _, test = sequence_train_test_split(scenes.groups, test_size=0.5, random_state=seed)
@@ -257,12 +258,19 @@ def perfect_clusters(preset, options):
             f1.append(f1_score(test_table["class"], predicted, labels=list(CLASS_NAMES), average=None))
             group = test_table["class"].to_numpy() == 4
             to_pedestrian.append(float(np.mean(predicted[group] == 3)) if group.any() else float("nan"))
+            sizes.append(test_table.loc[group, ["n_detections", "range_mean"]].assign(called=predicted[group]))
             objects.append(
                 train_table.loc[train_table["class"] == 4, ["sequence", "cluster"]].drop_duplicates().shape[0]
             )
         row = {"training sequences": n, **dict(zip(CLASS_NAMES.values(), np.mean(f1, axis=0).round(3), strict=True))}
         row["group -> pedestrian"] = round(float(np.nanmean(to_pedestrian)), 3)
         row["group objects in training"] = objects
+        sizes = pd.concat(sizes)
+        for called, code in (("as pedestrian", 3), ("as group", 4)):
+            mine = sizes[sizes["called"] == code]
+            row[f"group {called}: median n, range m"] = (
+                f"{mine['n_detections'].median():.0f}, {mine['range_mean'].median():.0f}" if len(mine) else "-"
+            )
         rows.append(row)
     lines.append(pd.DataFrame(rows).to_string(index=False))
     return "\n".join(lines)

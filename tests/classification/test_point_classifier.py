@@ -146,10 +146,8 @@ def _neighbourhood_reference(X, radius, time_window, causal):
             near &= (X["t"] <= X["t"].iloc[i]).to_numpy()
         mine = X[near]
         spread = np.sqrt(mine["x"].var(ddof=0) + mine["y"].var(ddof=0))
-        rows.append(
-            [len(mine), spread, mine["v_r"].mean(), mine["v_r"].std(ddof=0)]
-            + [mine["rcs"].mean(), mine["rcs"].std(ddof=0), mine["rcs"].max()]
-        )
+        doppler = [mine["v_r"].mean(), mine["v_r"].std(ddof=0)]
+        rows.append([len(mine), spread, *doppler, mine["rcs"].mean(), mine["rcs"].std(ddof=0), mine["rcs"].max()])
     return np.asarray(rows)
 
 
