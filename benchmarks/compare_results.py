@@ -19,7 +19,7 @@ import re
 import sys
 
 #: Keys whose values are measured times (s), shares of them, or clock readings: not compared.  Settings that are
-#: lengths of time (``window_s``, ``frame_s``) are compared.
+#: lengths of time (``window_s``) are compared.
 TIME_KEY = re.compile(r"wall_time|clustering_s$|_times_s$|time_saving|elapsed|started|finished|^utc|_at$")
 
 

@@ -1,7 +1,7 @@
 """Beyond the paper: the framework's own stages, set up to count objects (panoptic quality).
 
 The object experiment is the paper's own #12 on #8 with a minimum cluster
-size, tuned for per-frame panoptic quality (PQ).  Why these stages and not
+size, tuned for per-window panoptic quality (PQ).  Why these stages and not
 others (an ablation of one factor at a time against #8): read more in the
 :ref:`User Guide <objects-measured>`.
 
