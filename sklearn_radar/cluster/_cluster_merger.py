@@ -110,7 +110,7 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
         ``min_cluster_size``); the detections of a smaller one become noise.
         1 (the default) keeps every cluster, as in the paper; beyond it, see
         the user guide's "Counting objects".
-    causal : bool, default=False
+    causal_min_size : bool, default=False
         How ``min_cluster_size`` counts.  False: a merged cluster's whole
         size.  True: a detection counts the detections of its cluster up to
         its own time (those of the same time included), so a cluster's first
@@ -164,7 +164,7 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
         "memory": [None, str, HasMethods(["cache"])],
         "cluster_vr_min": [Interval(Real, 0, None, closed="left"), None],
         "min_cluster_size": [Interval(Integral, 1, None, closed="left")],
-        "causal": ["boolean"],
+        "causal_min_size": ["boolean"],
     }
 
     def __init__(
@@ -180,7 +180,7 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
         memory=None,
         cluster_vr_min=None,
         min_cluster_size=1,
-        causal=False,
+        causal_min_size=False,
     ):
         self.mode = mode
         self.eps_d = eps_d
@@ -193,7 +193,7 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
         self.memory = memory
         self.cluster_vr_min = cluster_vr_min
         self.min_cluster_size = min_cluster_size
-        self.causal = causal
+        self.causal_min_size = causal_min_size
 
     @_fit_context(prefer_skip_nested_validation=False)
     def fit(self, X, y=None):
@@ -234,7 +234,7 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
             merges += [(sequence[rows[0]], a, b) for a, b in sequence_merges]
         self.stage1_labels_ = stage1_labels
         roots = _gate_static_clusters(roots, c["v_r"], self.cluster_vr_min)
-        roots = drop_small_clusters(roots, self.min_cluster_size, c["t"] if self.causal else None)
+        roots = drop_small_clusters(roots, self.min_cluster_size, c["t"] if self.causal_min_size else None)
         self.labels_ = consecutive_labels(roots)
         self.merges_ = np.array(merges, dtype=np.float64).reshape(-1, 3)
         return self

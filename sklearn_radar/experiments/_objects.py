@@ -94,7 +94,7 @@ def object_pipeline(stage=2, *, params=None, stage1_params=None, causal=False, m
     else:
         setting = {**paper_params(8), **stage1_params, "cluster__causal": causal}
         pipeline = experiment_pipeline(12, memory=memory, stage1_params=setting)
-        pipeline.set_params(merge__causal=causal)
+        pipeline.set_params(merge__causal_min_size=causal)
     pipeline.set_params(filter__causal=causal)
     if params:
         pipeline.set_params(**params)
