@@ -41,8 +41,8 @@ def _why_not_replaceable(out):
     if not out.is_file() or out.stat().st_size == 0:
         return None
     head = (OBJECTS_HEADER + "\n").encode("ascii")
-    with open(out, "rb") as stream:
-        ours = stream.read(len(head)) == head
+    with open(out, "rb") as handle:
+        ours = handle.read(len(head)) == head
     return None if ours else "exists and is not an object list written by sklearn-radar"
 
 
@@ -126,8 +126,8 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None, classif
         if table is None:
             table = pd.DataFrame(columns=OBJECTS_HEADER.split(","))
 
-        def write(stream):
-            stream.write(table.to_csv(index=False, lineterminator="\n").encode("ascii"))
+        def write(handle):
+            handle.write(table.to_csv(index=False, lineterminator="\n").encode("ascii"))
 
         atomic_write(Path(objects), write, replaceable=check_objects_file)
     return {
