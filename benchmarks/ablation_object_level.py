@@ -229,7 +229,7 @@ def variants():
             None,
             min_size,
             after="F0 causal",
-            fixed={"mode": "velocity", "causal": True},
+            fixed={"mode": "velocity", "causal_min_size": True},
         ),
         *_object_variants("objects", causal=False),
         *_object_variants("objects causal", causal=True),
@@ -298,8 +298,8 @@ CAUSAL = (
 
 
 def _merger(variant, stage1_params):
-    """Stage 2 on the tuned stage 1, with the variant's fixed merger parameters (``causal``: both stages)."""
-    stage1 = clone(_cluster(causal=variant.fixed.get("causal", False))).set_params(**stage1_params)[-1]
+    """Stage 2 on the tuned stage 1, with the variant's fixed merger parameters (causal_min_size: causal stage 1)."""
+    stage1 = clone(_cluster(causal=variant.fixed.get("causal_min_size", False))).set_params(**stage1_params)[-1]
     return Pipeline([("merge", ClusterMerger(stage1=stage1, **variant.fixed))])
 
 

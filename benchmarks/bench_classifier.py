@@ -11,7 +11,7 @@ time of the whole process, which counts every thread of the classifier's OpenMP 
 * stage 1: ``RadarDBSCAN.fit_predict`` on the test data;
 * the classifier stage on the test data given stage 1's labels: ``ClusterClassifier.predict_instances`` with a
   clusterer that hands back the precomputed labels, i.e. reading the columns, the cluster features (per
-  0.5 s frame), the wrapped classifier's ``predict_proba`` and the per-detection result;
+  0.5 s window), the wrapped classifier's ``predict_proba`` and the per-detection result;
 * ``predict_instances`` with #8's stage 1 inside, the whole call a user makes;
 * ``fit`` on the training data given stage 1's labels (features, matching, fitting the classifier), against
   stage 1 on the training data;
@@ -23,7 +23,7 @@ settings of the default HistGradientBoostingClassifier cost in macro-F1 (3 seeds
 matched targets and point-wise F1 against every detection's class, both over the five road-user classes)
 and in prediction time: the measurement behind the default ``max_iter=30``.  ``--signatures`` prints what
 the simulated classes hold: per class, the median and quartiles of the main features of the annotated road
-users themselves (each object's detections per 0.5 s frame, i.e. perfect clustering), and the macro-F1 of the
+users themselves (each object's detections per 0.5 s window, i.e. perfect clustering), and the macro-F1 of the
 default classifier trained on such segments of one seed and tested on another's (both presets).
 """
 
@@ -198,7 +198,7 @@ def signatures(args):
         test, test_classes = true_segments(args.seed + 4, difficulty)
         grouped = train.groupby(pd.Series(train_classes).map(ROAD_USER_CLASSES))[features]
         median, low, high = grouped.median(), grouped.quantile(0.25), grouped.quantile(0.75)
-        print(f"\n{difficulty} preset, annotated road users per 0.5 s frame: median [quartiles]")
+        print(f"\n{difficulty} preset, annotated road users per 0.5 s window: median [quartiles]")
         print(
             (
                 median.round(2).astype(str) + " [" + low.round(2).astype(str) + ", " + high.round(2).astype(str) + "]"

@@ -7,7 +7,7 @@ Data: random labellings of the shape of radar scenes, ``--n-detections`` detecti
 the detections ignored, -2); the prediction keeps 80 % of each object's detections in one instance, scatters the
 rest, classifies each row right with probability 0.85 and adds clusters of background.  Printed, each the best of
 ``--repeat`` runs: the wall time of ``semantic_scores`` (class-aware PQ, mAP@0.5, macro-F1, mCov) and of
-``panoptic_quality`` on the same instances (0.5 s frames both), and their ratio.
+``panoptic_quality`` on the same instances (0.5 s windows both), and their ratio.
 """
 
 import argparse

@@ -11,10 +11,10 @@ For each class of the simulator (by ``label_id``) it prints, over the annotated 
 * ``RCS``: the mean over objects of each object's mean RCS (dBsm), and ``between``: the standard deviation
   of the per-object mean RCS between the objects of the class (dB); ``within``: the median over objects
   of the RCS standard deviation of one object's detections (dB);
-* ``along`` / ``across``: the median extent of a 0.5 s frame of an object along and across its principal
+* ``along`` / ``across``: the median extent of a 0.5 s window of an object along and across its principal
   axes (m; :func:`~sklearn_radar.classification.cluster_features`);
-* ``vr_std``: the median standard deviation of the compensated Doppler in a 0.5 s frame (m/s);
-* ``sensors``: the mean number of sensors that see a 0.5 s frame, and ``life``: the mean number of
+* ``vr_std``: the median standard deviation of the compensated Doppler in a 0.5 s window (m/s);
+* ``sensors``: the mean number of sensors that see a 0.5 s window, and ``life``: the mean number of
   sensors that see the object over its whole life.  Both are set by the mounting, not the class: the four
   sensors (yaw -85, -25, 25, 85 deg, +-60 deg each) see almost every direction with exactly two of them.
 
@@ -111,7 +111,7 @@ def main():
     for title, values in runs.items():
         print(f"\n{args.difficulty} preset, {title}, seeds {args.seeds}, {args.n_sequences} x {args.duration:g} s:")
         print(signatures(args, values).round(2).to_string())
-    print("(RCS, between, within: dBsm / dB; along, across: m; vr_std: m/s; sensors per 0.5 s frame and per life)")
+    print("(RCS, between, within: dBsm / dB; along, across: m; vr_std: m/s; sensors per 0.5 s window and per life)")
 
 
 if __name__ == "__main__":

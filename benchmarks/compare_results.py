@@ -19,7 +19,7 @@ import re
 import sys
 
 #: Keys whose values are measured times (s), shares of them, or clock readings: not compared.  Settings that are
-#: lengths of time (``window_s``, ``frame_s``) are compared.
+#: lengths of time (``window_s``) are compared.
 TIME_KEY = re.compile(r"wall_time|clustering_s$|_times_s$|time_saving|elapsed|started|finished|^utc|_at$")
 
 
@@ -65,10 +65,10 @@ def main(argv=None):
     parser.add_argument("after")
     parser.add_argument("--tol", type=float, default=1e-9)
     args = parser.parse_args(argv)
-    with open(args.before) as stream:
-        before = json.load(stream)
-    with open(args.after) as stream:
-        after = json.load(stream)
+    with open(args.before) as handle:
+        before = json.load(handle)
+    with open(args.after) as handle:
+        after = json.load(handle)
     found = differences(before, after, args.tol)
     for where, b, a in found[:50]:
         print(f"{where}: {b!r} -> {a!r}")

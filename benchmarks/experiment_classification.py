@@ -3,7 +3,7 @@
 For each preset and seed: ``make_scenes`` (``--n-sequences`` x ``--duration`` s), split into a training and a
 test half of whole sequences (``sequence_train_test_split``, the seed's split); the object experiment
 (``experiments.object_pipeline``: #12's velocity merging on #8 with a minimum cluster size) is tuned for
-per-frame PQ on the training half only, with the object-level ablation's search
+per-window PQ on the training half only, with the object-level ablation's search
 (``benchmarks/ablation_object_level.py``, ``run_one``: stage 1, then stage 2 on it; ``--n-iter`` iterations
 each, folds grouped by sequence).  Then, all trained on the training half and scored on the test half:
 
@@ -14,7 +14,7 @@ each, folds grouped by sequence).  Then, all trained on the training half and sc
   within the radius and +- the time window: offline, not causal, as the offline clustering is).
 
 All three see the same frame transform and Doppler-density filter (the tuned setting's).  The scores are
-``metrics.class_panoptic_quality`` per 0.5 s frame (class-mean and per class), the class-agnostic PQ of the
+``metrics.class_panoptic_quality`` per 0.5 s window (class-mean and per class), the class-agnostic PQ of the
 same predicted instances (``metrics.panoptic_quality``: the road users kept), the clustering's PQ before the
 classifier (every cluster, for the clusters; the agnostic PQ again for the point-wise ones), and
 ``metrics.class_errors`` of the clusters (the clusterer's own labels, so that a road user called background
@@ -26,7 +26,7 @@ three classifiers (not to the tuning, which stays on the training half): how muc
 examples.  ``--class-weight balanced`` gives the learner of all three balanced class weights.
 
 ``--perfect-clusters`` prints instead the F1 per class of the default learner on perfect clusters (each
-object's own detections per 0.5 s frame) of the test half, trained on ``--training-sizes`` other simulated
+object's own detections per 0.5 s window) of the test half, trained on ``--training-sizes`` other simulated
 sequences: what the classes' signatures allow, and how it grows with the training data.
 
 Run (the user guide's tables; about 5 minutes each on 2 busy cores, after the tuning, about 1 minute per preset

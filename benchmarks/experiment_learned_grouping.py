@@ -8,7 +8,7 @@ half/half by sequence with ``sequence_train_test_split(random_state=seed)`` (the
 its baselines are scored on the same test sequences).  Every detection passes the framework's front, per sequence:
 ``FrameTransform(frame="frame")`` (world x, y in m, compensated Doppler v_r in m/s, t in s) then
 ``DopplerDensityFilter()`` (its ``keep``); a detection it drops is noise.  The target is the main job's,
-``metrics.precluster_target``, and the test half is scored with ``metrics.panoptic_quality`` (0.5 s frames).
+``metrics.precluster_target``, and the test half is scored with ``metrics.panoptic_quality`` (0.5 s windows).
 
 Designs (each learner a ``HistGradientBoosting*`` on vectorised numpy features of cKDTree neighbourhoods):
 
@@ -20,7 +20,7 @@ Designs (each learner a ``HistGradientBoosting*`` on vectorised numpy features o
   with one rigid velocity, RCS, range, both sides' neighbourhoods and objectness); the link classifier learns
   "same instance, both road users".  Grouping: average-linkage hierarchical clustering (scipy) of 1 - P(link)
   (1 for pairs that are not candidates) per sequence and chunk of ``chunk`` s (chunk borders are offset by 0.25 s
-  from the 0.5 s PQ frames, so a split at a border costs as it would on line); the cut, the objectness threshold,
+  from the 0.5 s PQ windows, so a split at a border costs as it would on line); the cut, the objectness threshold,
   the chunk length and a minimum cluster size are tuned for PQ.
 * ``A-mean`` (the default; learned links + average linkage over the existing links only): greedily merge the two
   clusters with the largest mean P(link) over the candidate pairs between them while it exceeds the link threshold;
@@ -89,7 +89,7 @@ P_CANDIDATE = 0.05  # objectness above which a detection takes part in pairs and
 V_MOVING = 0.2  # m/s: neighbours above it enter the local rigid-velocity fit
 LOCAL_RADIUS, LOCAL_WINDOW = 2.5, 0.15  # m, s: neighbourhood of the per-detection features
 CENTRE_WINDOW = 0.15  # s: an object's centre at time t is the mean of its detections within t +- this
-CHUNK_OFFSET = 0.25  # s: hierarchical-clustering chunks start 0.25 s after the PQ frames
+CHUNK_OFFSET = 0.25  # s: hierarchical-clustering chunks start 0.25 s after the PQ windows
 
 
 # --------------------------------------------------------------------------------------------------- data
@@ -515,7 +515,7 @@ def group_votes(s, threshold, eps, min_samples, t_scale):
 
 
 def score(sequences, labels_of):
-    """PQ (precluster target, 0.5 s frames) of per-sequence kept-detection labels, over the given sequences."""
+    """PQ (precluster target, 0.5 s windows) of per-sequence kept-detection labels, over the given sequences."""
     truth, pred, times, groups = [], [], [], []
     for s in sequences:
         full = np.full(s["n_rows"], -1, np.int64)
@@ -531,7 +531,7 @@ def score(sequences, labels_of):
 
 
 def anatomy(sequences, labels_of):
-    """Missed ground-truth segments (0.5 s frames, as PQ) by cause, and the median size of missed and matched ones.
+    """Missed ground-truth segments (0.5 s windows, as PQ) by cause, and the median size of missed and matched ones.
 
     A segment is missed when no cluster's segment reaches IoU > 0.5 with it: ``noise`` when more than half of its
     detections are noise; else ``merged`` when the cluster holding most of it covers more than half of it (so the
@@ -542,13 +542,13 @@ def anatomy(sequences, labels_of):
     for s in sequences:
         pred = np.full(s["n_rows"], -1, np.int64)
         pred[s["keep"]] = labels_of(s)
-        frame = np.floor((s["t_all"] - s["t_all"].min()) / 0.5).astype(np.int64)
+        window = np.floor((s["t_all"] - s["t_all"].min()) / 0.5).astype(np.int64)
         truth = s["target_all"]
-        _, pred_code = np.unique(np.column_stack([frame, pred]), axis=0, return_inverse=True)
+        _, pred_code = np.unique(np.column_stack([window, pred]), axis=0, return_inverse=True)
         pred_code = np.where(pred >= 0, pred_code.ravel(), -1)
         pred_size = np.bincount(pred_code[pred_code >= 0])
         obj = np.flatnonzero(truth >= 0)
-        _, gt_code = np.unique(np.column_stack([frame[obj], truth[obj]]), axis=0, return_inverse=True)
+        _, gt_code = np.unique(np.column_stack([window[obj], truth[obj]]), axis=0, return_inverse=True)
         gt_code = gt_code.ravel()
         gt_size = np.bincount(gt_code)
         noise = np.bincount(gt_code, weights=pred[obj] < 0, minlength=len(gt_size))

@@ -48,7 +48,7 @@ print(pd.Series(y_train).map(names).value_counts().to_string())
 # The frame transform, the Doppler-density filter and stage 1 of the paper's best
 # experiment (#8), then :class:`~sklearn_radar.classification.ClusterClassifier`,
 # which wraps the clusterer as :class:`~sklearn_radar.ClusterMerger` wraps its
-# stage 1.  It cuts every cluster into 0.5 s frames, describes each part by its
+# stage 1.  It cuts every cluster into 0.5 s windows, describes each part by its
 # features (extent, Doppler and RCS statistics, the Eq. 6 velocity, ...) and
 # classifies it with a histogram gradient-boosting classifier.  It learns from the
 # clusters matched to the ground truth: a part takes the class of the annotated
@@ -92,7 +92,7 @@ print(scores.round(3).to_string())
 # %%
 # Road users, not detections
 # --------------------------
-# The semantic instance-segmentation scores count road users per 0.5 s frame
+# The semantic instance-segmentation scores count road users per 0.5 s window
 # (:func:`~sklearn_radar.metrics.semantic_scores`): class PQ and mAP@0.5 need a
 # predicted instance of the right class with IoU > 0.5 against an annotated one;
 # mCov is the class-agnostic coverage of the annotated instances.  A pipeline
@@ -198,7 +198,7 @@ plt.show()
 # What the data hold
 # ------------------
 # A classifier can only learn what tells the classes apart.  The features of the
-# annotated road users themselves (each object's detections per 0.5 s frame): the
+# annotated road users themselves (each object's detections per 0.5 s window): the
 # simulator gives each class its own RCS, extent and Doppler spread (the
 # micro-Doppler of limbs and wheels), so on perfectly clustered road users the
 # classes separate well; the errors above come mostly from the clustering.

@@ -125,7 +125,7 @@ for name, labels, n_merges in rows:
 # ``theta`` the line of sight.  :func:`~sklearn_radar.cluster.estimate_velocity`
 # fits this with RANSAC over pairs of detections and least squares (Kellner
 # et al. 2013).  Here: the largest stage-1 cluster within one ``eps_t2``
-# frame of 0.35 s (as Eq. 6 uses it), its detections against their line of
+# window of 0.35 s (as Eq. 6 uses it), its detections against their line of
 # sight (FCS, ``azimuth_sc + sensor_yaw + heading``), and the fitted curve.
 stage1_labels = models["velocity"].stage1_labels_
 largest = np.bincount(stage1_labels[stage1_labels >= 0]).argmax()

@@ -114,7 +114,7 @@ for name, ours, theirs in [
 # %%
 # Tracking quality of the ids
 # ---------------------------
-# ID switches, MOTA and IDF1 per 0.5 s frame on the moving road users
+# ID switches, MOTA and IDF1 per 0.5 s window on the moving road users
 # (:func:`~sklearn_radar.metrics.tracking_scores`), for the ids as the
 # stream reported them and after resolving the aliases.
 survivor = {merged_id: kept for _, kept, merged_id, _ in aliases}

@@ -10,7 +10,7 @@ an executor and asks it, never whether a cluster exists:
     one task; handles among the arguments are the data they stand for;
 ``gather(handles)`` / ``fetch(handle)``
     the values here;
-``stream(function, items)``
+``imap(function, items)``
     ``function(item)`` in order, a few at a time, each yielded as it ends;
 ``map(function, items)`` / ``ahead(function, items)``
     ``function(executor, item)`` for independent pieces of work (the
@@ -215,7 +215,7 @@ class LocalExecutor:
         """Every sequence a task of its own: joblib's ``n_jobs`` spreads them."""
         return [[position] for position in range(len(sizes))]
 
-    def stream(self, function, items):
+    def imap(self, function, items):
         for item in items:
             yield _bounded(self.threads, function, item)
 
@@ -392,7 +392,7 @@ class DaskExecutor:
                 for future in futures:
                     future.release()
 
-    def stream(self, function, items, in_flight=None):
+    def imap(self, function, items, in_flight=None):
         """``function(item)`` in order, at most ``in_flight`` (default: twice the threads) submitted at a time.
 
         Each result is yielded as soon as it and those before it are done:

@@ -152,7 +152,7 @@ def test_patterns_catch_what_they_are_for():
         "Time window of Eq. 5, in s.",
         "Velocity threshold, m/s (the paper's #12: 23.11 deg).",
         "The paper's experiments #1-#13 (Table III, Fig. 6).",
-        "Length of a time frame in s, > 0 (Scheiner et al. 2021: 500 ms);",
+        "Length of a time window in s, > 0 (Scheiner et al. 2021: 500 ms);",
         "Scheiner et al. (2019), Liu et al. 2022, CVPR 2019.",
         "For each occupied cell, the indices of its 3 x 3 neighbourhood.",
         "The default run's budget: 4 sequences x 20 s, 10 iterations (30 % random), 2 folds.",

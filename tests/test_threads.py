@@ -55,7 +55,7 @@ def _every_path(executor):
         "command": _threads(),  # the runner's own thread: the steps that wait for others run there
         "place": executor.fetch(executor.place(_threads, 0)),
         "submit": executor.fetch(executor.submit(_threads, 0)),
-        "stream": list(executor.stream(_threads, [0, 1])),
+        "imap": list(executor.imap(_threads, [0, 1])),
         "queued": list(executor.queued(_threads, [[(0,), (1,)]])),
         "ahead": list(executor.ahead(_task, [0, 1])),
         "map": executor.map(_task, [0, 1]),

@@ -45,8 +45,8 @@ def cluster_radarscenes(data, params, out, experiment=None, *, classifier=None, 
     for noise, instance = cluster id (-1 for noise).  The pipeline never
     crosses sequences, so each sequence is loaded, clustered and written
     on its own (its cluster ids shifted past those of the sequences before
-    it): the predictions are written as a stream and the data set need not
-    fit in memory.  The file is written atomically (a temporary sibling,
+    it): the predictions are written sequence by sequence and the data set
+    need not fit in memory.  The file is written atomically (a temporary sibling,
     renamed when complete).
 
     With ``classifier`` each sequence is also classified
@@ -82,7 +82,7 @@ def cluster_radarscenes(data, params, out, experiment=None, *, classifier=None, 
     scheduler : str, default=None
         Address of a running dask scheduler: the sequences are loaded and
         clustered on its workers (which must see ``data`` at the same
-        path), a few at a time, and streamed back in order.
+        path), a few at a time, and sent back in order.
     workers : int, default=None
         Start a local dask cluster of this many worker processes instead.
 
@@ -118,13 +118,13 @@ def cluster_radarscenes(data, params, out, experiment=None, *, classifier=None, 
     counts = {"n_detections": 0, "n_clusters": 0}
     failed = []
 
-    def write(stream):
-        stream.write(head)
+    def write(handle):
+        handle.write(head)
         try:
-            for uuids, labels, *classes in executor.stream(run, tasks):
+            for uuids, labels, *classes in executor.imap(run, tasks):
                 shifted = np.where(labels >= 0, labels + counts["n_clusters"], -1)
                 classes = classes[0] if classes else None
-                _write_entries(stream, uuids, shifted, first=counts["n_detections"] == 0, classes=classes)
+                _write_entries(handle, uuids, shifted, first=counts["n_detections"] == 0, classes=classes)
                 counts["n_detections"] += len(labels)
                 counts["n_clusters"] += int(labels.max()) + 1 if len(labels) else 0
                 if counted is not None:
@@ -132,7 +132,7 @@ def cluster_radarscenes(data, params, out, experiment=None, *, classifier=None, 
         except OSError as error:  # reading a sequence failed: not a write error of ``out``
             failed.append(error)
             raise _ReadFailed from None
-        stream.write(_PREDICTIONS_TAIL if counts["n_detections"] else _PREDICTIONS_EMPTY_TAIL)
+        handle.write(_PREDICTIONS_TAIL if counts["n_detections"] else _PREDICTIONS_EMPTY_TAIL)
 
     with connect_executor(scheduler, workers) as executor:
         tasks = [(str(data_dir), n, model) for n in numbers]
@@ -243,10 +243,10 @@ def write_predictions(uuids, labels, out, classes=None):
         classes = _devkit_classes(classes, len(labels))
     head = _PREDICTIONS_HEAD if classes is None else _CLASSES_HEAD
 
-    def write(stream):
-        stream.write(head)
-        _write_entries(stream, uuids, labels, first=True, classes=classes)
-        stream.write(_PREDICTIONS_TAIL if len(labels) else _PREDICTIONS_EMPTY_TAIL)
+    def write(handle):
+        handle.write(head)
+        _write_entries(handle, uuids, labels, first=True, classes=classes)
+        handle.write(_PREDICTIONS_TAIL if len(labels) else _PREDICTIONS_EMPTY_TAIL)
 
     check_predictions_file(out)
     atomic_write(Path(out), write, replaceable=check_predictions_file)
@@ -302,7 +302,7 @@ _PREDICTIONS_HEAD, _PREDICTIONS_TAIL, _PREDICTIONS_EMPTY_TAIL = _predictions_fra
 _CLASSES_HEAD = _class_frame()[0]
 
 
-def _write_entries(stream, uuids, labels, first, classes=None):
+def _write_entries(handle, uuids, labels, first, classes=None):
     """``"uuid": [class, instance]`` lines (indent 2, as json.dumps), comma-separated across calls.
 
     The class is ``classes`` when given (the devkit's class indices), else 1 for a clustered detection, 0 for noise.
@@ -314,4 +314,4 @@ def _write_entries(stream, uuids, labels, first, classes=None):
         f"      {int(kind)},\n      {int(label)}\n    ]"
         for i, (u, kind, label) in enumerate(zip(uuids, classes.tolist(), labels.tolist(), strict=True))
     ]
-    stream.write("".join(lines).encode("ascii"))
+    handle.write("".join(lines).encode("ascii"))

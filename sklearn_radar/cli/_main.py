@@ -191,7 +191,7 @@ def _parser():
         choices=("v1", "pq"),
         default="v1",
         help="what the searches maximise: v1, the paper's radar V-measure, or pq, the panoptic quality of moving "
-        "road users per 0.5 s frame (default: v1)",
+        "road users per 0.5 s time window (default: v1)",
     )
     _add_cluster_flags(
         reproduce,
@@ -234,7 +234,7 @@ def _parser():
         description="Label every radar scan of a RadarScenes folder as it would arrive on a car (timestamp order "
         "across sensors, each stage causal), with persistent object ids; write the devkit's per-point predictions "
         "JSON and print the per-scan latency and the real-time factor. With --classifier, the final objects are "
-        "classified after the replay (per 0.5 s frame, not causally) and each detection's class is the devkit's "
+        "classified after the replay (per 0.5 s time window, not causally) and each detection's class is the devkit's "
         "ClassificationLabel index, as for 'cluster'.",
     )
     stream.set_defaults(run=_stream, parser=stream, together=_check_setting_options)

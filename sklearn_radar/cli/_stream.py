@@ -41,8 +41,8 @@ def _why_not_replaceable(out):
     if not out.is_file() or out.stat().st_size == 0:
         return None
     head = (OBJECTS_HEADER + "\n").encode("ascii")
-    with open(out, "rb") as stream:
-        ours = stream.read(len(head)) == head
+    with open(out, "rb") as handle:
+        ours = handle.read(len(head)) == head
     return None if ours else "exists and is not an object list written by sklearn-radar"
 
 
@@ -64,8 +64,8 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None, classif
 
     With ``classifier``, the final objects are classified after the replay
     (:meth:`~sklearn_radar.classification.ClusterClassifier.predict_instances_of`
-    on the final object ids, per time frame as in training: not causal,
-    a frame's class uses the whole frame): the class is the devkit's
+    on the final object ids, per time window as in training: not causal,
+    a window's class uses the whole window): the class is the devkit's
     ``ClassificationLabel`` index (STATIC 5 for noise and for objects
     classified as background), the instance the final object id where
     the class is a road user, -1 where it is STATIC.
@@ -97,7 +97,7 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None, classif
         ``experiment`` is None; else None), ``n_detections``, ``n_scans``, ``n_objects``,
         ``n_aliases``, ``latency`` and ``cpu`` (wall and thread CPU time per scan, s), ``recording`` (s),
         ``out`` and ``objects``; with ``classifier`` also ``classes`` (detections per devkit class name) and
-        ``n_road_users`` (objects classified as a road user in some frame).
+        ``n_road_users`` (objects classified as a road user in some window).
     """
     setting, pipeline, chosen = params_setting(params, experiment, classifier)
     model = None
@@ -126,8 +126,8 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None, classif
         if table is None:
             table = pd.DataFrame(columns=OBJECTS_HEADER.split(","))
 
-        def write(stream):
-            stream.write(table.to_csv(index=False, lineterminator="\n").encode("ascii"))
+        def write(handle):
+            handle.write(table.to_csv(index=False, lineterminator="\n").encode("ascii"))
 
         atomic_write(Path(objects), write, replaceable=check_objects_file)
     return {

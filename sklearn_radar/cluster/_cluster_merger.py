@@ -29,8 +29,8 @@ from ._velocity import _VELOCITY_DEFAULTS, _estimate, _estimate_velocities
 
 def _stage1_labels(stage1, columns):
     """Stage-1 labels of the working columns (a separate function so that joblib.Memory can cache it)."""
-    frame = pd.DataFrame({name: values for name, values in columns.items() if values is not None})
-    return stage1.fit(frame).labels_
+    table = pd.DataFrame({name: values for name, values in columns.items() if values is not None})
+    return stage1.fit(table).labels_
 
 
 class ClusterMerger(ClusterMixin, BaseEstimator):
@@ -43,7 +43,7 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
 
     * ``mode="velocity"`` (Eq. 6): ``d_min < eps_d`` and ``dphi < eps_phi``
       and ``dv < eps_v`` and ``dt < eps_t2``.  d_min is the smallest distance
-      between detections of A and of B within the ``eps_t2`` frame, dphi and
+      between detections of A and of B within the ``eps_t2`` window, dphi and
       dv the differences of direction and magnitude of the clusters' full
       velocities, estimated from Doppler and line of sight
       (:func:`estimate_velocity`, Kellner et al. 2013).
@@ -54,7 +54,7 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
       spline; a line below four scans) is the velocity, which continues the
       centre forward.  d_pred is the distance
       of the two continued centres at the beginning, middle and end of the
-      frame ``[s_B, s_B + eps_t2]``, the minimum counts; dv is the norm of the
+      window ``[s_B, s_B + eps_t2]``, the minimum counts; dv is the norm of the
       velocity difference.
 
     ``dt`` is the gap from A's last detection before ``s_B`` to ``s_B`` (0
@@ -81,7 +81,7 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
     eps_v : float, default=2.72
         Velocity threshold, m/s (the paper: 2.72 for continuation #13, 1.04 for Eq. 6 #12).
     eps_t2 : float, default=0.35
-        Time frame, s.
+        Time window, s.
     min_samples : int, default=1
         N_min of the second DBSCAN, counted in clusters (itself included).
     unknown_velocity : {"reject", "accept"}, default="reject"
@@ -110,7 +110,7 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
         ``min_cluster_size``); the detections of a smaller one become noise.
         1 (the default) keeps every cluster, as in the paper; beyond it, see
         the user guide's "Counting objects".
-    causal : bool, default=False
+    causal_min_size : bool, default=False
         How ``min_cluster_size`` counts.  False: a merged cluster's whole
         size.  True: a detection counts the detections of its cluster up to
         its own time (those of the same time included), so a cluster's first
@@ -164,7 +164,7 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
         "memory": [None, str, HasMethods(["cache"])],
         "cluster_vr_min": [Interval(Real, 0, None, closed="left"), None],
         "min_cluster_size": [Interval(Integral, 1, None, closed="left")],
-        "causal": ["boolean"],
+        "causal_min_size": ["boolean"],
     }
 
     def __init__(
@@ -180,7 +180,7 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
         memory=None,
         cluster_vr_min=None,
         min_cluster_size=1,
-        causal=False,
+        causal_min_size=False,
     ):
         self.mode = mode
         self.eps_d = eps_d
@@ -193,7 +193,7 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
         self.memory = memory
         self.cluster_vr_min = cluster_vr_min
         self.min_cluster_size = min_cluster_size
-        self.causal = causal
+        self.causal_min_size = causal_min_size
 
     @_fit_context(prefer_skip_nested_validation=False)
     def fit(self, X, y=None):
@@ -234,7 +234,7 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
             merges += [(sequence[rows[0]], a, b) for a, b in sequence_merges]
         self.stage1_labels_ = stage1_labels
         roots = _gate_static_clusters(roots, c["v_r"], self.cluster_vr_min)
-        roots = drop_small_clusters(roots, self.min_cluster_size, c["t"] if self.causal else None)
+        roots = drop_small_clusters(roots, self.min_cluster_size, c["t"] if self.causal_min_size else None)
         self.labels_ = consecutive_labels(roots)
         self.merges_ = np.array(merges, dtype=np.float64).reshape(-1, 3)
         return self

@@ -1,7 +1,7 @@
 """Beyond the paper: the framework's own stages, set up to count objects (panoptic quality).
 
 The object experiment is the paper's own #12 on #8 with a minimum cluster
-size, tuned for per-frame panoptic quality (PQ).  Why these stages and not
+size, tuned for per-window panoptic quality (PQ).  Why these stages and not
 others (an ablation of one factor at a time against #8): read more in the
 :ref:`User Guide <objects-measured>`.
 
@@ -94,7 +94,7 @@ def object_pipeline(stage=2, *, params=None, stage1_params=None, causal=False, m
     else:
         setting = {**paper_params(8), **stage1_params, "cluster__causal": causal}
         pipeline = experiment_pipeline(12, memory=memory, stage1_params=setting)
-        pipeline.set_params(merge__causal=causal)
+        pipeline.set_params(merge__causal_min_size=causal)
     pipeline.set_params(filter__causal=causal)
     if params:
         pipeline.set_params(**params)

@@ -1,9 +1,9 @@
 """Scores and targets for radar clustering.
 
 The radar V-measure and the pre-clustered target of Scheiner et al. 2019 (Sec. "Parameter Optimization"), and
-object-level scores per time frame: panoptic quality, coverage, the share of background-only clusters and the
+object-level scores per time window: panoptic quality, coverage, the share of background-only clusters and the
 missed and false segments by cause; and
-the tracking quality of object ids over frames: ID switches, MOTA, IDF1 and HOTA; and the semantic scores of
+the tracking quality of object ids over windows: ID switches, MOTA, IDF1 and HOTA; and the semantic scores of
 classified road users: class-aware panoptic quality, mAP, point-wise macro-F1 and coverage, and where the
 class-aware panoptic quality goes (a confusion matrix of matched segments).
 """

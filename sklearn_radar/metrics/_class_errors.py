@@ -1,6 +1,6 @@
 """Where the class-aware panoptic quality goes: a confusion matrix of matched segments and, per class, the errors.
 
-Segments are those of :func:`~sklearn_radar.metrics.class_panoptic_quality`: per time frame of each sequence,
+Segments are those of :func:`~sklearn_radar.metrics.class_panoptic_quality`: per time window of each sequence,
 a ground-truth segment is one instance's detections and a predicted segment one predicted instance's (one
 cluster's), each with the majority class of its rows.  Here a predicted segment takes part whatever its
 class, background included, and segments match *class-agnostically*: when their IoU exceeds 0.5 (at most one
@@ -33,18 +33,18 @@ __all__ = ["class_errors"]
         "instances_pred": ["array-like"],
         "times": ["array-like", None],
         "groups": ["array-like", None],
-        "frame": [Interval(Real, 0, None, closed="neither"), None],
+        "window": [Interval(Real, 0, None, closed="neither"), None],
         "confidence": ["array-like", None],
     },
     prefer_skip_nested_validation=True,
 )
 def class_errors(
-    classes_true, instances_true, classes_pred, instances_pred, *, times, groups=None, frame=0.5, confidence=None
+    classes_true, instances_true, classes_pred, instances_pred, *, times, groups=None, window=0.5, confidence=None
 ):
     """The confusion matrix of matched segments and, per road-user class, where its panoptic quality goes.
 
     The segments are those of :func:`class_panoptic_quality` (one
-    instance's detections in one frame of ``frame`` seconds, with the
+    instance's detections in one window of ``window`` seconds, with the
     majority class of its rows; detections whose true class is ignored, -2,
     left out), except that a predicted segment whose class is background
     (-1) takes part too.  A ground-truth segment of a road-user class and a
@@ -85,12 +85,12 @@ def class_errors(
     instances_pred : array-like of int, shape (n_detections,)
         Predicted instance (cluster) of each detection, negative for none.
     times : array-like of shape (n_detections,) or None
-        Time of each detection in s.  None, or ``frame=None``: every
-        sequence is one frame.
+        Time of each detection in s.  None, or ``window=None``: every
+        sequence is one window.
     groups : array-like of shape (n_detections,), default=None
         Sequence of each detection; None: one sequence.
-    frame : float or None, default=0.5
-        Length of a time frame in s, > 0; None: one frame per sequence.
+    window : float or None, default=0.5
+        Length of a time window in s, > 0; None: one window per sequence.
     confidence : array-like of float, shape (n_detections,), default=None
         Confidence of each detection's predicted class; breaks a tie of the
         majority vote of a predicted segment, as in
@@ -131,10 +131,10 @@ def class_errors(
     """
     arrays = _checked(classes_true, instances_true, classes_pred, instances_pred, confidence, times, groups)
     classes_true, classes_pred = arrays["classes_true"], arrays["classes_pred"]
-    kept = classes_true != _IGNORED  # left out after the frames are laid out, as class_panoptic_quality does
+    kept = classes_true != _IGNORED  # left out after the windows are laid out, as class_panoptic_quality does
     labels_true = np.where(kept & (arrays["instances_true"] >= 0), arrays["instances_true"], -1)
     labels_pred = np.where(kept & (arrays["instances_pred"] >= 0), arrays["instances_pred"], -1)
-    found = _segments(labels_true, labels_pred, times=arrays["times"], groups=arrays["groups"], frame=frame)
+    found = _segments(labels_true, labels_pred, times=arrays["times"], groups=arrays["groups"], window=window)
 
     member = np.flatnonzero(found.true_seg >= 0)
     true_class = _majority_class(found.true_seg[member], found.n_true, classes_true[member], None)

@@ -1,6 +1,6 @@
 """Where the panoptic quality goes: the missed and the false segments of a labelling, by cause.
 
-Segments and matches are those of :func:`~sklearn_radar.metrics.panoptic_quality`: per time frame of each
+Segments and matches are those of :func:`~sklearn_radar.metrics.panoptic_quality`: per time window of each
 sequence, a ground-truth segment (one object's detections) and a predicted segment (one cluster's) match when
 their IoU exceeds 0.5.  Every unmatched segment gets one cause.
 """
@@ -26,11 +26,11 @@ FALSE_CAUSES = ("background", "part_of_object", "several_objects")
         "labels_pred": ["array-like"],
         "times": ["array-like", None],
         "groups": ["array-like", None],
-        "frame": [Interval(Real, 0, None, closed="neither"), None],
+        "window": [Interval(Real, 0, None, closed="neither"), None],
     },
     prefer_skip_nested_validation=True,
 )
-def instance_errors(labels_true, labels_pred, *, times, groups=None, frame=0.5):
+def instance_errors(labels_true, labels_pred, *, times, groups=None, window=0.5):
     """The missed ground-truth segments and the false predicted segments of a clustering, by cause.
 
     A ground-truth segment that no predicted segment matches (IoU > 0.5) is
@@ -59,11 +59,11 @@ def instance_errors(labels_true, labels_pred, *, times, groups=None, frame=0.5):
     labels_pred : array-like of shape (n_detections,)
         Cluster per detection, -1 for noise.
     times : array-like of shape (n_detections,) or None
-        Detection time, s.  None: one frame per sequence.
+        Detection time, s.  None: one window per sequence.
     groups : array-like of shape (n_detections,), default=None
         Sequence of each detection; None: one sequence.
-    frame : float or None, default=0.5
-        Frame length, s.  None: one frame per sequence.
+    window : float or None, default=0.5
+        Window length, s.  None: one window per sequence.
 
     Returns
     -------
@@ -88,7 +88,7 @@ def instance_errors(labels_true, labels_pred, *, times, groups=None, frame=0.5):
     >>> errors["matched"], errors["noise"], errors["background"]
     (1, 1, 1)
     """
-    found = _segments(labels_true, labels_pred, times=times, groups=groups, frame=frame)
+    found = _segments(labels_true, labels_pred, times=times, groups=groups, window=window)
     labels_true, labels_pred = np.asarray(labels_true), np.asarray(labels_pred)
     n_true, n_pred = found.n_true, found.n_pred
     true_size, pair_true, pair_pred, inter = found.true_size, found.pair_true, found.pair_pred, found.inter

@@ -1,17 +1,17 @@
-"""HOTA (Luiten et al. 2021): detection, association and localisation accuracy of object ids over time frames.
+"""HOTA (Luiten et al. 2021): detection, association and localisation accuracy of object ids over time windows.
 
-Within each sequence time is cut into frames (as for the panoptic quality
-and :func:`~sklearn_radar.metrics.tracking_scores`).  In a frame, a
+Within each sequence time is cut into windows (as for the panoptic quality
+and :func:`~sklearn_radar.metrics.tracking_scores`).  In a window, a
 ground-truth object is the set of its detections and a hypothesis the set of
 detections carrying one predicted id; their similarity is the IoU of the two
 sets.  For each localisation threshold ``alpha`` in 0.05, 0.10, ..., 0.95 the
-frame's objects and hypotheses are matched one-to-one (Hungarian method on
+window's objects and hypotheses are matched one-to-one (Hungarian method on
 similarity times the global alignment of the two ids), a match counting when
 its IoU is at least ``alpha``; then
 
 * ``DetA = TP / (TP + FN + FP)``;
 * ``AssA``: over the true positives, the mean Jaccard index of the two ids'
-  frame sets (matched frames / frames of either id);
+  window sets (matched windows / windows of either id);
 * ``HOTA = sqrt(DetA * AssA)``, and the reported scores are the means over
   ``alpha``.
 
@@ -27,7 +27,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 from sklearn.utils._param_validation import Interval, validate_params
 
-from ._tracking import _frame_cells
+from ._tracking import _window_cells
 
 #: The localisation thresholds over which HOTA is averaged (TrackEval's).
 ALPHAS = np.arange(0.05, 0.99, 0.05)
@@ -41,12 +41,12 @@ _EPS = np.finfo(float).eps
         "labels_pred": ["array-like"],
         "times": ["array-like"],
         "groups": ["array-like", None],
-        "frame": [Interval(Real, 0, None, closed="neither"), None],
+        "window": [Interval(Real, 0, None, closed="neither"), None],
     },
     prefer_skip_nested_validation=True,
 )
-def hota_scores(labels_true, labels_pred, *, times, groups=None, frame=0.5):
-    """HOTA, DetA, AssA and LocA of predicted object ids against ground-truth objects, per time frame.
+def hota_scores(labels_true, labels_pred, *, times, groups=None, window=0.5):
+    """HOTA, DetA, AssA and LocA of predicted object ids against ground-truth objects, per time window.
 
     Read more in the :ref:`User Guide <user-guide-online>`.
 
@@ -64,9 +64,9 @@ def hota_scores(labels_true, labels_pred, *, times, groups=None, frame=0.5):
     groups : array-like of shape (n_detections,), default=None
         Sequence of each detection; ids of different sequences are
         different tracks.  None: one sequence.
-    frame : float or None, default=0.5
-        Frame length, s; detection ``i`` of sequence ``s`` lies in frame
-        ``floor((times[i] - min(times of s)) / frame)``.  None: one frame
+    window : float or None, default=0.5
+        Window length, s; detection ``i`` of sequence ``s`` lies in window
+        ``floor((times[i] - min(times of s)) / window)``.  None: one window
         per sequence.
 
     Returns
@@ -85,7 +85,7 @@ def hota_scores(labels_true, labels_pred, *, times, groups=None, frame=0.5):
     --------
     >>> from sklearn_radar.metrics import hota_scores
     >>> truth = [0, 0, 0, 0]
-    >>> pred = [5, 5, 7, 7]  # the object changes id between the two frames
+    >>> pred = [5, 5, 7, 7]  # the object changes id between the two windows
     >>> scores = hota_scores(truth, pred, times=[0.0, 0.1, 0.6, 0.7])
     >>> round(scores["deta"], 3), round(scores["assa"], 3), round(scores["hota"], 3)
     (1.0, 0.5, 0.707)
@@ -103,7 +103,7 @@ def hota_scores(labels_true, labels_pred, *, times, groups=None, frame=0.5):
         raise ValueError("times must be finite")
     totals = _Totals()
     if len(times):
-        cell, sequence = _frame_cells(times, groups, frame)
+        cell, sequence = _window_cells(times, groups, window)
         labels_true, labels_pred = labels_true.astype(np.int64), labels_pred.astype(np.int64)
         for number in np.unique(sequence):
             rows = np.flatnonzero(sequence == number)
@@ -119,8 +119,8 @@ def _ids(labels):
     return out, len(codes)
 
 
-def _frames(cell, gt, tr):
-    """Per frame (in time order): the ground-truth ids, the hypothesis ids and their IoU matrix."""
+def _windows(cell, gt, tr):
+    """Per window (in time order): the ground-truth ids, the hypothesis ids and their IoU matrix."""
     for code in np.unique(cell):
         rows = cell == code
         g, p = gt[rows], tr[rows]
@@ -139,16 +139,16 @@ def _sequence_counts(cell, labels_true, labels_pred):
     gt, n_gt = _ids(labels_true)
     tr, n_tr = _ids(labels_pred)
     counts = {key: np.zeros(len(ALPHAS)) for key in ("tp", "fn", "fp", "assa", "assre", "asspr", "loca")}
-    frames = list(_frames(cell, gt, tr))
-    gt_dets = sum(len(g) for g, _, _ in frames)
-    tr_dets = sum(len(p) for _, p, _ in frames)
+    windows = list(_windows(cell, gt, tr))
+    gt_dets = sum(len(g) for g, _, _ in windows)
+    tr_dets = sum(len(p) for _, p, _ in windows)
     if gt_dets == 0 or tr_dets == 0:
         counts["fn"] += gt_dets
         counts["fp"] += tr_dets
         return counts
     potential = np.zeros((n_gt, n_tr))
     gt_count, tr_count = np.zeros((n_gt, 1)), np.zeros((1, n_tr))
-    for g_ids, p_ids, similarity in frames:
+    for g_ids, p_ids, similarity in windows:
         denominator = similarity.sum(0)[None, :] + similarity.sum(1)[:, None] - similarity
         share = np.divide(similarity, denominator, out=np.zeros_like(similarity), where=denominator > _EPS)
         potential[g_ids[:, None], p_ids[None, :]] += share
@@ -156,7 +156,7 @@ def _sequence_counts(cell, labels_true, labels_pred):
         tr_count[0, p_ids] += 1
     alignment = potential / (gt_count + tr_count - potential)
     matches = np.zeros((len(ALPHAS), n_gt, n_tr))
-    for g_ids, p_ids, similarity in frames:
+    for g_ids, p_ids, similarity in windows:
         if len(g_ids) == 0 or len(p_ids) == 0:
             counts["fn"] += len(g_ids)
             counts["fp"] += len(p_ids)

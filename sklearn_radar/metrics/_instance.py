@@ -1,10 +1,10 @@
-"""Object-level metrics: panoptic quality, coverage and the share of background-only clusters, per time frame.
+"""Object-level metrics: panoptic quality, coverage and the share of background-only clusters, per time window.
 
 A *segment* is a set of detections.  A ground-truth segment is one annotated
-object's detections inside one time frame of one sequence; a predicted
+object's detections inside one time window of one sequence; a predicted
 segment is one cluster's.  Background (``labels_true == -1``) belongs to no
 ground-truth segment, noise (``labels_pred == -1``) to no predicted segment.
-Segments of different frames or sequences are never compared.
+Segments of different windows or sequences are never compared.
 
 Every score is a ratio of sums and counts over segments, which add up over sequences: each
 function here is the combination (:func:`~sklearn_radar.metrics._parts.combine_instance_parts`) of one part
@@ -56,12 +56,12 @@ _CONSTRAINTS = {
     "labels_pred": ["array-like"],
     "times": ["array-like", None],
     "groups": ["array-like", None],
-    "frame": [Interval(Real, 0, None, closed="neither"), None],
+    "window": [Interval(Real, 0, None, closed="neither"), None],
 }
 
 
 @validate_params(_CONSTRAINTS, prefer_skip_nested_validation=True)
-def instance_scores(labels_true, labels_pred, *, times, groups=None, frame=0.5):
+def instance_scores(labels_true, labels_pred, *, times, groups=None, window=0.5):
     """Panoptic quality, coverage and background shares at once, from one segmentation of the detections.
 
     The union of :func:`panoptic_quality`, :func:`instance_coverage` and
@@ -79,16 +79,16 @@ def instance_scores(labels_true, labels_pred, *, times, groups=None, frame=0.5):
         Predicted cluster per detection, -1 for noise.
     times : array-like of shape (n_detections,) or None
         Time of each detection in s (e.g. ``timestamp * 1e-6``).  None, or
-        ``frame=None``: every sequence is one frame.
+        ``window=None``: every sequence is one window.
     groups : array-like of shape (n_detections,), default=None
         Sequence of each detection: equal labels in different sequences are
-        different segments, and frames start at each sequence's first
+        different segments, and windows start at each sequence's first
         detection.  None: one sequence.
-    frame : float or None, default=0.5
-        Length of a time frame in s, > 0; detection ``i`` of sequence ``s``
-        lies in frame ``floor((times[i] - min(times of s)) / frame)``.  The
-        default, 500 ms, is the frame of Scheiner et al. (2021).  None: one
-        frame per sequence ("per sequence" evaluation).
+    window : float or None, default=0.5
+        Length of a time window in s, > 0; detection ``i`` of sequence ``s``
+        lies in window ``floor((times[i] - min(times of s)) / window)``.  The
+        default, 500 ms, is the window of Scheiner et al. (2021).  None: one
+        window per sequence ("per sequence" evaluation).
 
     Returns
     -------
@@ -113,16 +113,16 @@ def instance_scores(labels_true, labels_pred, *, times, groups=None, frame=0.5):
     (0.666667, 1.0, 0.5)
     """
     # The whole labelling as one part: one implementation of the scores for it and for merged parts.
-    return combine_instance_parts([instance_parts(labels_true, labels_pred, times=times, groups=groups, frame=frame)])
+    return combine_instance_parts([instance_parts(labels_true, labels_pred, times=times, groups=groups, window=window)])
 
 
 @validate_params(_CONSTRAINTS, prefer_skip_nested_validation=True)
-def panoptic_quality(labels_true, labels_pred, *, times, groups=None, frame=0.5):
-    """Panoptic quality (Kirillov et al. 2019) of the clusters, one "thing" class, per time frame.
+def panoptic_quality(labels_true, labels_pred, *, times, groups=None, window=0.5):
+    """Panoptic quality (Kirillov et al. 2019) of the clusters, one "thing" class, per time window.
 
-    Within each sequence (``groups``) time is cut into frames of ``frame``
+    Within each sequence (``groups``) time is cut into windows of ``window``
     seconds.  A ground-truth segment ``g`` is one object's detections inside
-    a frame, a predicted segment ``p`` one cluster's.  Over all frames and
+    a window, a predicted segment ``p`` one cluster's.  Over all windows and
     sequences:
 
     * a pair matches when ``IoU(g, p) = |g ∩ p| / |g ∪ p| > 0.5``; with this
@@ -135,7 +135,7 @@ def panoptic_quality(labels_true, labels_pred, *, times, groups=None, frame=0.5)
       ``recall = TP / (TP + FN)``.
 
     Unlike the radar V-measure, clustering static background costs here:
-    every background-only cluster is a false positive in each frame it
+    every background-only cluster is a false positive in each window it
     spans.  Degenerate input never raises: a ratio 0/0 (no segment at all,
     or no match for SQ) is 0.0, never NaN.
 
@@ -143,9 +143,9 @@ def panoptic_quality(labels_true, labels_pred, *, times, groups=None, frame=0.5)
 
     Parameters
     ----------
-    labels_true, labels_pred, times, groups, frame
+    labels_true, labels_pred, times, groups, window
         As in :func:`instance_scores`: ground truth (-1 background),
-        clusters (-1 noise), times (s), sequences and frame length (s).
+        clusters (-1 noise), times (s), sequences and window length (s).
 
     Returns
     -------
@@ -164,7 +164,7 @@ def panoptic_quality(labels_true, labels_pred, *, times, groups=None, frame=0.5)
        "Panoptic Segmentation", CVPR 2019.
     .. [2] N. Scheiner, F. Kraus, N. Appenrodt, J. Dickmann and B. Sick,
        "Object detection for automotive radar point clouds – a comparison",
-       AI Perspectives 3, 2021 (frames of 500 ms).
+       AI Perspectives 3, 2021 (windows of 500 ms).
 
     Examples
     --------
@@ -174,17 +174,17 @@ def panoptic_quality(labels_true, labels_pred, *, times, groups=None, frame=0.5)
     >>> round(scores.pq, 6), scores.tp, scores.fp, scores.fn
     (0.6, 1, 0, 0)
     """
-    scores = instance_scores(labels_true, labels_pred, times=times, groups=groups, frame=frame)
+    scores = instance_scores(labels_true, labels_pred, times=times, groups=groups, window=window)
     return Bunch(**{key: scores[key] for key in _PQ_KEYS})
 
 
 @validate_params(_CONSTRAINTS, prefer_skip_nested_validation=True)
-def instance_coverage(labels_true, labels_pred, *, times, groups=None, frame=0.5):
-    """Mean coverage mCov and weighted mean coverage mWCov of the ground-truth segments, per time frame.
+def instance_coverage(labels_true, labels_pred, *, times, groups=None, window=0.5):
+    """Mean coverage mCov and weighted mean coverage mWCov of the ground-truth segments, per time window.
 
     The coverage of a ground-truth segment ``g`` (one object's detections
-    inside one frame, as in :func:`panoptic_quality`) is its best IoU with a
-    predicted segment of the same frame, 0 when no cluster overlaps it:
+    inside one window, as in :func:`panoptic_quality`) is its best IoU with a
+    predicted segment of the same window, 0 when no cluster overlaps it:
     ``cov(g) = max_p |g ∩ p| / |g ∪ p|``.  Then ``mCov = Σ_g cov(g) / G``
     over the G ground-truth segments and
     ``mWCov = Σ_g |g| cov(g) / Σ_g |g|``, which weights each segment by its
@@ -198,9 +198,9 @@ def instance_coverage(labels_true, labels_pred, *, times, groups=None, frame=0.5
 
     Parameters
     ----------
-    labels_true, labels_pred, times, groups, frame
+    labels_true, labels_pred, times, groups, window
         As in :func:`instance_scores`: ground truth (-1 background),
-        clusters (-1 noise), times (s), sequences and frame length (s).
+        clusters (-1 noise), times (s), sequences and window length (s).
 
     Returns
     -------
@@ -225,15 +225,15 @@ def instance_coverage(labels_true, labels_pred, *, times, groups=None, frame=0.5
     >>> float(scores.mcov), float(scores.mwcov)
     (0.75, 0.6666666666666666)
     """
-    scores = instance_scores(labels_true, labels_pred, times=times, groups=groups, frame=frame)
+    scores = instance_scores(labels_true, labels_pred, times=times, groups=groups, window=window)
     return Bunch(**{key: scores[key] for key in _COVERAGE_KEYS})
 
 
 @validate_params(_CONSTRAINTS, prefer_skip_nested_validation=True)
-def background_share(labels_true, labels_pred, *, times=None, groups=None, frame=0.5):
-    """Share of the predicted segments (per frame) and of the clusters (per sequence) that hold background only.
+def background_share(labels_true, labels_pred, *, times=None, groups=None, window=0.5):
+    """Share of the predicted segments (per window) and of the clusters (per sequence) that hold background only.
 
-    A predicted segment, one cluster's detections inside one frame as in
+    A predicted segment, one cluster's detections inside one window as in
     :func:`panoptic_quality`, or a whole cluster of one sequence, is
     background-only when none of its detections belongs to an annotated
     object (``labels_true == -1`` for all of them).  The shares make the
@@ -244,16 +244,16 @@ def background_share(labels_true, labels_pred, *, times=None, groups=None, frame
 
     Parameters
     ----------
-    labels_true, labels_pred, times, groups, frame
+    labels_true, labels_pred, times, groups, window
         As in :func:`instance_scores`: ground truth (-1 background),
-        clusters (-1 noise), times (s), sequences and frame length (s);
-        here ``times`` may be left out (None: every sequence is one frame).
+        clusters (-1 noise), times (s), sequences and window length (s);
+        here ``times`` may be left out (None: every sequence is one window).
 
     Returns
     -------
     scores : Bunch
-        ``background_segment_share`` (per frame; equal to the cluster share
-        when ``times`` or ``frame`` is None) and
+        ``background_segment_share`` (per window; equal to the cluster share
+        when ``times`` or ``window`` is None) and
         ``background_cluster_share`` (per sequence), floats in [0, 1].
 
     See Also
@@ -268,20 +268,20 @@ def background_share(labels_true, labels_pred, *, times=None, groups=None, frame
     >>> scores.background_cluster_share
     0.5
     """
-    scores = instance_scores(labels_true, labels_pred, times=times, groups=groups, frame=frame)
+    scores = instance_scores(labels_true, labels_pred, times=times, groups=groups, window=window)
     return Bunch(**{key: scores[key] for key in _BACKGROUND_KEYS})
 
 
-def _instance_score(estimator, X, y, metric, frame):
+def _instance_score(estimator, X, y, metric, window):
     """The scorers' body: ``fit_predict`` on X, then one score; the worst value on any failure."""
     key, sign = _SCORER_METRICS[metric]
-    times, groups = _times_and_groups(X, frame)  # a set-up mistake: raises before any fit
+    times, groups = _times_and_groups(X, window)  # a set-up mistake: raises before any fit
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             labels = estimator.fit_predict(X)
         scores = combine_instance_parts(
-            [instance_parts(np.asarray(y), np.asarray(labels), times=times, groups=groups, frame=frame)]
+            [instance_parts(np.asarray(y), np.asarray(labels), times=times, groups=groups, window=window)]
         )
         score = sign * scores[key]
     except Exception:  # a search must go on; error_score=0 documents the same choice
@@ -292,15 +292,15 @@ def _instance_score(estimator, X, y, metric, frame):
 class _InstanceScorer:
     """A scorer ``(estimator, X, y) -> float`` of :func:`make_instance_scorer` (a class, so that it pickles)."""
 
-    def __init__(self, metric, frame):
+    def __init__(self, metric, window):
         self.metric = metric
-        self.frame = frame
+        self.window = window
 
     def __call__(self, estimator, X, y):
-        return _instance_score(estimator, X, y, self.metric, self.frame)
+        return _instance_score(estimator, X, y, self.metric, self.window)
 
     def __repr__(self):
-        return f"make_instance_scorer(metric={self.metric!r}, frame={self.frame!r})"
+        return f"make_instance_scorer(metric={self.metric!r}, window={self.window!r})"
 
 
 # Not skipping nested validation: the scorer fits ``estimator``, whose parameters
@@ -310,9 +310,9 @@ class _InstanceScorer:
     prefer_skip_nested_validation=False,
 )
 def panoptic_quality_scorer(estimator, X, y):
-    """Scorer for every scikit-learn search: ``fit_predict`` on X, panoptic quality per 0.5 s frame against y.
+    """Scorer for every scikit-learn search: ``fit_predict`` on X, panoptic quality per 0.5 s window against y.
 
-    The scorer of ``make_instance_scorer("pq", frame=0.5)``: see
+    The scorer of ``make_instance_scorer("pq", window=0.5)``: see
     :func:`make_instance_scorer` for how it fits the estimator, reads the
     times and sequences of X and scores a failing fit (0.0).
 
@@ -332,7 +332,7 @@ def panoptic_quality_scorer(estimator, X, y):
     Returns
     -------
     score : float
-        PQ of :func:`panoptic_quality` with ``frame=0.5``, in [0, 1]; 0.0
+        PQ of :func:`panoptic_quality` with ``window=0.5``, in [0, 1]; 0.0
         when the fit fails.
 
     Raises
@@ -346,16 +346,16 @@ def panoptic_quality_scorer(estimator, X, y):
 
     See Also
     --------
-    make_instance_scorer : a scorer for any of the object-level scores and frame lengths.
+    make_instance_scorer : a scorer for any of the object-level scores and window lengths.
     """
     return _instance_score(estimator, X, y, "pq", 0.5)
 
 
 @validate_params(
-    {"metric": [StrOptions(set(_SCORER_METRICS))], "frame": [Interval(Real, 0, None, closed="neither"), None]},
+    {"metric": [StrOptions(set(_SCORER_METRICS))], "window": [Interval(Real, 0, None, closed="neither"), None]},
     prefer_skip_nested_validation=True,
 )
-def make_instance_scorer(metric="pq", *, frame=0.5):
+def make_instance_scorer(metric="pq", *, window=0.5):
     """A scorer ``(estimator, X, y) -> float`` of one object-level score, for every scikit-learn search.
 
     Clusterers have no out-of-sample ``predict``, so the estimator is fitted
@@ -378,8 +378,8 @@ def make_instance_scorer(metric="pq", *, frame=0.5):
         :func:`instance_scores`), or ``"neg_background_segment_share"`` or
         ``"neg_background_cluster_share"``: searches maximise, so the
         background shares are negated, in [-1, 0].
-    frame : float or None, default=0.5
-        Length of a time frame in s, > 0; None: one frame per sequence (X
+    window : float or None, default=0.5
+        Length of a time window in s, > 0; None: one window per sequence (X
         then needs no time column).
 
     Returns
@@ -390,12 +390,12 @@ def make_instance_scorer(metric="pq", *, frame=0.5):
 
     See Also
     --------
-    panoptic_quality_scorer : the scorer of ``metric="pq", frame=0.5``.
+    panoptic_quality_scorer : the scorer of ``metric="pq", window=0.5``.
 
     Examples
     --------
     >>> from sklearn_radar.metrics import make_instance_scorer
-    >>> make_instance_scorer("mwcov", frame=None)
-    make_instance_scorer(metric='mwcov', frame=None)
+    >>> make_instance_scorer("mwcov", window=None)
+    make_instance_scorer(metric='mwcov', window=None)
     """
-    return _InstanceScorer(metric, frame)
+    return _InstanceScorer(metric, window)

@@ -87,7 +87,7 @@ class PanopticParts:
     ----------
     tp, fp, fn : int
         Matched pairs, unmatched predicted and unmatched ground-truth
-        segments (per time frame) of :func:`~sklearn_radar.metrics.panoptic_quality`.
+        segments (per time window) of :func:`~sklearn_radar.metrics.panoptic_quality`.
     iou_sum : float
         Sum of the IoUs of the matched pairs, in [0, tp].
     """
@@ -114,7 +114,7 @@ class InstanceParts(PanopticParts):
     ``mWCov = weighted_cover_sum / n_object_detections``, the background
     segment share ``n_background_segments / (tp + fp)`` and the background
     cluster share ``n_background_clusters / n_clusters`` (0.0 for 0/0).
-    Segments (per time frame) and clusters never cross sequences, so each
+    Segments (per time window) and clusters never cross sequences, so each
     field adds up over the parts.  The means over objects (mCov, mWCov)
     therefore need no per-object array: the part is ten numbers, whatever
     the number of detections, objects or clusters.
@@ -136,7 +136,7 @@ class InstanceParts(PanopticParts):
     n_background_segments : int
         Predicted segments (of the ``tp + fp``) without an object detection.
     n_clusters : int
-        Clusters (per sequence, over all its frames).
+        Clusters (per sequence, over all its windows).
     n_background_clusters : int
         Clusters without an object detection.
     """
@@ -182,7 +182,7 @@ def _local_codes(labels, missing):
     return codes, k
 
 
-def score_parts(objective, labels_true, labels_pred, times=None, *, groups=None, frame=0.5):
+def score_parts(objective, labels_true, labels_pred, times=None, *, groups=None, window=0.5):
     """Small mergeable summary of one sequence's labelling, for :func:`combine_parts`.
 
     Parameters
@@ -190,7 +190,7 @@ def score_parts(objective, labels_true, labels_pred, times=None, *, groups=None,
     objective : {"v1", "pq"}
         The score the part is for: the radar V-measure
         (:func:`~sklearn_radar.metrics.radar_v_measure`, the objective V1 of
-        Scheiner et al. 2019) or panoptic quality per time frame
+        Scheiner et al. 2019) or panoptic quality per time window
         (:func:`~sklearn_radar.metrics.panoptic_quality`).
     labels_true : array-like of shape (n_detections,)
         Ground-truth instance per detection, -1 for background.
@@ -198,15 +198,15 @@ def score_parts(objective, labels_true, labels_pred, times=None, *, groups=None,
         Predicted cluster per detection, -1 for noise.
     times : array-like of shape (n_detections,), default=None
         Time of each detection in s, for ``"pq"`` only (ignored for
-        ``"v1"``): frames are counted from the sequence's first detection,
-        ``floor((times - min(times)) / frame)``.  None: the sequence is one
-        frame.
+        ``"v1"``): windows are counted from the sequence's first detection,
+        ``floor((times - min(times)) / window)``.  None: the sequence is one
+        window.
     groups : array-like of shape (n_detections,), default=None
         Sequence of each detection, when the labelling covers several
         sequences: the part then equals the merge of their parts.  None: one
         sequence.
-    frame : float or None, default=0.5
-        Length of a time frame in s, > 0, for ``"pq"``; None: one frame per
+    window : float or None, default=0.5
+        Length of a time window in s, > 0, for ``"pq"``; None: one window per
         sequence.
 
     Returns
@@ -224,7 +224,7 @@ def score_parts(objective, labels_true, labels_pred, times=None, *, groups=None,
     """
     _check_objective(objective)
     if objective == "pq":
-        counts = _segment_counts(labels_true, labels_pred, times=times, groups=groups, frame=frame)
+        counts = _segment_counts(labels_true, labels_pred, times=times, groups=groups, window=window)
         return PanopticParts(**{key: counts[key] for key in ("tp", "fp", "fn", "iou_sum")})
 
     labels_true = np.asarray(labels_true)
@@ -318,7 +318,7 @@ def combine_parts(objective, parts, *, beta=1.0):
     Equal (up to rounding) to
     ``radar_v_measure(concat_true, concat_pred, groups=concat_groups, beta=beta)``
     for ``"v1"`` and to
-    ``panoptic_quality(concat_true, concat_pred, times=concat_times, groups=concat_groups, frame=frame).pq``
+    ``panoptic_quality(concat_true, concat_pred, times=concat_times, groups=concat_groups, window=window).pq``
     for ``"pq"``, each sequence a different group.  The order of the parts
     does not matter.
 
@@ -366,7 +366,7 @@ def combine_parts(objective, parts, *, beta=1.0):
     return float(score) if np.isfinite(score) else 0.0
 
 
-def sequence_parts(estimator, X, y, objective, frame=0.5):
+def sequence_parts(estimator, X, y, objective, window=0.5):
     """Scorer-like task: ``fit_predict`` on one sequence's detections, then its part; a FailedPart if the fit fails.
 
     The per-sequence counterpart of
@@ -382,15 +382,15 @@ def sequence_parts(estimator, X, y, objective, frame=0.5):
         The clusterer (or pipeline ending in one) to score; it is fitted on
         ``X``.
     X : DataFrame of shape (n_detections, n_columns)
-        The detections of one sequence.  For ``"pq"`` (with ``frame`` not
+        The detections of one sequence.  For ``"pq"`` (with ``window`` not
         None) it needs a ``t`` column (s) or else ``timestamp`` (µs).  With a
         ``sequence`` column holding several sequences, each is its own group.
     y : array-like of shape (n_detections,)
         Ground-truth instance per detection, -1 for background.
     objective : {"v1", "pq"}
         The score the part is for.
-    frame : float or None, default=0.5
-        Length of a time frame in s, > 0, for ``"pq"``; None: one frame per
+    window : float or None, default=0.5
+        Length of a time window in s, > 0, for ``"pq"``; None: one window per
         sequence.
 
     Returns
@@ -407,23 +407,23 @@ def sequence_parts(estimator, X, y, objective, frame=0.5):
         any fit.
     """
     _check_objective(objective)
-    times, groups = _times_and_groups(X, frame if objective == "pq" else None)
+    times, groups = _times_and_groups(X, window if objective == "pq" else None)
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
             labels = estimator.fit_predict(X)
-        return score_parts(objective, np.asarray(y), np.asarray(labels), times, groups=groups, frame=frame)
+        return score_parts(objective, np.asarray(y), np.asarray(labels), times, groups=groups, window=window)
     except Exception as error:  # a search must go on; the fold scores 0.0, as the scorers' error_score
         text = str(error).strip().splitlines()
         return FailedPart(f"{type(error).__name__}: {text[0] if text else ''}")
 
 
-def instance_parts(labels_true, labels_pred, *, times, frame=0.5, groups=None):
+def instance_parts(labels_true, labels_pred, *, times, window=0.5, groups=None):
     """Small mergeable summary of one sequence's labelling, for every score of :func:`combine_instance_parts`.
 
     Parameters
     ----------
-    labels_true, labels_pred, times, frame, groups
+    labels_true, labels_pred, times, window, groups
         As in :func:`~sklearn_radar.metrics.instance_scores`, for one
         sequence; with ``groups``, for several, and the part then equals the
         merge of their parts.
@@ -438,20 +438,20 @@ def instance_parts(labels_true, labels_pred, *, times, frame=0.5, groups=None):
     ------
     ValueError
         If the arrays are not 1-D of equal length, a time is not finite or
-        ``frame`` is not > 0.
+        ``window`` is not > 0.
     """
-    if frame is not None and not frame > 0:
-        raise ValueError(f"frame must be > 0 s or None, got {frame!r}")
-    return InstanceParts(**_segment_counts(labels_true, labels_pred, times=times, groups=groups, frame=frame))
+    if window is not None and not window > 0:
+        raise ValueError(f"window must be > 0 s or None, got {window!r}")
+    return InstanceParts(**_segment_counts(labels_true, labels_pred, times=times, groups=groups, window=window))
 
 
 def combine_instance_parts(parts):
     """Every score of :func:`~sklearn_radar.metrics.instance_scores` of the concatenated sequences, from their parts.
 
     Equal (up to rounding, about 1e-15) to
-    ``instance_scores(concat_true, concat_pred, times=concat_times, groups=concat_groups, frame=frame)``,
+    ``instance_scores(concat_true, concat_pred, times=concat_times, groups=concat_groups, window=window)``,
     each part's sequence a group of its own (equal labels in different parts
-    are different objects and clusters), with the ``frame`` the parts were
+    are different objects and clusters), with the ``window`` the parts were
     made with.  The sums and counts of :class:`InstanceParts` add up, and the
     scores are formed from the totals by the same code as
     :func:`~sklearn_radar.metrics.instance_scores`: means over objects
@@ -462,7 +462,7 @@ def combine_instance_parts(parts):
     ----------
     parts : iterable of InstanceParts
         One part per sequence (or per block of sequences), from
-        :func:`instance_parts`, all with the same ``frame``.  Empty: the
+        :func:`instance_parts`, all with the same ``window``.  Empty: the
         scores of no detection.
 
     Returns

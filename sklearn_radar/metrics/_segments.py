@@ -1,13 +1,13 @@
-"""Segments of a labelling per time frame, and the sums and counts every object-level score is a ratio of.
+"""Segments of a labelling per time window, and the sums and counts every object-level score is a ratio of.
 
 A *segment* is a set of detections.  A ground-truth segment is one annotated
-object's detections inside one time frame of one sequence; a predicted
+object's detections inside one time window of one sequence; a predicted
 segment is one cluster's.  Background (``labels_true == -1``) belongs to no
 ground-truth segment, noise (``labels_pred == -1``) to no predicted segment.
-Segments of different frames or sequences are never compared.
+Segments of different windows or sequences are never compared.
 
 :func:`_segment_counts` computes everything once, vectorised: the
-(sequence, frame, label) triples are encoded as integer segment ids, the
+(sequence, window, label) triples are encoded as integer segment ids, the
 intersections are the counts of the (ground-truth id, predicted id) pairs of
 the detections that belong to both kinds of segment, and
 ``IoU = |g ∩ p| / (|g| + |p| - |g ∩ p|)``.  No Python loop runs over segments.
@@ -56,26 +56,26 @@ def _ratio(numerator, denominator):
     return float(numerator / denominator) if denominator else 0.0
 
 
-def _frame_cells(n, times, groups, frame):
-    """Sequence and (sequence, frame) codes of n detections: ``(seq, n_seq, cell, n_cell)``.
+def _window_cells(n, times, groups, window):
+    """Sequence and (sequence, window) codes of n detections: ``(seq, n_seq, cell, n_cell)``.
 
-    Detection ``i`` of sequence ``s`` lies in frame ``floor((times[i] - min(times of s)) / frame)``; with
-    ``times`` or ``frame`` None every sequence is one frame.  ``times`` (s) and ``groups`` are 1-D arrays of
+    Detection ``i`` of sequence ``s`` lies in window ``floor((times[i] - min(times of s)) / window)``; with
+    ``times`` or ``window`` None every sequence is one window.  ``times`` (s) and ``groups`` are 1-D arrays of
     length n or None.
     """
     seq, n_seq = _codes(groups) if groups is not None else (np.zeros(n, dtype=np.int64), 1 if n else 0)
-    if times is None or frame is None:  # one frame per sequence
+    if times is None or window is None:  # one window per sequence
         return seq, n_seq, seq, n_seq
     if not np.isfinite(times).all():
         raise ValueError("times must be finite")
     start = np.full(n_seq, np.inf)
     np.minimum.at(start, seq, times)
-    frame_index, n_frame = _codes(np.floor((times - start[seq]) / frame))
-    cell, n_cell = _joint_codes(seq, n_seq, frame_index, n_frame)
+    window_index, n_window = _codes(np.floor((times - start[seq]) / window))
+    cell, n_cell = _joint_codes(seq, n_seq, window_index, n_window)
     return seq, n_seq, cell, n_cell
 
 
-def _segments(labels_true, labels_pred, *, times=None, groups=None, frame=0.5):
+def _segments(labels_true, labels_pred, *, times=None, groups=None, window=0.5):
     """The segments of both labellings and their overlaps, vectorised.
 
     Returns a Bunch: ``seq``, ``n_seq``, per detection; ``true_seg``, ``pred_seg`` (segment id per detection, -1
@@ -95,9 +95,9 @@ def _segments(labels_true, labels_pred, *, times=None, groups=None, frame=0.5):
             shapes = {key: value.shape for key, value in arrays.items()}
             raise ValueError(f"{', '.join(arrays)} must be 1-D of equal length, got shapes {shapes}")
 
-    seq, n_seq, cell, n_cell = _frame_cells(n, times, groups, frame)
+    seq, n_seq, cell, n_cell = _window_cells(n, times, groups, window)
 
-    # Segment ids: (sequence, frame, label) -> 0 .. n_segments - 1; -1 for background and noise.
+    # Segment ids: (sequence, window, label) -> 0 .. n_segments - 1; -1 for background and noise.
     is_object = labels_true != -1
     is_cluster = labels_pred != -1
     true_seg = np.full(n, -1, dtype=np.int64)
@@ -132,9 +132,9 @@ def _segments(labels_true, labels_pred, *, times=None, groups=None, frame=0.5):
     )
 
 
-def _segment_counts(labels_true, labels_pred, *, times=None, groups=None, frame=0.5):
+def _segment_counts(labels_true, labels_pred, *, times=None, groups=None, window=0.5):
     """The sums and counts of :data:`COUNT_KEYS` of a labelling, in one pass, as a dict."""
-    found = _segments(labels_true, labels_pred, times=times, groups=groups, frame=frame)
+    found = _segments(labels_true, labels_pred, times=times, groups=groups, window=window)
     labels_true, labels_pred = np.asarray(labels_true), np.asarray(labels_pred)
     is_object, is_cluster = labels_true != -1, labels_pred != -1
     seq, n_seq, n_true, n_pred = found.seq, found.n_seq, found.n_true, found.n_pred
@@ -149,7 +149,7 @@ def _segment_counts(labels_true, labels_pred, *, times=None, groups=None, frame=
     cover = np.zeros(n_true)
     np.maximum.at(cover, pair_true, iou)
 
-    # Background-only predicted segments (per frame) and clusters (per sequence).
+    # Background-only predicted segments (per window) and clusters (per sequence).
     pred_has_object = np.bincount(pair_pred, minlength=n_pred) > 0
     cluster, n_clusters = _joint_codes(seq[is_cluster], n_seq, *_codes(labels_pred[is_cluster]))
     cluster_has_object = np.bincount(cluster[is_object[is_cluster]], minlength=n_clusters) > 0
@@ -197,7 +197,7 @@ def _scores_from_counts(
     ----------
     tp, fp, fn : int
         Matched pairs, unmatched predicted and unmatched ground-truth
-        segments (per time frame).
+        segments (per time window).
     iou_sum : float
         Sum of the IoUs of the matched pairs, in [0, tp].
     cover_sum : float
@@ -235,11 +235,11 @@ def _scores_from_counts(
     )
 
 
-def _times_and_groups(X, frame):
+def _times_and_groups(X, window):
     """Times in s and sequences of the detection table X, for the scorers."""
     columns = getattr(X, "columns", ())
     groups = X["sequence"].to_numpy() if "sequence" in columns else None
-    if frame is None:
+    if window is None:
         return None, groups
     if "t" in columns:
         return X["t"].to_numpy(dtype=np.float64), groups
@@ -247,6 +247,6 @@ def _times_and_groups(X, frame):
         stamps = X["timestamp"].to_numpy()
         return (stamps - stamps.min()) * 1e-6 if len(stamps) else stamps.astype(np.float64), groups
     raise ValueError(
-        "per-frame instance scores need the time of each detection: X must be a DataFrame with a 't' (s) or "
-        "'timestamp' (µs) column, or use frame=None"
+        "per-window instance scores need the time of each detection: X must be a DataFrame with a 't' (s) or "
+        "'timestamp' (µs) column, or use window=None"
     )

@@ -4,22 +4,22 @@ The metrics of a classified segmentation, one road-user class per instance
 (:mod:`sklearn_radar.classification`: car 0, large vehicle 1, two-wheeler 2,
 pedestrian 3, pedestrian group 4, background -1, ignored -2).
 
-*Segments.*  Within each sequence (``groups``) time is cut into frames of
-``frame`` seconds, starting at the sequence's first detection, as in
+*Segments.*  Within each sequence (``groups``) time is cut into windows of
+``window`` seconds, starting at the sequence's first detection, as in
 :func:`~sklearn_radar.metrics.panoptic_quality`.  A ground-truth segment is
-one ground-truth instance (``instances_true >= 0``) restricted to a frame;
+one ground-truth instance (``instances_true >= 0``) restricted to a window;
 its class is the majority of ``classes_true`` over its rows, ties going to
 the smallest code.  A predicted segment is one predicted instance
-(``instances_pred >= 0``) restricted to a frame; its class is the majority
+(``instances_pred >= 0``) restricted to a window; its class is the majority
 of ``classes_pred`` over its rows, ties going to the class with the highest
 summed ``confidence`` (when given), then to the smallest code.  A segment
 whose class is negative (background, ignored) is no road user and takes no
 part in the instance metrics.  Detections whose ``classes_true`` is
-IGNORED (-2) are left out of every metric after the frames are laid out.
-Segments of different frames or sequences are never compared.
+IGNORED (-2) are left out of every metric after the windows are laid out.
+Segments of different windows or sequences are never compared.
 
 Everything is computed once and vectorised (:func:`_semantic_layout`): the
-segment ids are integer codes of (frame, instance), the intersections the
+segment ids are integer codes of (window, instance), the intersections the
 counts of (ground-truth segment, predicted segment) pairs, and a loop runs
 only over the classes.
 """
@@ -35,7 +35,7 @@ from sklearn.utils import Bunch
 from sklearn.utils._param_validation import Interval, StrOptions, validate_params
 
 from .._schema import instance_target
-from ._segments import _codes, _frame_cells, _joint_codes, _panoptic, _times_and_groups
+from ._segments import _codes, _joint_codes, _panoptic, _times_and_groups, _window_cells
 
 __all__ = [
     "class_panoptic_quality",
@@ -54,7 +54,7 @@ _RECALL_POINTS = np.linspace(0.0, 1.0, 101)
 #: Metrics of :func:`make_semantic_scorer`, keys of :func:`semantic_scores`.
 _SCORER_METRICS = ("pq", "sq", "rq", "map", "macro_f1", "mcov")
 
-_FRAME = [Interval(Real, 0, None, closed="neither"), None]
+_WINDOW = [Interval(Real, 0, None, closed="neither"), None]
 _SEGMENT_CONSTRAINTS = {
     "classes_true": ["array-like"],
     "instances_true": ["array-like"],
@@ -62,7 +62,7 @@ _SEGMENT_CONSTRAINTS = {
     "instances_pred": ["array-like"],
     "times": ["array-like", None],
     "groups": ["array-like", None],
-    "frame": _FRAME,
+    "window": _WINDOW,
 }
 
 
@@ -156,7 +156,7 @@ def _road_user_segments(cell, n_cell, instances, classes, weights):
     return segment, segment_class[road_user]
 
 
-def _semantic_layout(arrays, frame):
+def _semantic_layout(arrays, window):
     """Every segment and intersection of checked inputs (:func:`_checked`), as a Bunch.
 
     Keys: ``true_class`` and ``pred_class`` (class of each segment),
@@ -165,8 +165,8 @@ def _semantic_layout(arrays, frame):
     overlapping pairs of segments, their intersection and union sizes).
     """
     n = arrays["classes_true"].shape[0]
-    _, _, cell, n_cell = _frame_cells(n, arrays["times"], arrays["groups"], frame)
-    kept = np.flatnonzero(arrays["classes_true"] != _IGNORED)  # after the frames are laid out
+    _, _, cell, n_cell = _window_cells(n, arrays["times"], arrays["groups"], window)
+    kept = np.flatnonzero(arrays["classes_true"] != _IGNORED)  # after the windows are laid out
     confidence = arrays["confidence"]
     if confidence is not None:  # in order of confidence: every sum of confidences is then the same float
         kept = kept[np.argsort(confidence[kept], kind="stable")]
@@ -296,13 +296,13 @@ def _per_class_f1(classes_true, classes_pred, include_background):
 # ---------------------------------------------------------------------------------------------------------------
 @validate_params({**_SEGMENT_CONSTRAINTS, "confidence": ["array-like", None]}, prefer_skip_nested_validation=True)
 def class_panoptic_quality(
-    classes_true, instances_true, classes_pred, instances_pred, *, times, groups=None, frame=0.5, confidence=None
+    classes_true, instances_true, classes_pred, instances_pred, *, times, groups=None, window=0.5, confidence=None
 ):
-    """Class-aware panoptic quality (Kirillov et al. 2019) per time frame: per road-user class, and their mean.
+    """Class-aware panoptic quality (Kirillov et al. 2019) per time window: per road-user class, and their mean.
 
     The segments are those of the module (:mod:`sklearn_radar.metrics._semantic`):
-    ground-truth and predicted instances restricted to each frame of
-    ``frame`` seconds of each sequence, each with the majority class of its
+    ground-truth and predicted instances restricted to each window of
+    ``window`` seconds of each sequence, each with the majority class of its
     rows.  For each class ``c``:
 
     * a ground-truth segment ``g`` and a predicted segment ``p`` of class
@@ -334,13 +334,13 @@ def class_panoptic_quality(
     instances_pred : array-like of int, shape (n_detections,)
         Predicted instance of each detection, -1 for none (noise).
     times : array-like of shape (n_detections,) or None
-        Time of each detection in s.  None, or ``frame=None``: every
-        sequence is one frame.
+        Time of each detection in s.  None, or ``window=None``: every
+        sequence is one window.
     groups : array-like of shape (n_detections,), default=None
         Sequence of each detection; None: one sequence.
-    frame : float or None, default=0.5
-        Length of a time frame in s, > 0 (Scheiner et al. 2021: 500 ms);
-        None: one frame per sequence.
+    window : float or None, default=0.5
+        Length of a time window in s, > 0 (Scheiner et al. 2021: 500 ms);
+        None: one window per sequence.
     confidence : array-like of float, shape (n_detections,), default=None
         Confidence of each detection's predicted class, used only to break a
         tie of the majority vote of a predicted segment (highest sum wins;
@@ -379,7 +379,7 @@ def class_panoptic_quality(
     (0.666667, 1)
     """
     arrays = _checked(classes_true, instances_true, classes_pred, instances_pred, confidence, times, groups)
-    return _panoptic_of_layout(_semantic_layout(arrays, frame))
+    return _panoptic_of_layout(_semantic_layout(arrays, window))
 
 
 @validate_params(
@@ -395,10 +395,10 @@ def mean_average_precision(
     *,
     times,
     groups=None,
-    frame=0.5,
+    window=0.5,
     iou_threshold=0.5,
 ):
-    """Mean average precision of the predicted instances per time frame, ranked by confidence (mAP@0.5).
+    """Mean average precision of the predicted instances per time window, ranked by confidence (mAP@0.5).
 
     The segments are those of :func:`class_panoptic_quality`.  For each
     class ``c`` present in the truth, its predicted segments are ranked by
@@ -435,11 +435,11 @@ def mean_average_precision(
         ``confidence`` of ``predict_instances``), the ranking score; it also
         breaks ties of the majority vote, as in :func:`class_panoptic_quality`.
     times : array-like of shape (n_detections,) or None
-        Time of each detection in s; None: every sequence is one frame.
+        Time of each detection in s; None: every sequence is one window.
     groups : array-like of shape (n_detections,), default=None
         Sequence of each detection; None: one sequence.
-    frame : float or None, default=0.5
-        Length of a time frame in s, > 0; None: one frame per sequence.
+    window : float or None, default=0.5
+        Length of a time window in s, > 0; None: one window per sequence.
     iou_threshold : float, default=0.5
         IoU a true positive must exceed, in [0.5, 1).
 
@@ -478,7 +478,7 @@ def mean_average_precision(
     0.50495
     """
     arrays = _checked(classes_true, instances_true, classes_pred, instances_pred, confidence, times, groups)
-    return _average_precision_of_layout(_semantic_layout(arrays, frame), iou_threshold)
+    return _average_precision_of_layout(_semantic_layout(arrays, window), iou_threshold)
 
 
 @validate_params(
@@ -534,7 +534,7 @@ def pointwise_macro_f1(classes_true, classes_pred, *, include_background=True):
 
 @validate_params({**_SEGMENT_CONSTRAINTS, "confidence": ["array-like"]}, prefer_skip_nested_validation=True)
 def semantic_scores(
-    classes_true, instances_true, classes_pred, instances_pred, confidence, *, times, groups=None, frame=0.5
+    classes_true, instances_true, classes_pred, instances_pred, confidence, *, times, groups=None, window=0.5
 ):
     """Every semantic instance-segmentation metric at once, from one segmentation of the detections.
 
@@ -555,11 +555,11 @@ def semantic_scores(
     classes_true, instances_true, classes_pred, instances_pred, confidence
         As in :func:`mean_average_precision`.
     times : array-like of shape (n_detections,) or None
-        Time of each detection in s; None: every sequence is one frame.
+        Time of each detection in s; None: every sequence is one window.
     groups : array-like of shape (n_detections,), default=None
         Sequence of each detection; None: one sequence.
-    frame : float or None, default=0.5
-        Length of a time frame in s, > 0; None: one frame per sequence.
+    window : float or None, default=0.5
+        Length of a time window in s, > 0; None: one window per sequence.
 
     Returns
     -------
@@ -587,7 +587,7 @@ def semantic_scores(
     (1.0, 1.0, 1.0, 1.0)
     """
     arrays = _checked(classes_true, instances_true, classes_pred, instances_pred, confidence, times, groups)
-    layout = _semantic_layout(arrays, frame)
+    layout = _semantic_layout(arrays, window)
     panoptic = _panoptic_of_layout(layout)
     precision = _average_precision_of_layout(layout, 0.5)
     kept = arrays["classes_true"] != _IGNORED
@@ -618,7 +618,7 @@ def semantic_scores(
 # ---------------------------------------------------------------------------------------------------------------
 def _true_instances(X, instance_column, groups, classes):
     """Ground-truth instance of each detection of X (-1 none); a set-up mistake raises a ValueError."""
-    if instance_column is None:  # one instance per road-user class (and frame: the segments split it)
+    if instance_column is None:  # one instance per road-user class (and window: the segments split it)
         return np.where(classes >= 0, classes, -1)
     if not isinstance(X, pd.DataFrame) or instance_column not in X.columns:
         raise ValueError(
@@ -638,9 +638,9 @@ def _predicted_instances(estimator, X):
     return predict_instances(estimator, X)
 
 
-def _semantic_score(estimator, X, y, metric, frame, instance_column):
+def _semantic_score(estimator, X, y, metric, window, instance_column):
     """The scorer's body: predict the instances of X, then one score; 0.0 on any failure."""
-    times, groups = _times_and_groups(X, frame)  # set-up mistakes raise before any prediction
+    times, groups = _times_and_groups(X, window)  # set-up mistakes raise before any prediction
     classes_true = _integer_codes(y, "y")
     instances_true = _true_instances(X, instance_column, groups, classes_true)
     try:
@@ -652,7 +652,7 @@ def _semantic_score(estimator, X, y, metric, frame, instance_column):
             score = pointwise_macro_f1(classes_true, predicted[0])
         else:
             arrays = _checked(classes_true, instances_true, *predicted, times, groups)
-            score = _layout_score(_semantic_layout(arrays, frame), metric)
+            score = _layout_score(_semantic_layout(arrays, window), metric)
     except Exception:  # a search must go on; a failing prediction scores the worst value
         return 0.0
     return float(score) if np.isfinite(score) else 0.0
@@ -670,26 +670,26 @@ def _layout_score(layout, metric):
 class _SemanticScorer:
     """A scorer ``(estimator, X, y) -> float`` of :func:`make_semantic_scorer` (a class, so that it pickles)."""
 
-    def __init__(self, metric, frame, instance_column):
+    def __init__(self, metric, window, instance_column):
         self.metric = metric
-        self.frame = frame
+        self.window = window
         self.instance_column = instance_column
 
     def __call__(self, estimator, X, y):
-        return _semantic_score(estimator, X, y, self.metric, self.frame, self.instance_column)
+        return _semantic_score(estimator, X, y, self.metric, self.window, self.instance_column)
 
     def __repr__(self):
         return (
-            f"make_semantic_scorer(metric={self.metric!r}, frame={self.frame!r}, "
+            f"make_semantic_scorer(metric={self.metric!r}, window={self.window!r}, "
             f"instance_column={self.instance_column!r})"
         )
 
 
 @validate_params(
-    {"metric": [StrOptions(set(_SCORER_METRICS))], "frame": _FRAME, "instance_column": [str, None]},
+    {"metric": [StrOptions(set(_SCORER_METRICS))], "window": _WINDOW, "instance_column": [str, None]},
     prefer_skip_nested_validation=True,
 )
-def make_semantic_scorer(metric="pq", *, frame=0.5, instance_column="track_id"):
+def make_semantic_scorer(metric="pq", *, window=0.5, instance_column="track_id"):
     """A scorer ``(estimator, X, y) -> float`` of one semantic metric, for searches and ``cross_val_score``.
 
     The estimator is fitted (by the search) and scored with its
@@ -721,12 +721,12 @@ def make_semantic_scorer(metric="pq", *, frame=0.5, instance_column="track_id"):
         ``"rq"`` (class means of :func:`class_panoptic_quality`), ``"map"``
         (:func:`mean_average_precision` at IoU 0.5), ``"macro_f1"``
         (:func:`pointwise_macro_f1`, background included) or ``"mcov"``.
-    frame : float or None, default=0.5
-        Length of a time frame in s, > 0; None: one frame per sequence (X
+    window : float or None, default=0.5
+        Length of a time window in s, > 0; None: one window per sequence (X
         then needs no time column).
     instance_column : str or None, default="track_id"
         Column of X with the ground-truth instance of each detection.  None:
-        the detections of one road-user class in one frame of one sequence
+        the detections of one road-user class in one window of one sequence
         are one instance (the rule of
         :class:`~sklearn_radar.classification.ClusterClassifier` with
         ``instance_column=None``).
@@ -744,6 +744,6 @@ def make_semantic_scorer(metric="pq", *, frame=0.5, instance_column="track_id"):
     --------
     >>> from sklearn_radar.metrics import make_semantic_scorer
     >>> make_semantic_scorer("map")
-    make_semantic_scorer(metric='map', frame=0.5, instance_column='track_id')
+    make_semantic_scorer(metric='map', window=0.5, instance_column='track_id')
     """
-    return _SemanticScorer(metric, frame, instance_column)
+    return _SemanticScorer(metric, window, instance_column)

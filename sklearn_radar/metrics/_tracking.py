@@ -1,11 +1,11 @@
-"""Tracking quality of object ids over time frames: ID switches, MOTA (CLEAR MOT) and IDF1 (identity measures).
+"""Tracking quality of object ids over time windows: ID switches, MOTA (CLEAR MOT) and IDF1 (identity measures).
 
-Within each sequence time is cut into frames (as for the panoptic quality).
-In a frame, a ground-truth object is the set of its detections (a moving
+Within each sequence time is cut into windows (as for the panoptic quality).
+In a window, a ground-truth object is the set of its detections (a moving
 road user, ``labels_true >= 0``) and a hypothesis the set of detections
 carrying one predicted id; they match when their IoU exceeds 0.5, so that
 each has at most one partner and no assignment is needed.  Then, summed
-over frames (Bernardin and Stiefelhagen 2008; Ristani et al. 2016):
+over windows (Bernardin and Stiefelhagen 2008; Ristani et al. 2016):
 
 * ``misses``: ground-truth objects without a partner; ``false_positives``:
   hypotheses without one;
@@ -14,7 +14,7 @@ over frames (Bernardin and Stiefelhagen 2008; Ristani et al. 2016):
 * ``MOTA = 1 - (misses + false_positives + id_switches) / n_objects``;
 * ``IDF1 = 2 IDTP / (2 IDTP + IDFP + IDFN)`` from the one-to-one
   assignment of whole ground-truth tracks to whole predicted tracks that
-  maximises the frames in which they match (IDTP).
+  maximises the windows in which they match (IDTP).
 """
 
 from __future__ import annotations
@@ -25,19 +25,19 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 from sklearn.utils._param_validation import Interval, validate_params
 
-#: A ground-truth object and a hypothesis match in a frame when their IoU exceeds this.
+#: A ground-truth object and a hypothesis match in a window when their IoU exceeds this.
 MATCH_IOU = 0.5
 
 
-def _frame_cells(times, groups, frame):
-    """Code of each detection's (sequence, frame), ordered by sequence then frame; and the sequence codes."""
+def _window_cells(times, groups, window):
+    """Code of each detection's (sequence, window), ordered by sequence then window; and the sequence codes."""
     _, sequence = np.unique(groups, return_inverse=True)
     sequence = sequence.ravel()
-    if frame is None:
+    if window is None:
         return sequence, sequence
     start = np.full(sequence.max() + 1, np.inf)
     np.minimum.at(start, sequence, times)
-    index = np.floor((times - start[sequence]) / frame).astype(np.int64)
+    index = np.floor((times - start[sequence]) / window).astype(np.int64)
     _, cell = np.unique(np.c_[sequence, index], axis=0, return_inverse=True)
     return cell.ravel(), sequence
 
@@ -62,12 +62,12 @@ def _segments(cell, sequence, labels):
         "labels_pred": ["array-like"],
         "times": ["array-like"],
         "groups": ["array-like", None],
-        "frame": [Interval(Real, 0, None, closed="neither"), None],
+        "window": [Interval(Real, 0, None, closed="neither"), None],
     },
     prefer_skip_nested_validation=True,
 )
-def tracking_scores(labels_true, labels_pred, *, times, groups=None, frame=0.5):
-    """ID switches, MOTA and IDF1 of predicted object ids against ground-truth objects, per time frame.
+def tracking_scores(labels_true, labels_pred, *, times, groups=None, window=0.5):
+    """ID switches, MOTA and IDF1 of predicted object ids against ground-truth objects, per time window.
 
     Read more in the :ref:`User Guide <user-guide-online>`.
 
@@ -85,17 +85,17 @@ def tracking_scores(labels_true, labels_pred, *, times, groups=None, frame=0.5):
     groups : array-like of shape (n_detections,), default=None
         Sequence of each detection; ids of different sequences are
         different tracks.  None: one sequence.
-    frame : float or None, default=0.5
-        Frame length, s; detection ``i`` of sequence ``s`` lies in frame
-        ``floor((times[i] - min(times of s)) / frame)``.  None: one frame
+    window : float or None, default=0.5
+        Window length, s; detection ``i`` of sequence ``s`` lies in window
+        ``floor((times[i] - min(times of s)) / window)``.  None: one window
         per sequence.
 
     Returns
     -------
     scores : dict
         ``mota``, ``idf1``, ``id_switches``, ``misses``, ``false_positives``,
-        ``n_objects`` (ground-truth objects summed over frames),
-        ``n_matches``, ``idtp``, ``idfp``, ``idfn`` and ``n_frames``.
+        ``n_objects`` (ground-truth objects summed over windows),
+        ``n_matches``, ``idtp``, ``idfp``, ``idfn`` and ``n_windows``.
         ``mota`` and ``idf1`` are NaN without any ground-truth object (and
         without hypotheses for ``idf1``).
 
@@ -103,7 +103,7 @@ def tracking_scores(labels_true, labels_pred, *, times, groups=None, frame=0.5):
     --------
     >>> from sklearn_radar.metrics import tracking_scores
     >>> truth = [0, 0, 0, 0]
-    >>> pred = [5, 5, 7, 7]  # the object changes id between the two frames
+    >>> pred = [5, 5, 7, 7]  # the object changes id between the two windows
     >>> scores = tracking_scores(truth, pred, times=[0.0, 0.1, 0.6, 0.7])
     >>> scores["id_switches"], scores["mota"], scores["idf1"]
     (1, 0.5, 0.5)
@@ -121,7 +121,7 @@ def tracking_scores(labels_true, labels_pred, *, times, groups=None, frame=0.5):
         raise ValueError("times must be finite")
     if len(times) == 0:
         return _scores(0, 0, 0, 0, 0, 0, 0, 0)
-    cell, sequence = _frame_cells(times, groups, frame)
+    cell, sequence = _window_cells(times, groups, window)
     g_rows, g_segment, g_cell, g_track = _segments(cell, sequence, labels_true.astype(np.int64))
     p_rows, p_segment, p_cell, p_track = _segments(cell, sequence, labels_pred.astype(np.int64))
     n_g, n_p = len(g_cell), len(p_cell)
@@ -136,8 +136,8 @@ def tracking_scores(labels_true, labels_pred, *, times, groups=None, frame=0.5):
     matched = pair[iou > MATCH_IOU]
     switches = _id_switches(g_cell[matched[:, 0]], g_track[matched[:, 0]], p_track[matched[:, 1]])
     idtp = _identity_true_positives(g_track[matched[:, 0]], p_track[matched[:, 1]])
-    n_frames = len(np.unique(cell))
-    return _scores(n_g, n_p, len(matched), switches, idtp, n_g - idtp, n_p - idtp, n_frames)
+    n_windows = len(np.unique(cell))
+    return _scores(n_g, n_p, len(matched), switches, idtp, n_g - idtp, n_p - idtp, n_windows)
 
 
 def _id_switches(cell, g_track, p_track):
@@ -148,7 +148,7 @@ def _id_switches(cell, g_track, p_track):
 
 
 def _identity_true_positives(g_track, p_track):
-    """IDTP: the most matched frames a one-to-one assignment of ground-truth to predicted tracks keeps."""
+    """IDTP: the most matched windows a one-to-one assignment of ground-truth to predicted tracks keeps."""
     if len(g_track) == 0:
         return 0
     pair, count = np.unique(np.c_[g_track, p_track], axis=0, return_counts=True)
@@ -160,7 +160,7 @@ def _identity_true_positives(g_track, p_track):
     return int(weight[rows, cols].sum())
 
 
-def _scores(n_objects, n_hypotheses, n_matches, switches, idtp, idfn, idfp, n_frames):
+def _scores(n_objects, n_hypotheses, n_matches, switches, idtp, idfn, idfp, n_windows):
     misses, false_positives = n_objects - n_matches, n_hypotheses - n_matches
     mota = 1.0 - (misses + false_positives + switches) / n_objects if n_objects else np.nan
     denominator = 2 * idtp + idfp + idfn
@@ -175,5 +175,5 @@ def _scores(n_objects, n_hypotheses, n_matches, switches, idtp, idfn, idfp, n_fr
         "idtp": int(idtp),
         "idfp": int(idfp),
         "idfn": int(idfn),
-        "n_frames": int(n_frames),
+        "n_windows": int(n_windows),
     }

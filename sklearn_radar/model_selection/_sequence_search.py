@@ -467,7 +467,7 @@ class SequenceSearchCV(MetaEstimatorMixin, BaseEstimator):
     scoring : {"v1", "pq"}, default="v1"
         ``"v1"``: the radar V-measure
         (:func:`~sklearn_radar.metrics.radar_v_measure_scorer`, the paper's
-        Eq. 7); ``"pq"``: the panoptic quality per 0.5 s frame
+        Eq. 7); ``"pq"``: the panoptic quality per 0.5 s time window
         (:func:`~sklearn_radar.metrics.panoptic_quality_scorer`), which needs
         a time column (``t`` in s, or ``timestamp`` in µs) in what the
         clusterer reads.

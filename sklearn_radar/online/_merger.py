@@ -274,7 +274,7 @@ class MergeComponents:
     min_samples : int
         N_min of the second DBSCAN, counted in clusters (itself included).
     eps_t2 : float
-        Stage 2's time frame, s.
+        Stage 2's time window, s.
     """
 
     def __init__(self, min_samples, eps_t2):

@@ -130,7 +130,7 @@ class ObjectList:
 
         Returns
         -------
-        frame : DataFrame
+        table : DataFrame
             One row per object, a column per field, in the order above.
         """
         return pd.DataFrame({field.name: getattr(self, field.name) for field in fields(self)})

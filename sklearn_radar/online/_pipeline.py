@@ -104,7 +104,7 @@ class OnlinePipeline:
     The count is what is known at the scan (object ids, so stage-1
     meetings included): a stage-2 merge decided later adds the merged
     cluster's past detections only from then on.  The causal pipeline
-    (``merge__causal=True``) applies the same rule to its final clusters:
+    (``merge__causal_min_size=True``) applies the same rule to its final clusters:
     the stage-1 labels resolved through the stage-2 joins, with that rule,
     equal its labels.
 
@@ -208,7 +208,7 @@ class OnlinePipeline:
         return self._min_size
 
     def causal_pipeline(self):
-        """The offline pipeline whose labels this stream gives: ``causal=True`` on the filter, stage 1 and stage 2.
+        """The offline pipeline whose labels this stream gives: every stage causal (stage 2: ``causal_min_size=True``).
 
         Returns
         -------
@@ -221,7 +221,9 @@ class OnlinePipeline:
                 causal.set_params(**{f"{name}__causal": True})
             elif isinstance(step, ClusterMerger):
                 stage1 = clone(step.stage1) if step.stage1 is not None else RadarDBSCAN()
-                causal.set_params(**{f"{name}__stage1": stage1.set_params(causal=True), f"{name}__causal": True})
+                causal.set_params(
+                    **{f"{name}__stage1": stage1.set_params(causal=True), f"{name}__causal_min_size": True}
+                )
         return causal
 
     def update(self, scan, objects=True):

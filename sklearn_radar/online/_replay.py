@@ -27,7 +27,7 @@ def replay(online, data, objects=False):
     n = len(data)
     labels, reported, keep = np.full(n, -1), np.full(n, -1), np.zeros(n, dtype=bool)
     confirmed = np.zeros(n, dtype=bool)
-    latency, cpu, aliases, frames = [], [], [], []
+    latency, cpu, aliases, scan_objects = [], [], [], []
     for rows in scan_order(data):
         scan = {name: values[rows] for name, values in columns.items()}
         start, start_cpu = time.perf_counter(), time.thread_time()
@@ -38,14 +38,14 @@ def replay(online, data, objects=False):
         confirmed[rows] = result.confirmed
         aliases += result.aliases
         if objects and len(result.objects):
-            frame = result.objects.to_frame()
-            frame.insert(0, "timestamp", int(scan["timestamp"][0]))
-            frames.append(frame)
+            listed = result.objects.to_frame()
+            listed.insert(0, "timestamp", int(scan["timestamp"][0]))
+            scan_objects.append(listed)
     aliases += online.finish().aliases
     survivor = _survivors(aliases)
     final = np.array([survivor(i) if i >= 0 else -1 for i in reported.tolist()], dtype=np.int64)
     final = drop_small_clusters(final, online.min_cluster_size, data["timestamp"].to_numpy())
-    table = pd.concat(frames, ignore_index=True) if frames else None
+    table = pd.concat(scan_objects, ignore_index=True) if scan_objects else None
     return {
         "labels": labels,
         "reported": reported,

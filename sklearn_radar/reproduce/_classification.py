@@ -24,8 +24,8 @@ from ._constants import BEST_STAGE1, CLASSIFIED
 from ._records import JsonRecord, record
 from ._tracking import run_setting_pipeline, tracked_setting
 
-#: Frame of the semantic scores and of the classifier's segments, s (as the object-level scores').
-CLASSIFICATION_FRAME_S = 0.5
+#: Time window of the semantic scores and of the classifier's segments, s (as the object-level scores').
+CLASSIFICATION_WINDOW_S = 0.5
 
 #: Name of the point-wise classifier's row.
 POINT_WISE = "point-wise (no clustering)"
@@ -47,12 +47,12 @@ _NOT_INPUT = ("uuid", "label_id")
 
 @record
 class SemanticScores(JsonRecord):
-    """Semantic instance-segmentation scores (:func:`~sklearn_radar.metrics.semantic_scores`), per 0.5 s frame.
+    """Semantic instance-segmentation scores (:func:`~sklearn_radar.metrics.semantic_scores`), per 0.5 s time window.
 
     Attributes
     ----------
-    frame_s : float
-        Frame length, s.
+    window_s : float
+        Window length, s.
     pq, sq, rq : float
         Class-aware panoptic quality and its factors, the mean over the classes.
     map : float
@@ -65,7 +65,7 @@ class SemanticScores(JsonRecord):
         By class name: ``{"pq", "ap", "f1"}``.
     """
 
-    frame_s: float
+    window_s: float
     pq: float
     sq: float
     rq: float
@@ -93,7 +93,7 @@ class ClassifiedSetting(JsonRecord):
         ``pq``, ``map``, ``macro_f1`` and ``mcov`` of each test sequence, in order (the paired comparisons'
         data).
     background_share_before : float or None
-        Share of the clustering's segments (per frame) with no detection of an annotated road user; None for the
+        Share of the clustering's segments (per time window) with no detection of an annotated road user; None for the
         point-wise classifier, which has no clusters.
     background_share_after : float
         The same share among the segments the classifier keeps as road users.
@@ -190,7 +190,7 @@ def classifier_model(pipeline):
     steps = [(name, clone(step)) for name, step in pipeline.steps[:-1]]
     clusterer = clone(pipeline.steps[-1][1])
     model = clone(pipeline)
-    model.steps = [*steps, ("classify", ClusterClassifier(clusterer, frame_length=CLASSIFICATION_FRAME_S))]
+    model.steps = [*steps, ("classify", ClusterClassifier(clusterer, frame_length=CLASSIFICATION_WINDOW_S))]
     return model
 
 
@@ -323,7 +323,7 @@ def _scores(arrays, groups):
         arrays["confidence"],
         times=arrays["times"],
         groups=groups,
-        frame=CLASSIFICATION_FRAME_S,
+        window=CLASSIFICATION_WINDOW_S,
     )
     per_class = {
         ROAD_USER_CLASSES[int(code)]: {k: float(v) for k, v in figures.items()}
@@ -331,18 +331,18 @@ def _scores(arrays, groups):
         if int(code) in ROAD_USER_CLASSES
     }
     return SemanticScores(
-        frame_s=CLASSIFICATION_FRAME_S,
+        window_s=CLASSIFICATION_WINDOW_S,
         **{k: float(found[k]) for k in ("pq", "sq", "rq", "map", "macro_f1", "mcov")},
         per_class=per_class,
     )
 
 
 def _background_share(arrays, labels, groups):
-    """Share of the per-frame segments of ``labels`` with no detection of a road user of the pre-clustered target.
+    """Share of the per-window segments of ``labels`` with no detection of a road user of the pre-clustered target.
 
     The target of the object-level scores (``instance_test``): the share of a clustering is the same figure there.
     """
     share = background_share(
-        arrays["target"], labels, times=arrays["times"], groups=groups, frame=CLASSIFICATION_FRAME_S
+        arrays["target"], labels, times=arrays["times"], groups=groups, window=CLASSIFICATION_WINDOW_S
     )
     return float(share.background_segment_share)

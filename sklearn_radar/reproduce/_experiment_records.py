@@ -40,21 +40,21 @@ class InstanceScores(JsonRecord):
 
     Attributes
     ----------
-    frame_s : float
-        Length of the evaluation frames, s.
+    window_s : float
+        Length of the evaluation's time windows, s.
     pq, sq, rq : float
         Panoptic, segmentation and recognition quality (RQ is the F1 score), 0-1.
     precision, recall : float
-        Of the per-frame segment matches (IoU > 0.5), 0-1.
+        Of the per-window segment matches (IoU > 0.5), 0-1.
     mcov, mwcov : float
         Mean and size-weighted mean coverage of the ground-truth segments, 0-1.
     background_segment_share : float
-        Share of the predicted per-frame segments without any object detection, 0-1.
+        Share of the predicted per-window segments without any object detection, 0-1.
     background_cluster_share : float
         Share of the clusters without any object detection, 0-1.
     """
 
-    frame_s: float
+    window_s: float
     pq: float
     sq: float
     rq: float

@@ -64,7 +64,7 @@ class RunMeta(JsonRecord):
         Whether the run was interrupted.
     objective : {"v1", "pq"}, default="v1"
         What the searches maximised and ``params.json``'s ``best`` ranks by (its cross-validated training
-        score): the paper's radar V-measure, or the panoptic quality of moving road users per 0.5 s frame.
+        score): the paper's radar V-measure, or the panoptic quality of moving road users per 0.5 s time window.
     repeats : int, default=1
         Searches per tuned experiment and baseline, with the seeds ``seed``, ``seed + 1``, ... on the same
         split (the key is absent for 1).

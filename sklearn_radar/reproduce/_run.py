@@ -225,7 +225,7 @@ def reproduce(
         What every search maximises on the training half, and whose
         cross-validated training score ranks ``params.json``'s ``best`` (a
         test score never does): ``"v1"`` the paper's radar V-measure,
-        ``"pq"`` the panoptic quality of moving road users per 0.5 s frame
+        ``"pq"`` the panoptic quality of moving road users per 0.5 s time window
         (:func:`~sklearn_radar.metrics.panoptic_quality`).  Both are
         reported for every experiment whatever the choice.
     difficulty : {"easy", "realistic", "radarscenes"}, default="realistic"

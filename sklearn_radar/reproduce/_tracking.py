@@ -2,7 +2,7 @@
 
 Each setting of :data:`~._constants.TRACKED` (the run's tuned one where its experiment ran, the paper's otherwise)
 is replayed scan by scan through :class:`~sklearn_radar.online.OnlinePipeline` on every test sequence, where it
-lives, and :func:`~sklearn_radar.metrics.tracking_scores` scores the ids per 0.5 s frame (:ref:`online-speed`).
+lives, and :func:`~sklearn_radar.metrics.tracking_scores` scores the ids per 0.5 s time window (:ref:`online-speed`).
 """
 
 from __future__ import annotations
@@ -19,11 +19,11 @@ from ..online import OnlinePipeline
 from ..online._replay import replay
 from ._records import JsonRecord, record
 
-#: Frame of the tracking scores, s (as the object-level scores').
-TRACKING_FRAME_S = 0.5
+#: Time window of the tracking scores, s (as the object-level scores').
+TRACKING_WINDOW_S = 0.5
 
 #: The counts of :func:`tracking_scores` that add up over sequences.
-_COUNTS = ("id_switches", "misses", "false_positives", "n_objects", "n_matches", "idtp", "idfp", "idfn", "n_frames")
+_COUNTS = ("id_switches", "misses", "false_positives", "n_objects", "n_matches", "idtp", "idfp", "idfn", "n_windows")
 
 
 @record
@@ -35,14 +35,14 @@ class TrackingScores(JsonRecord):
 
     Attributes
     ----------
-    frame_s : float
-        Frame length, s.
+    window_s : float
+        Window length, s.
     mota, idf1 : float
         From the summed counts; NaN without ground-truth objects.
-    id_switches, misses, false_positives, n_objects, n_matches, idtp, idfp, idfn, n_frames : int
+    id_switches, misses, false_positives, n_objects, n_matches, idtp, idfp, idfn, n_windows : int
     """
 
-    frame_s: float
+    window_s: float
     mota: float
     idf1: float
     id_switches: int
@@ -53,7 +53,7 @@ class TrackingScores(JsonRecord):
     idtp: int
     idfp: int
     idfn: int
-    n_frames: int
+    n_windows: int
 
 
 @record
@@ -127,7 +127,7 @@ def track_sequence(sequence, pipeline):
     truth = np.asarray(sequence.scenes.target)
     found = {"n_scans": len(replayed["latency"]), "n_aliases": len(replayed["aliases"])}
     for name, ids in (("reported", replayed["reported"]), ("final", replayed["object_ids"])):
-        scores = tracking_scores(truth, ids, times=times, frame=TRACKING_FRAME_S)
+        scores = tracking_scores(truth, ids, times=times, window=TRACKING_WINDOW_S)
         found[name] = {count: scores[count] for count in _COUNTS}
     return found
 
@@ -146,9 +146,9 @@ def combine_tracking(number, params, source, parts):
             total["idtp"],
             total["idfn"],
             total["idfp"],
-            total["n_frames"],
+            total["n_windows"],
         )
-        return TrackingScores(frame_s=TRACKING_FRAME_S, **{name: figures[name] for name in ("mota", "idf1")}, **total)
+        return TrackingScores(window_s=TRACKING_WINDOW_S, **{name: figures[name] for name in ("mota", "idf1")}, **total)
 
     return TrackingResult(
         number=number,

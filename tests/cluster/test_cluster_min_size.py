@@ -1,4 +1,4 @@
-"""ClusterMerger's min_cluster_size: whole merged clusters offline, a confirmation rule with causal=True."""
+"""ClusterMerger's min_cluster_size: whole merged clusters offline, a confirmation rule with causal_min_size=True."""
 
 import numpy as np
 import pytest
@@ -25,7 +25,9 @@ def assert_same_partition(a, b):
 
 
 def test_default_keeps_every_cluster(work):
-    np.testing.assert_array_equal(merger().fit(work).labels_, merger(min_cluster_size=1, causal=True).fit(work).labels_)
+    np.testing.assert_array_equal(
+        merger().fit(work).labels_, merger(min_cluster_size=1, causal_min_size=True).fit(work).labels_
+    )
 
 
 @pytest.mark.parametrize("min_size", [5, 40])
@@ -45,7 +47,7 @@ def test_causal_counts_each_cluster_up_to_each_detection(work):
     so_far = np.array(
         [np.sum((full == label) & (t <= ti)) if label >= 0 else 0 for label, ti in zip(full, t, strict=True)]
     )
-    labels = merger(min_cluster_size=8, causal=True).fit(work).labels_
+    labels = merger(min_cluster_size=8, causal_min_size=True).fit(work).labels_
     assert_same_partition(labels, np.where(so_far >= 8, full, -1))
     offline = merger(min_cluster_size=8).fit(work).labels_
     assert np.sum(labels >= 0) < np.sum(offline >= 0)  # a cluster's first detections wait for confirmation
@@ -57,7 +59,7 @@ def test_stage1_labels_and_merges_are_not_pruned(work):
     np.testing.assert_array_equal(plain.merges_, pruned.merges_)
 
 
-@pytest.mark.parametrize("params", [{"min_cluster_size": 0}, {"min_cluster_size": 2.5}, {"causal": "yes"}])
+@pytest.mark.parametrize("params", [{"min_cluster_size": 0}, {"min_cluster_size": 2.5}, {"causal_min_size": "yes"}])
 def test_bad_values_are_refused_by_name(work, params):
     with pytest.raises(ValueError, match=next(iter(params))):
         merger(**params).fit(work)

@@ -51,7 +51,7 @@ def test_stage2_runs_on_the_tuned_stage1_and_keeps_8s_setting_elsewhere(scenes):
 def test_causal_sets_every_stage(scenes):
     pipe = object_pipeline(2, causal=True)
     assert pipe.named_steps["filter"].causal and pipe.named_steps["merge"].stage1.causal
-    assert pipe.named_steps["merge"].causal and not object_pipeline(2).named_steps["merge"].causal
+    assert pipe.named_steps["merge"].causal_min_size and not object_pipeline(2).named_steps["merge"].causal_min_size
     assert object_pipeline(1, causal=True).named_steps["cluster"].causal
     offline = object_pipeline(2).fit_predict(scenes.data)
     causal = pipe.fit_predict(scenes.data)

@@ -11,7 +11,7 @@ from sklearn_radar.metrics import class_errors, class_panoptic_quality
 
 
 def test_each_place_by_hand():
-    # One frame.  Car 0 (3 detections): cluster 10 holds 2 of them, called a car: matched, right class.
+    # One window.  Car 0 (3 detections): cluster 10 holds 2 of them, called a car: matched, right class.
     # Car 1 (2 detections): cluster 11 holds both, called a pedestrian: misclassified (and a wrong-class
     # pedestrian segment).  Pedestrian 2 (2 detections): cluster 12 holds both, called background:
     # misclassified as background.  Pedestrian 3 (2 detections): split over clusters 13 and 14 (IoU 1/2 each):

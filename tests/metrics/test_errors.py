@@ -11,7 +11,7 @@ from sklearn_radar.metrics import instance_errors, instance_scores
 
 
 def test_each_cause_by_hand():
-    # One frame (times None).  Object 0: matched by cluster 10.  Object 1 (4 detections): 3 are noise.
+    # One window (times None).  Object 0: matched by cluster 10.  Object 1 (4 detections): 3 are noise.
     # Objects 2 and 3 (3 detections each): cluster 11 holds both (IoU 3/6, not above one half): both merged with an
     # object.  Object 4 (2 detections): cluster 12 holds both plus 3 background detections: merged with background;
     # cluster 12 is then a false "part of one object".  Object 5 (4 detections): two clusters of 2 (IoU 1/2): split;
@@ -32,8 +32,8 @@ def test_each_cause_by_hand():
     assert errors["median_size_matched"] == 2.0 and errors["median_size_missed"] == 3.0
 
 
-def test_frames_make_separate_segments():
-    # The same object and cluster in two frames: two matched segments.
+def test_windows_make_separate_segments():
+    # The same object and cluster in two windows: two matched segments.
     errors = instance_errors([0, 0, 0, 0], [1, 1, 1, 1], times=[0.0, 0.1, 0.6, 0.7])
     assert errors["n_true"] == 2 and errors["matched"] == 2 and errors["false"] == 0
 
@@ -49,7 +49,7 @@ def test_lengths_must_agree():
 
 
 def reference(truth, pred, groups):
-    """Segments one by one (one frame per sequence)."""
+    """Segments one by one (one window per sequence)."""
     causes = Counter()
     true_keys = {(g, t) for g, t in zip(groups, truth, strict=True) if t != -1}
     pred_keys = {(g, p) for g, p in zip(groups, pred, strict=True) if p != -1}

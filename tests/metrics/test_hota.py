@@ -1,4 +1,4 @@
-"""hota_scores against hand-computed cases and against TrackEval's HOTA on the same per-frame IoU matrices."""
+"""hota_scores against hand-computed cases and against TrackEval's HOTA on the same per-window IoU matrices."""
 
 import warnings
 
@@ -23,8 +23,8 @@ def test_a_perfect_track():
 
 
 def test_an_id_switch_by_hand():
-    # One object over two frames, tracked as 5 then as 7: every detection matches (DetA 1); each match's ids share
-    # 1 of the 2 + 1 - 1 frames of either id, so AssA = 1/2 and HOTA = sqrt(1/2) at every threshold.
+    # One object over two windows, tracked as 5 then as 7: every detection matches (DetA 1); each match's ids share
+    # 1 of the 2 + 1 - 1 windows of either id, so AssA = 1/2 and HOTA = sqrt(1/2) at every threshold.
     scores = hota_scores([0, 0, 0, 0], [5, 5, 7, 7], times=[0.0, 0.1, 0.6, 0.7])
     assert scores["deta"] == 1.0 and scores["assa"] == pytest.approx(0.5)
     assert scores["hota"] == pytest.approx(np.sqrt(0.5))
@@ -49,14 +49,14 @@ def test_lengths_must_agree():
         hota_scores([0, 0], [0], times=[0.0, 0.1])
 
 
-def trackeval_scores(truth, pred, times, groups, frame=0.5):
-    """The reference: TrackEval's HOTA fed, frame by frame, the ids present and their IoU matrix."""
+def trackeval_scores(truth, pred, times, groups, window=0.5):
+    """The reference: TrackEval's HOTA fed, window by window, the ids present and their IoU matrix."""
     metric = trackeval_hota.HOTA()
     results = {}
     for number in np.unique(groups):
         rows = groups == number
         t, g, p = times[rows], truth[rows], pred[rows]
-        cell = np.floor((t - t.min()) / frame).astype(int)
+        cell = np.floor((t - t.min()) / window).astype(int)
         g_codes = np.unique(g[g >= 0])
         p_codes = np.unique(p[p >= 0])
         data = {"gt_ids": [], "tracker_ids": [], "similarity_scores": []}

@@ -1,4 +1,4 @@
-"""Object-level metrics: hand-computed cases, a brute-force per-frame matcher on random labelings, properties."""
+"""Object-level metrics: hand-computed cases, a brute-force per-window matcher on random labelings, properties."""
 
 import math
 import pickle
@@ -27,14 +27,14 @@ COUNT_KEYS = ("tp", "fp", "fn")
 ALL_KEYS = FLOAT_KEYS + COUNT_KEYS + SHARE_KEYS
 
 # ----------------------------------------------------------------------------------------------------------------
-# Hand-computed case: one sequence starting at t = 10 s, two frames of 0.5 s, three objects.
+# Hand-computed case: one sequence starting at t = 10 s, two windows of 0.5 s, three objects.
 #
-# frame 0, t in [10.0, 10.5):
+# window 0, t in [10.0, 10.5):
 #   rows 0-3  object 0 (|g0| = 4)   -> rows 0, 1, 2 in cluster 10, row 3 noise
 #   rows 4-5  object 1 (|g1| = 2)   -> row 4 in cluster 11, row 5 in cluster 12: each IoU 1/2, exactly 0.5, no match
 #   row 6     background            -> cluster 10:  g0 vs p10 = {0, 1, 2, 6}: 3 / (4 + 4 - 3) = 0.6, a match
 #   row 7     background            -> cluster 13, background only
-# frame 1, t in [10.5, 11.0) (row 8 exactly at 10.5 s):
+# window 1, t in [10.5, 11.0) (row 8 exactly at 10.5 s):
 #   rows 8-9   object 0 (|g0'| = 2) -> cluster 10
 #   rows 10-12 object 2 (|g2| = 3)  -> cluster 10, which merges both: p10' = {8..12}
 #              g0' vs p10': 2 / 5 = 0.4, no match; g2 vs p10': 3 / 5 = 0.6, a match
@@ -64,14 +64,14 @@ CASE_EXPECTED = {
     "background_segment_share": 1 / 3,
     "background_cluster_share": 0.25,
 }
-# The same labels as one frame (frame=None):
+# The same labels as one window (window=None):
 #   g0 = rows 0-3, 8, 9 (6); g1 = {4, 5} (2); g2 = {10, 11, 12} (3).  T = 3.
 #   p10 = {0, 1, 2, 6, 8, 9, 10, 11, 12} (9); p11 = {4}; p12 = {5}; p13 = {7, 13}.  P = 4.
 #   g0 vs p10: 5 / (6 + 9 - 5) = 0.5, not a match; g2 vs p10: 3 / 9; g1: 1/2 with p11 and p12.  TP = 0.
 #   SQ = 0 (0/0), RQ = PQ = precision = recall = 0.  FP = 4, FN = 3.
 #   mCov = (1/2 + 1/2 + 1/3) / 3 = 4/9;  mWCov = (6/2 + 2/2 + 3/3) / 11 = 5/11.
 #   Background: p13 of 4 segments, cluster 13 of 4 clusters -> 1/4 and 1/4.
-CASE_EXPECTED_ONE_FRAME = {
+CASE_EXPECTED_ONE_WINDOW = {
     "pq": 0.0,
     "sq": 0.0,
     "rq": 0.0,
@@ -97,14 +97,14 @@ def _assert_scores(scores, expected):
             assert isinstance(scores[key], float), key
 
 
-def test_hand_computed_case_per_frame():
+def test_hand_computed_case_per_window():
     scores = instance_scores(CASE_TRUE, CASE_PRED, times=CASE_TIMES)
     _assert_scores(scores, CASE_EXPECTED)
 
 
-def test_hand_computed_case_as_one_frame():
-    _assert_scores(instance_scores(CASE_TRUE, CASE_PRED, times=CASE_TIMES, frame=None), CASE_EXPECTED_ONE_FRAME)
-    _assert_scores(instance_scores(CASE_TRUE, CASE_PRED, times=None), CASE_EXPECTED_ONE_FRAME)
+def test_hand_computed_case_as_one_window():
+    _assert_scores(instance_scores(CASE_TRUE, CASE_PRED, times=CASE_TIMES, window=None), CASE_EXPECTED_ONE_WINDOW)
+    _assert_scores(instance_scores(CASE_TRUE, CASE_PRED, times=None), CASE_EXPECTED_ONE_WINDOW)
 
 
 def test_the_three_functions_are_parts_of_instance_scores():
@@ -118,7 +118,7 @@ def test_the_three_functions_are_parts_of_instance_scores():
 
 
 def test_background_share_without_times_is_per_sequence():
-    # One frame per sequence: p13 is one of the 4 clusters (and of the 4 segments).
+    # One window per sequence: p13 is one of the 4 clusters (and of the 4 segments).
     share = background_share(CASE_TRUE, CASE_PRED)
     assert share.background_segment_share == share.background_cluster_share == 0.25
 
@@ -149,15 +149,15 @@ def test_segments_never_cross_sequences():
     assert share.background_cluster_share == 0.5
 
 
-def test_frames_start_at_each_sequences_first_detection():
-    # Sequence 1 starts at 0 s, sequence 2 at 100.3 s: with frame 0.5, rows at 100.3 and 100.7 share frame 0.
+def test_windows_start_at_each_sequences_first_detection():
+    # Sequence 1 starts at 0 s, sequence 2 at 100.3 s: with window 0.5, rows at 100.3 and 100.7 share window 0.
     scores = instance_scores([0, 0, 1, 1], [4, 4, 4, 4], times=[0.0, 0.4, 100.3, 100.7], groups=[1, 1, 2, 2])
     assert (scores.tp, scores.fp, scores.fn) == (2, 0, 0)
-    # A sequence starting at 0.4 s: rows at 0.4 and 0.5 s both lie in its frame 0, one segment of each kind.
-    scores = instance_scores([0, 0], [4, 4], times=[0.4, 0.5], frame=0.5, groups=[1, 1])
+    # A sequence starting at 0.4 s: rows at 0.4 and 0.5 s both lie in its window 0, one segment of each kind.
+    scores = instance_scores([0, 0], [4, 4], times=[0.4, 0.5], window=0.5, groups=[1, 1])
     assert (scores.tp, scores.fp, scores.fn) == (1, 0, 0)
-    # Starting at 0 s: 0.4 s is in frame 0 and 0.5 s in frame 1, two segments of each kind, two matches.
-    scores = instance_scores([0, 0, 0], [4, 4, 4], times=[0.0, 0.4, 0.5], frame=0.5)
+    # Starting at 0 s: 0.4 s is in window 0 and 0.5 s in window 1, two segments of each kind, two matches.
+    scores = instance_scores([0, 0, 0], [4, 4, 4], times=[0.0, 0.4, 0.5], window=0.5)
     assert (scores.tp, scores.fp, scores.fn) == (2, 0, 0)
 
 
@@ -192,15 +192,15 @@ def test_invalid_arrays_raise():
 
 
 # ----------------------------------------------------------------------------------------------------------------
-# Brute force: segments as Python sets, a double loop over the segments of each frame.
+# Brute force: segments as Python sets, a double loop over the segments of each window.
 # ----------------------------------------------------------------------------------------------------------------
-def _brute_force(truth, pred, times, groups, frame):
+def _brute_force(truth, pred, times, groups, window):
     n = len(truth)
     groups = [0] * n if groups is None else list(groups)
     start = {}
     for i in range(n):
         start[groups[i]] = min(start.get(groups[i], math.inf), times[i])
-    cell = [(groups[i], 0 if frame is None else math.floor((times[i] - start[groups[i]]) / frame)) for i in range(n)]
+    cell = [(groups[i], 0 if window is None else math.floor((times[i] - start[groups[i]]) / window)) for i in range(n)]
     true_segments, pred_segments = defaultdict(set), defaultdict(set)
     clusters = defaultdict(set)
     for i in range(n):
@@ -214,7 +214,7 @@ def _brute_force(truth, pred, times, groups, frame):
     for g_key, g in true_segments.items():
         cover[g_key] = 0.0
         for p_key, p in pred_segments.items():
-            if g_key[0] != p_key[0]:  # another frame or sequence
+            if g_key[0] != p_key[0]:  # another window or sequence
                 continue
             iou = len(g & p) / len(g | p)
             cover[g_key] = max(cover[g_key], iou)
@@ -257,21 +257,21 @@ def _random_case(rng):
         pred = rng.integers(-1, rng.integers(1, 8), n)
     times = rng.uniform(0.0, 2.0, n).round(2) + rng.choice([0.0, 5.0, 1e5], n_groups)[rng.integers(0, n_groups, n)]
     groups = rng.choice(np.array([3, 7, 11]), n) if n_groups > 1 else None
-    frame = rng.choice(np.array([0.1, 0.25, 0.5, 1.0, np.nan]))
-    return truth, pred, times, groups, None if np.isnan(frame) else float(frame)
+    window = rng.choice(np.array([0.1, 0.25, 0.5, 1.0, np.nan]))
+    return truth, pred, times, groups, None if np.isnan(window) else float(window)
 
 
 def test_against_a_brute_force_matcher_on_random_labelings():
     rng = np.random.default_rng(12)
     n_matches = 0
     for _ in range(400):
-        truth, pred, times, groups, frame = _random_case(rng)
-        scores = instance_scores(truth, pred, times=times, groups=groups, frame=frame)
-        expected = _brute_force(truth.tolist(), pred.tolist(), times.tolist(), groups, frame)
+        truth, pred, times, groups, window = _random_case(rng)
+        scores = instance_scores(truth, pred, times=times, groups=groups, window=window)
+        expected = _brute_force(truth.tolist(), pred.tolist(), times.tolist(), groups, window)
         assert set(scores) == set(expected)
         for key, value in expected.items():
             assert np.isfinite(scores[key])
-            assert scores[key] == pytest.approx(value, abs=1e-12), (key, truth, pred, times, groups, frame)
+            assert scores[key] == pytest.approx(value, abs=1e-12), (key, truth, pred, times, groups, window)
         n_matches += scores.tp
     assert n_matches > 500  # the cases exercise matching, not only misses
 
@@ -279,19 +279,19 @@ def test_against_a_brute_force_matcher_on_random_labelings():
 def test_random_labelings_are_invariant_to_renaming_labels_and_permuting_rows():
     rng = np.random.default_rng(3)
     for _ in range(100):
-        truth, pred, times, groups, frame = _random_case(rng)
-        scores = instance_scores(truth, pred, times=times, groups=groups, frame=frame)
+        truth, pred, times, groups, window = _random_case(rng)
+        scores = instance_scores(truth, pred, times=times, groups=groups, window=window)
         # Rename: an injective map of the labels, -1 kept; strings for the clusters.
         rename_true = np.where(truth == -1, -1, 1000 - 3 * truth)
         rename_pred = np.array([-1 if p == -1 else f"cluster-{p}" for p in pred], dtype=object)
-        renamed = instance_scores(rename_true, rename_pred, times=times, groups=groups, frame=frame)
+        renamed = instance_scores(rename_true, rename_pred, times=times, groups=groups, window=window)
         order = rng.permutation(len(truth))
         permuted = instance_scores(
             truth[order],
             pred[order],
             times=times[order],
             groups=None if groups is None else groups[order],
-            frame=frame,
+            window=window,
         )
         for key in ALL_KEYS:
             assert renamed[key] == pytest.approx(scores[key], abs=1e-12), key
@@ -301,26 +301,26 @@ def test_random_labelings_are_invariant_to_renaming_labels_and_permuting_rows():
 def test_counts_of_sequences_add_up():
     rng = np.random.default_rng(5)
     for _ in range(50):
-        truth, pred, times, _, frame = _random_case(rng)
+        truth, pred, times, _, window = _random_case(rng)
         groups = rng.integers(0, 3, len(truth))
-        together = instance_scores(truth, pred, times=times, groups=groups, frame=frame)
+        together = instance_scores(truth, pred, times=times, groups=groups, window=window)
         apart = [
-            instance_scores(truth[groups == s], pred[groups == s], times=times[groups == s], frame=frame)
+            instance_scores(truth[groups == s], pred[groups == s], times=times[groups == s], window=window)
             for s in range(3)
         ]
         for key in COUNT_KEYS:
             assert together[key] == sum(scores[key] for scores in apart)
 
 
-def test_frame_none_is_one_frame_per_sequence():
+def test_window_none_is_one_window_per_sequence():
     rng = np.random.default_rng(8)
     for _ in range(50):
         truth, pred, times, groups, _ = _random_case(rng)
-        one_frame = instance_scores(truth, pred, times=times, groups=groups, frame=None)
-        huge_frame = instance_scores(truth, pred, times=times, groups=groups, frame=1e9)
+        one_window = instance_scores(truth, pred, times=times, groups=groups, window=None)
+        huge_window = instance_scores(truth, pred, times=times, groups=groups, window=1e9)
         no_times = instance_scores(truth, pred, times=None, groups=groups)
         for key in ALL_KEYS:
-            assert one_frame[key] == pytest.approx(huge_frame[key], abs=1e-12) == no_times[key]
+            assert one_window[key] == pytest.approx(huge_window[key], abs=1e-12) == no_times[key]
 
 
 # ----------------------------------------------------------------------------------------------------------------
@@ -338,11 +338,11 @@ def _times(data):
 def test_a_perfect_labelling_scores_one(scenes):
     truth = scenes.target
     pred = np.where(truth == -1, -1, 3 * truth + 17)  # renamed, background left as noise
-    for frame in (0.5, 0.1, None):
-        scores = instance_scores(truth, pred, times=_times(scenes.data), groups=scenes.groups, frame=frame)
+    for window in (0.5, 0.1, None):
+        scores = instance_scores(truth, pred, times=_times(scenes.data), groups=scenes.groups, window=window)
         assert scores.tp > 0 and scores.fp == scores.fn == 0
         for key in FLOAT_KEYS:
-            assert scores[key] == 1.0, (key, frame)
+            assert scores[key] == 1.0, (key, window)
         assert scores.background_segment_share == scores.background_cluster_share == 0.0
 
 
@@ -365,14 +365,14 @@ def test_clustering_background_lowers_pq_and_raises_the_background_share(scenes)
 def test_adding_a_background_cluster_never_raises_pq():
     rng = np.random.default_rng(21)
     for _ in range(100):
-        truth, pred, times, groups, frame = _random_case(rng)
+        truth, pred, times, groups, window = _random_case(rng)
         free = np.flatnonzero((truth == -1) & (pred == -1))
         if len(free) == 0:
             continue
-        before = instance_scores(truth, pred, times=times, groups=groups, frame=frame)
+        before = instance_scores(truth, pred, times=times, groups=groups, window=window)
         pred = pred.copy()
         pred[free[: rng.integers(1, len(free) + 1)]] = 99
-        after = instance_scores(truth, pred, times=times, groups=groups, frame=frame)
+        after = instance_scores(truth, pred, times=times, groups=groups, window=window)
         assert after.pq <= before.pq
         assert after.pq < before.pq or before.pq == 0.0
         assert after.background_cluster_share >= before.background_cluster_share
@@ -413,12 +413,12 @@ def test_scorer_equals_the_function_on_fit_predict_labels(scenes, pipeline_label
         assert scorer(experiment_pipeline(1), scenes.data, scenes.target) == pytest.approx(sign * expected[key])
 
 
-def test_scorer_reads_t_in_seconds_and_frame_none_needs_no_time(scenes, pipeline_labels):
+def test_scorer_reads_t_in_seconds_and_window_none_needs_no_time(scenes, pipeline_labels):
     expected = instance_scores(scenes.target, pipeline_labels, times=None, groups=scenes.groups)
     data = scenes.data.drop(columns="timestamp").assign(t=0.0)
-    scorer = make_instance_scorer("recall", frame=None)
+    scorer = make_instance_scorer("recall", window=None)
     assert scorer(experiment_pipeline(1), scenes.data, scenes.target) == pytest.approx(expected.recall)
-    # A 't' column is read in s: all detections at t = 0 are one frame, as frame=None.
+    # A 't' column is read in s: all detections at t = 0 are one window, as window=None.
     assert panoptic_quality_scorer(_Fixed(pipeline_labels), data, scenes.target) == pytest.approx(expected.pq)
 
 
@@ -447,7 +447,7 @@ def test_scorer_without_a_time_column_is_a_setup_error():
     X = pd.DataFrame({"x": [0.0, 0.3], "y": 0.0, "v_r": 3.0, "sequence": 1})
     with pytest.raises(ValueError, match=r"'t' .* or 'timestamp'"):
         panoptic_quality_scorer(_AllNoise(), X, [0, 0])
-    assert make_instance_scorer(frame=None)(_Fixed(np.array([4, 4])), X, [0, 0]) == 1.0
+    assert make_instance_scorer(window=None)(_Fixed(np.array([4, 4])), X, [0, 0]) == 1.0
 
 
 def test_scorer_pickles_and_works_in_a_search():
@@ -455,8 +455,8 @@ def test_scorer_pickles_and_works_in_a_search():
         {"x": [0.0, 0.3, 5.0, 5.3, 20.0], "y": 0.0, "v_r": 3.0, "t": [0.0, 0.1, 0.0, 0.1, 0.2], "sequence": 1}
     )
     y = np.array([0, 0, 1, 1, -1])
-    scorer = pickle.loads(pickle.dumps(make_instance_scorer("pq", frame=0.5)))
-    assert repr(scorer) == "make_instance_scorer(metric='pq', frame=0.5)"
+    scorer = pickle.loads(pickle.dumps(make_instance_scorer("pq", window=0.5)))
+    assert repr(scorer) == "make_instance_scorer(metric='pq', window=0.5)"
     everything = np.arange(len(X))
     search = GridSearchCV(
         RadarDBSCAN(), {"min_samples": [2, 10]}, scoring=scorer, cv=[(everything, everything)], error_score="raise"

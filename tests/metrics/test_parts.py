@@ -79,10 +79,10 @@ def test_v1_parts_combine_to_the_radar_v_measure_of_the_concatenation(seqs, beta
 
 @settings(max_examples=200, deadline=None)
 @given(sequences, st.sampled_from([0.5, 0.25, None]))
-def test_pq_parts_combine_to_the_panoptic_quality_of_the_concatenation(seqs, frame):
+def test_pq_parts_combine_to_the_panoptic_quality_of_the_concatenation(seqs, window):
     truth, pred, times, groups = _concatenate(seqs)
-    parts = [score_parts("pq", t, p, s, frame=frame) for t, p, s in seqs]
-    expected = panoptic_quality(truth, pred, times=times, groups=groups, frame=frame)
+    parts = [score_parts("pq", t, p, s, window=window) for t, p, s in seqs]
+    expected = panoptic_quality(truth, pred, times=times, groups=groups, window=window)
     assert combine_parts("pq", parts) == pytest.approx(expected.pq, **TOL)
     assert sum(part.tp for part in parts) == expected.tp
     assert sum(part.fp for part in parts) == expected.fp
@@ -161,7 +161,7 @@ def test_a_part_is_small_and_pickles(objective):
     truth = rng.integers(-1, 4, n)  # background and 4 objects
     pred = rng.integers(-1, 4, n)  # noise and 4 clusters
     times = np.sort(rng.uniform(0.0, 100.0, n))
-    part = score_parts(objective, truth, pred, times, frame=None)
+    part = score_parts(objective, truth, pred, times, window=None)
     assert part.size <= 3 * 5 * 5  # at most one cell per (class, cluster) pair: independent of n
     data = pickle.dumps(part)
     assert len(data) < 2_000 < truth.nbytes
@@ -189,9 +189,9 @@ class _Failing(RadarDBSCAN):
 
 
 def _two_sequences():
-    frames = []
+    windows = []
     for sequence, x0 in ((1, 0.0), (2, 40.0)):
-        frames.append(
+        windows.append(
             pd.DataFrame(
                 {
                     "x": x0 + np.array([0.0, 0.3, 0.6, 5.0, 5.3, 20.0, 20.2]),
@@ -202,7 +202,7 @@ def _two_sequences():
                 }
             )
         )
-    X = pd.concat(frames, ignore_index=True)
+    X = pd.concat(windows, ignore_index=True)
     y = np.array([0, 0, 0, 1, 1, -1, -1] * 2)
     return X, y
 
@@ -233,13 +233,13 @@ class _Fixed(RadarDBSCAN):
 def test_sequence_parts_reads_timestamps_in_microseconds():
     y = np.array([0, 0, 0, 0, -1, -1])
     labels = np.array([5, 5, 5, 5, 5, -1])
-    t = np.array([0.0, 0.1, 0.4, 0.6, 0.7, 0.9])  # frames [0, 0.5) and [0.5, 1.0): 3 + 1 object detections
+    t = np.array([0.0, 0.1, 0.4, 0.6, 0.7, 0.9])  # windows [0, 0.5) and [0.5, 1.0): 3 + 1 object detections
     stamps = pd.DataFrame({"timestamp": 7_000_000 + np.round(t * 1e6).astype(np.int64)})
     by_t = sequence_parts(_Fixed(labels), pd.DataFrame({"t": t}), y, "pq")
     by_stamp = sequence_parts(_Fixed(labels), stamps, y, "pq")
     expected = panoptic_quality(y, labels, times=t)
     for part in (by_t, by_stamp):
-        # Frame 0: {0, 1, 2} vs {0, 1, 2}; frame 1: object {3}, cluster {3, 4}: IoU 1/2, not a match.
+        # Window 0: {0, 1, 2} vs {0, 1, 2}; window 1: object {3}, cluster {3, 4}: IoU 1/2, not a match.
         assert (part.tp, part.fp, part.fn) == (expected.tp, expected.fp, expected.fn) == (1, 1, 1)
         assert part.iou_sum == pytest.approx(1.0, **TOL)
     # "v1" needs no time column.
@@ -311,11 +311,11 @@ def _assert_same_scores(got, expected):
 
 @settings(max_examples=300, deadline=None)
 @given(sequences, st.sampled_from([0.5, 0.25, 2.0, None]), st.booleans())
-def test_instance_parts_combine_to_the_instance_scores_of_the_concatenation(seqs, frame, with_times):
+def test_instance_parts_combine_to_the_instance_scores_of_the_concatenation(seqs, window, with_times):
     seqs = [_renumbered(seq) for seq in seqs]
     truth, pred, times, groups = _concatenate(seqs)
-    parts = [instance_parts(t, p, times=s if with_times else None, frame=frame) for t, p, s in seqs]
-    expected = instance_scores(truth, pred, times=times if with_times else None, groups=groups, frame=frame)
+    parts = [instance_parts(t, p, times=s if with_times else None, window=window) for t, p, s in seqs]
+    expected = instance_scores(truth, pred, times=times if with_times else None, groups=groups, window=window)
     _assert_same_scores(combine_instance_parts(parts), expected)
     # The counts of panoptic quality are those of its own part, and combine_parts("pq") takes the richer part.
     assert combine_parts("pq", parts) == pytest.approx(expected.pq, **TOL)
@@ -323,20 +323,20 @@ def test_instance_parts_combine_to_the_instance_scores_of_the_concatenation(seqs
 
 @settings(max_examples=100, deadline=None)
 @given(sequences, st.sampled_from([0.5, None]), st.randoms(use_true_random=False))
-def test_instance_parts_merge_in_any_order_and_a_part_with_groups_is_their_merge(seqs, frame, random):
+def test_instance_parts_merge_in_any_order_and_a_part_with_groups_is_their_merge(seqs, window, random):
     seqs = [_renumbered(seq) for seq in seqs]
     truth, pred, times, groups = _concatenate(seqs)
-    parts = [instance_parts(t, p, times=s, frame=frame) for t, p, s in seqs]
+    parts = [instance_parts(t, p, times=s, window=window) for t, p, s in seqs]
     shuffled = list(parts)
     random.shuffle(shuffled)
-    merged = instance_parts(truth, pred, times=times, frame=frame, groups=groups)
+    merged = instance_parts(truth, pred, times=times, window=window, groups=groups)
     expected = combine_instance_parts(parts)
     _assert_same_scores(combine_instance_parts(shuffled), expected)
     _assert_same_scores(combine_instance_parts([merged]), expected)
 
 
 def test_instance_parts_pool_objects_and_clusters_not_the_scores_by_hand():
-    # All detections in one 0.5 s frame, so segments are clusters.  Labels restart at 0 in each sequence.
+    # All detections in one 0.5 s window, so segments are clusters.  Labels restart at 0 in each sequence.
     # A: object 0 (4 detections) split 2 + 2 over clusters 1 and 2: IoU 2/4 each, cover 1/2, no match (IoU > 1/2
     #    needed); object 1 (2 detections) lost to noise: cover 0.  TP 0, FP 2, FN 2; mCov 1/4, mWCov 2/6.
     # B: object 0 (2 detections) is cluster 1 exactly: TP 1, IoU 1; clusters 2 and 3 hold background only: FP 2.
@@ -369,8 +369,8 @@ def test_instance_parts_pool_objects_and_clusters_not_the_scores_by_hand():
     _assert_same_scores(combine_instance_parts([part_b, part_a]), hand)
 
 
-def test_instance_parts_count_segments_per_frame_and_clusters_per_sequence_by_hand():
-    # One cluster 4 over two frames: with object 0 in frame 0 (a match), background only in frame 1.
+def test_instance_parts_count_segments_per_window_and_clusters_per_sequence_by_hand():
+    # One cluster 4 over two windows: with object 0 in window 0 (a match), background only in window 1.
     part = instance_parts([0, 0, -1, -1], [4, 4, 4, 4], times=[0.0, 0.2, 0.6, 0.7])
     assert (part.n_clusters, part.n_background_clusters, part.n_background_segments) == (1, 0, 1)
     assert (part.tp, part.fp, part.fn, part.n_object_detections) == (1, 1, 0, 2)
@@ -415,8 +415,8 @@ def test_combine_instance_parts_refuses_other_parts():
         combine_instance_parts([instance_parts([0], [0], times=None), FailedPart("RuntimeError: boom")])
     with pytest.raises(ValueError, match="PanopticParts"):
         combine_instance_parts([score_parts("pq", [0], [0])])
-    with pytest.raises(ValueError, match="frame"):
-        instance_parts([0], [0], times=[0.0], frame=0.0)
+    with pytest.raises(ValueError, match="window"):
+        instance_parts([0], [0], times=[0.0], window=0.0)
     with pytest.raises(ValueError, match="equal length"):
         instance_parts([0, 1], [0], times=None)
 

@@ -27,26 +27,26 @@ from sklearn_radar.metrics import (
 
 # ----------------------------------------------------------------------------------------------------------------
 # Hand-computed case.  Classes: car 0, large vehicle 1, two-wheeler 2, pedestrian 3, group 4, background -1,
-# ignored -2.  Sequence A (rows 0-12), frames of 0.5 s from t = 0; sequence B (rows 13-15), from t = 0.1.
+# ignored -2.  Sequence A (rows 0-12), windows of 0.5 s from t = 0; sequence B (rows 13-15), from t = 0.1.
 #
-# A, frame 0:
+# A, window 0:
 #   rows 0-3   true car instance 0 (|g| = 4); rows 0-2 predicted instance 10, class car (conf 0.9); row 3 noise
 #              -> TP car, IoU 3/4
 #   rows 4-5   true pedestrian instance 1; predicted instance 11 = rows 4, 5, 6 with classes 3, 3, 0 (a mixed
 #              segment: majority pedestrian; row 6 is background), conf 0.8, 0.8, 0.5 -> TP pedestrian, IoU 2/3
 #   row 7      ignored (-2) in truth, predicted instance 12 (car): left out, so instance 12 has no segment
-# A, frame 1 (t >= 0.5):
+# A, window 1 (t >= 0.5):
 #   rows 8-10  true car instance 0 again; predicted instance 10 with class group (4), conf 0.4: IoU 1, but the
 #              wrong class -> FN car, FP group
 #   rows 11-12 true two-wheeler instance 3; predicted instance 13 with classes 1, 2: a tie, confidence 0.6, 0.7
 #              -> class 2 (the higher summed confidence), TP two-wheeler, IoU 1.  Without confidence: class 1
 #              (the smaller code) -> FP large vehicle and FN two-wheeler.
-# B, frame 0:
+# B, window 0:
 #   rows 13-14 true car instance 0 (another sequence: another object), noise in the prediction -> FN car
 #   row 15     background, predicted instance 10 (car, conf 0.95): instance 10 of sequence A is never compared
 #              -> FP car
 #
-# PQ per class: car TP 1, FP 1 (B's 10), FN 2 (A frame 1, B): SQ 3/4, RQ 1 / (1 + 1/2 + 1) = 0.4, PQ 0.3;
+# PQ per class: car TP 1, FP 1 (B's 10), FN 2 (A window 1, B): SQ 3/4, RQ 1 / (1 + 1/2 + 1) = 0.4, PQ 0.3;
 #   two-wheeler: PQ = SQ = RQ = 1; pedestrian: SQ 2/3, RQ 1, PQ 2/3; group: TP 0, FP 1 -> 0.
 #   Classes present: 0, 2, 3, 4.  PQ = (0.3 + 1 + 2/3 + 0) / 4, SQ = (0.75 + 1 + 2/3 + 0) / 4, RQ = 2.4 / 4.
 # AP (classes in truth: 0, 2, 3): car ranks B's 10 (0.95, FP) before A's 10 (0.9, TP) of 3 true segments:
@@ -105,26 +105,26 @@ def test_a_tie_of_the_ground_truth_vote_goes_to_the_smallest_code():
     assert scores["per_class"][0]["fn"] == 1 and scores["per_class"][3]["fp"] == 1 and scores["pq"] == 0.0
 
 
-def test_frames_and_sequences_are_never_compared():
-    # One frame per sequence: A's car is {0-3, 8-10}, A's 10 is {0-2, 8-10} with classes car 3 x (0.9), group 3 x
+def test_windows_and_sequences_are_never_compared():
+    # One window per sequence: A's car is {0-3, 8-10}, A's 10 is {0-2, 8-10} with classes car 3 x (0.9), group 3 x
     # (0.4): a tie, car by confidence; IoU 6/7, a match.  B's car and B's 10 stay apart: FN and FP.
     scores = class_panoptic_quality(
-        **CASE, times=CASE_TIMES, groups=CASE_GROUPS, frame=None, confidence=CASE_CONFIDENCE
+        **CASE, times=CASE_TIMES, groups=CASE_GROUPS, window=None, confidence=CASE_CONFIDENCE
     )
     car = scores["per_class"][0]
     assert (car["tp"], car["fp"], car["fn"]) == (1, 1, 1)
     assert car["sq"] == pytest.approx(6 / 7) and 4 not in scores["per_class"]
     # Without groups B's rows join A: B's row 15 joins A's instance 10, and A's car instance 0 takes B's rows
     # 13, 14.  The scores change, so the sequences were apart above.
-    merged = class_panoptic_quality(**CASE, times=CASE_TIMES, frame=None, confidence=CASE_CONFIDENCE)
+    merged = class_panoptic_quality(**CASE, times=CASE_TIMES, window=None, confidence=CASE_CONFIDENCE)
     assert (merged["per_class"][0]["tp"], merged["per_class"][0]["fp"], merged["per_class"][0]["fn"]) == (1, 0, 0)
     assert merged["per_class"][0]["sq"] == pytest.approx(6 / 10)
 
 
-def test_ignored_rows_are_left_out_after_the_frames_are_laid_out():
-    # Row 0 (ignored) starts the frames: rows 1 (t 0.45) and 2 (t 0.55) are in frames 0 and 1.  The prediction
-    # covers row 1: a TP in frame 0, a FN in frame 1 -> PQ 1 x 1 / (1 + 1/2).  (Leaving row 0 out first would put
-    # both rows in one frame, IoU 1/2 and no match.)
+def test_ignored_rows_are_left_out_after_the_windows_are_laid_out():
+    # Row 0 (ignored) starts the windows: rows 1 (t 0.45) and 2 (t 0.55) are in windows 0 and 1.  The prediction
+    # covers row 1: a TP in window 0, a FN in window 1 -> PQ 1 x 1 / (1 + 1/2).  (Leaving row 0 out first would put
+    # both rows in one window, IoU 1/2 and no match.)
     scores = class_panoptic_quality([-2, 0, 0], [-1, 4, 4], [0, 0, -1], [7, 7, -1], times=[0.0, 0.45, 0.55])
     assert scores["pq"] == pytest.approx(2 / 3)
     assert (scores["per_class"][0]["tp"], scores["per_class"][0]["fn"]) == (1, 1)
@@ -271,13 +271,13 @@ def test_the_other_arguments_are_checked_too():
 # ----------------------------------------------------------------------------------------------------------------
 # Brute-force references: sets and Python loops, from the definitions.
 # ----------------------------------------------------------------------------------------------------------------
-def _brute_cells(times, groups, frame):
+def _brute_cells(times, groups, window):
     start = {}
     for t, g in zip(times, groups, strict=True):
         start[g] = min(start.get(g, math.inf), t)
-    if frame is None:
+    if window is None:
         return [(g, 0) for g in groups]
-    return [(g, math.floor((t - start[g]) / frame)) for t, g in zip(times, groups, strict=True)]
+    return [(g, math.floor((t - start[g]) / window)) for t, g in zip(times, groups, strict=True)]
 
 
 def _brute_segments(cells, instances, classes, kept, confidence=None):
@@ -298,8 +298,8 @@ def _brute_segments(cells, instances, classes, kept, confidence=None):
     return segments
 
 
-def _brute_layout(data, frame, with_confidence):
-    cells = _brute_cells(data["times"], data["groups"], frame)
+def _brute_layout(data, window, with_confidence):
+    cells = _brute_cells(data["times"], data["groups"], window)
     kept = [c != -2 for c in data["classes_true"]]
     confidence = data["confidence"] if with_confidence else None
     true = _brute_segments(cells, data["instances_true"], data["classes_true"], kept)
@@ -376,17 +376,17 @@ def _random_data(seed, n=300):
 
 @pytest.mark.slow
 @pytest.mark.parametrize("seed", range(12))
-@pytest.mark.parametrize("frame", [0.5, 1.0, None])
-def test_against_brute_force_definitions(seed, frame):
+@pytest.mark.parametrize("window", [0.5, 1.0, None])
+def test_against_brute_force_definitions(seed, window):
     data = _random_data(seed)
     args = {key: data[key] for key in CASE}
-    true, pred = _brute_layout(data, frame, with_confidence=True)
+    true, pred = _brute_layout(data, window, with_confidence=True)
     expected_pq = _brute_pq(true, pred)
     scores = semantic_scores(
-        **args, confidence=data["confidence"], times=data["times"], groups=data["groups"], frame=frame
+        **args, confidence=data["confidence"], times=data["times"], groups=data["groups"], window=window
     )
     panoptic = class_panoptic_quality(
-        **args, times=data["times"], groups=data["groups"], frame=frame, confidence=data["confidence"]
+        **args, times=data["times"], groups=data["groups"], window=window, confidence=data["confidence"]
     )
     assert set(panoptic["per_class"]) == set(expected_pq)
     for c, (pq, sq, rq, tp, fp, fn) in expected_pq.items():
@@ -398,7 +398,7 @@ def test_against_brute_force_definitions(seed, frame):
     segment_scores = {key: sum(data["confidence"][i] for i in rows) / len(rows) for key, (_, rows) in pred.items()}
     classes_in_truth = sorted({c for c, _ in true.values()})
     precision = mean_average_precision(
-        **args, confidence=data["confidence"], times=data["times"], groups=data["groups"], frame=frame
+        **args, confidence=data["confidence"], times=data["times"], groups=data["groups"], window=window
     )
     assert sorted(precision["per_class"]) == classes_in_truth
     for c in classes_in_truth:
@@ -586,6 +586,6 @@ def test_the_scorer_raises_on_set_up_mistakes_and_pickles(scenes):
         make_semantic_scorer(instance_column="object")(_Nothing(), X, y)
     with pytest.raises(ValueError, match="'t'"):
         make_semantic_scorer()(_Nothing(), X.drop(columns="timestamp"), y)
-    scorer = pickle.loads(pickle.dumps(make_semantic_scorer("map", frame=None, instance_column=None)))
-    assert repr(scorer) == "make_semantic_scorer(metric='map', frame=None, instance_column=None)"
+    scorer = pickle.loads(pickle.dumps(make_semantic_scorer("map", window=None, instance_column=None)))
+    assert repr(scorer) == "make_semantic_scorer(metric='map', window=None, instance_column=None)"
     assert scorer(_Nothing(), X.drop(columns="timestamp"), y) == 0.0

@@ -1,4 +1,4 @@
-"""tracking_scores against hand-computed cases and against py-motmetrics on the same per-frame matches."""
+"""tracking_scores against hand-computed cases and against py-motmetrics on the same per-window matches."""
 
 import numpy as np
 import pytest
@@ -13,19 +13,19 @@ motmetrics = pytest.importorskip("motmetrics")
 def test_a_perfect_track():
     scores = tracking_scores([0, 0, 1, 1], [3, 3, 4, 4], times=[0.0, 0.6, 0.0, 0.6])
     assert scores["mota"] == 1.0 and scores["idf1"] == 1.0 and scores["id_switches"] == 0
-    assert scores["n_objects"] == 4 and scores["n_frames"] == 2
+    assert scores["n_objects"] == 4 and scores["n_windows"] == 2
 
 
 def test_a_switch_a_miss_and_a_false_positive_by_hand():
-    # Frames of 0.5 s: object 0 is tracked as 5, then as 6 (a switch), then missed (its detections are noise);
-    # a cluster 9 of background detections is a false positive in frame 0.
+    # Windows of 0.5 s: object 0 is tracked as 5, then as 6 (a switch), then missed (its detections are noise);
+    # a cluster 9 of background detections is a false positive in window 0.
     truth = [0, 0, 0, 0, 0, 0, -1, -1]
     pred = [5, 5, 6, 6, -1, -1, 9, 9]
     times = [0.0, 0.1, 0.6, 0.7, 1.1, 1.2, 0.0, 0.1]
     scores = tracking_scores(truth, pred, times=times)
     assert (scores["id_switches"], scores["misses"], scores["false_positives"]) == (1, 1, 1)
     assert scores["mota"] == pytest.approx(1 - 3 / 3)
-    # IDF1: track 0 (3 frames) against 5 (1), 6 (1), 9 (1): the best assignment keeps one frame.
+    # IDF1: track 0 (3 windows) against 5 (1), 6 (1), 9 (1): the best assignment keeps one window.
     assert (scores["idtp"], scores["idfn"], scores["idfp"]) == (1, 2, 2)
     assert scores["idf1"] == pytest.approx(2 / (2 + 2 + 2))
 
@@ -42,15 +42,15 @@ def test_sequences_are_separate_tracks():
     assert scores["n_objects"] == 2 and scores["idtp"] == 2 and scores["id_switches"] == 0
 
 
-def motmetrics_scores(labels_true, labels_pred, times, groups, frame):
-    """The reference: py-motmetrics fed, frame by frame, 1 - IoU where IoU > 0.5 (else no match)."""
+def motmetrics_scores(labels_true, labels_pred, times, groups, window):
+    """The reference: py-motmetrics fed, window by window, 1 - IoU where IoU > 0.5 (else no match)."""
     labels_true, labels_pred = np.asarray(labels_true), np.asarray(labels_pred)
     times, groups = np.asarray(times, dtype=float), np.asarray(groups)
     accumulator = motmetrics.MOTAccumulator(auto_id=False)
-    frame_id = 0
+    window_id = 0
     for sequence in np.unique(groups):
         mine = groups == sequence
-        index = np.floor((times - times[mine].min()) / frame).astype(int)
+        index = np.floor((times - times[mine].min()) / window).astype(int)
         for f in np.unique(index[mine]):
             rows = mine & (index == f)
             gt = sorted(set(labels_true[rows][labels_true[rows] >= 0].tolist()))
@@ -66,18 +66,18 @@ def motmetrics_scores(labels_true, labels_pred, times, groups, frame):
                 [int(sequence) * 100_000 + g for g in gt],
                 [int(sequence) * 100_000 + h for h in hyp],
                 distance,
-                frame_id,
+                window_id,
             )
-            frame_id += 1
+            window_id += 1
     summary = motmetrics.metrics.create().compute(
         accumulator, metrics=["mota", "idf1", "num_switches", "num_misses", "num_false_positives"]
     )
     return summary.iloc[0].to_dict()
 
 
-def assert_like_motmetrics(truth, pred, times, groups, frame=0.5):
-    ours = tracking_scores(truth, pred, times=times, groups=groups, frame=frame)
-    reference = motmetrics_scores(truth, pred, times, groups, frame)
+def assert_like_motmetrics(truth, pred, times, groups, window=0.5):
+    ours = tracking_scores(truth, pred, times=times, groups=groups, window=window)
+    reference = motmetrics_scores(truth, pred, times, groups, window)
     assert ours["id_switches"] == reference["num_switches"]
     assert ours["misses"] == reference["num_misses"]
     assert ours["false_positives"] == reference["num_false_positives"]

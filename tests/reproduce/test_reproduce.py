@@ -346,12 +346,12 @@ def test_experiment_numbers_come_from_the_papers_metadata():
     )
 
 
-def _brute_force_pq(target, labels, times, groups, frame=0.5):
-    """Per-frame panoptic quality written plainly: segments as sets of row numbers, IoU > 0.5 matches."""
+def _brute_force_pq(target, labels, times, groups, window=0.5):
+    """Per-window panoptic quality written plainly: segments as sets of row numbers, IoU > 0.5 matches."""
     segments = {"true": {}, "pred": {}}
     start = {g: min(t for t, h in zip(times, groups, strict=True) if h == g) for g in set(groups)}
     for row, (true, pred, t, g) in enumerate(zip(target, labels, times, groups, strict=True)):
-        key = (g, int((t - start[g]) // frame))
+        key = (g, int((t - start[g]) // window))
         if true >= 0:
             segments["true"].setdefault((*key, true), set()).add(row)
         if pred >= 0:
@@ -383,7 +383,7 @@ def test_objective_pq_is_searched_reported_and_ranks_the_saved_best(tiny_folder,
     cv = {key: record["cv_best"] for key, record in results["experiments"].items() if "cv_best" in record}
     assert saved["best"] == max(cv, key=cv.get) == "3"  # #1 has no search: no cross-validated PQ
     assert saved["experiments"]["3"]["cv_pq"] == cv["3"] and saved["experiments"]["1"]["cv_pq"] is None
-    # The reported PQ of #3 equals a plain per-frame matcher on the saved setting's test labels.
+    # The reported PQ of #3 equals a plain per-window matcher on the saved setting's test labels.
     scenes = load_radarscenes(tiny_folder)
     test = np.flatnonzero(np.isin(scenes.groups, results["meta"]["data"]["test_sequences"]))
     target = precluster_target(scenes.data, scenes.target)[test]

@@ -112,7 +112,7 @@ def test_the_pooled_scores_are_those_of_the_whole_test_half(classified, tiny_fol
         found["confidence"].to_numpy(),
         times=data["timestamp"].to_numpy(dtype=np.float64) * 1e-6,
         groups=data["sequence"].to_numpy(),
-        frame=0.5,
+        window=0.5,
     )
     for key in ("pq", "map", "macro_f1", "mcov"):
         assert getattr(entry.scores, key) == pytest.approx(scores[key], abs=1e-9), key
@@ -120,7 +120,7 @@ def test_the_pooled_scores_are_those_of_the_whole_test_half(classified, tiny_fol
 
 def _setting(name, per_sequence, before=0.5):
     mean = float(np.mean(per_sequence))
-    scores = SemanticScores(frame_s=0.5, pq=mean, sq=1.0, rq=mean, map=mean, macro_f1=mean, mcov=mean, per_class={})
+    scores = SemanticScores(window_s=0.5, pq=mean, sq=1.0, rq=mean, map=mean, macro_f1=mean, mcov=mean, per_class={})
     return ClassifiedSetting(
         name=name,
         setting_source="tuned",
@@ -318,8 +318,8 @@ def test_the_step_counts_background_against_the_target_of_the_object_level_score
     part = classified_sequence(Sequence(id=int(numbers[1]), scenes=test, target=target), model)
     setting = _classified_setting("#1", "fixed #1", {}, model, [part], None)
     times = test.data["timestamp"].to_numpy(dtype=np.float64) * 1e-6
-    expected = background_share(target, part["clusters"], times=times, frame=0.5).background_segment_share
-    wrong = background_share(raw, part["clusters"], times=times, frame=0.5).background_segment_share
+    expected = background_share(target, part["clusters"], times=times, window=0.5).background_segment_share
+    wrong = background_share(raw, part["clusters"], times=times, window=0.5).background_segment_share
     assert expected != wrong  # the two targets tell apart
     assert setting.background_share_before == pytest.approx(expected, abs=1e-12)
 

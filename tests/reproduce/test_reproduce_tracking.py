@@ -73,7 +73,7 @@ def test_the_scores_are_those_of_the_whole_test_half(tracked, tiny_folder):
         np.concatenate(ids),
         times=scenes.data["timestamp"].to_numpy()[rows] * 1e-6,
         groups=scenes.data["sequence"].to_numpy()[rows],
-        frame=0.5,
+        window=0.5,
     )
     final = entry.final
     assert (final.idf1, final.mota, final.id_switches, final.n_objects) == pytest.approx(
@@ -95,12 +95,12 @@ def test_the_tracking_table_names_what_its_count_of_objects_counts(tracked):
     section = report.split("## Beyond the paper: object tracking online")[1].split("\n## ")[0]
     header = next(line for line in section.splitlines() if line.startswith("| setting |"))
     columns = [cell.strip() for cell in header.strip("|").split("|")]
-    assert "objects" not in columns and "object-frames" in columns
-    assert "*object-frames* counts each annotated moving road user once in every 0.5 s frame it is seen in" in section
+    assert "objects" not in columns and "object-windows" in columns
+    assert "*object-windows* counts each annotated moving road user once in every 0.5 s window it is seen in" in section
     for number, result in results.tracking.items():
         row = next(line for line in section.splitlines() if line.startswith(f"| #{number} "))
         cells = [cell.strip() for cell in row.strip("|").split("|")]
-        assert cells[columns.index("object-frames")] == str(result.final.n_objects)
+        assert cells[columns.index("object-windows")] == str(result.final.n_objects)
 
 
 def test_results_without_tracking_still_load():

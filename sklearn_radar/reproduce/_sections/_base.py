@@ -121,10 +121,10 @@ def frame_name(frame):
 
 def grid_markdown(table: GridTable):
     """A table of Table I as a markdown table."""
-    frame = table.to_frame()
-    header = "| eta_1 (m/s) \\ d_xy (m) | " + " | ".join(f"{c:.1f}" for c in frame.columns) + " |"
-    rule = "|---|" + "---|" * len(frame.columns)
-    rows = [f"| {i:.2f} | " + " | ".join(f"{v:g}" for v in frame.loc[i]) + " |" for i in frame.index]
+    data = table.to_frame()
+    header = "| eta_1 (m/s) \\ d_xy (m) | " + " | ".join(f"{c:.1f}" for c in data.columns) + " |"
+    rule = "|---|" + "---|" * len(data.columns)
+    rows = [f"| {i:.2f} | " + " | ".join(f"{v:g}" for v in data.loc[i]) + " |" for i in data.index]
     return "\n".join([header, rule, *rows])
 
 

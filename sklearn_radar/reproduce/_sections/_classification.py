@@ -30,7 +30,7 @@ def markdown(results: RunResults) -> list[str]:
     if found is None:
         return []
     rows = found.settings
-    frame = next(iter(rows.values())).scores.frame_s
+    window = next(iter(rows.values())).scores.window_s
     lines = [
         "",
         "## Beyond the paper: classifying the clusters",
@@ -39,11 +39,11 @@ def markdown(results: RunResults) -> list[str]:
         'proposed clustering framework on a classifier". Here a `ClusterClassifier` (the cluster features of '
         "`sklearn_radar.classification.cluster_features`, a `HistGradientBoostingClassifier`) is trained on the "
         "clusters of each setting on the training half, cut into "
-        f"{frame:g} s frames; a segment's target is the class of the annotated road user whose detections in the "
-        "frame have IoU > 0.5 with it, background otherwise. Segments classified as background become noise. "
+        f"{window:g} s time windows; a segment's target is the class of the annotated road user whose detections "
+        "in the window have IoU > 0.5 with it, background otherwise. Segments classified as background become noise. "
         "The point-wise classifier, the same classifier on single detections with no clustering (instances: "
         "connected detections of one class), is what a user would try instead. Scores on the test half, per "
-        f"{frame:g} s frame, against the annotated road users (`sklearn_radar.metrics.semantic_scores`): class PQ "
+        f"{window:g} s window, against the annotated road users (`sklearn_radar.metrics.semantic_scores`): class PQ "
         "(a match needs the same class and IoU > 0.5; the mean over classes), mAP@0.5 (instances ranked by the "
         "classifier's confidence; COCO's 101-point interpolation; the mean over classes), macro-F1 over the "
         "detections (background counted as a class) and the class-agnostic mCov. Background-only segments: the "
@@ -103,7 +103,7 @@ def background_before(results: RunResults, name, row: ClassifiedSetting):
 
     That of the clustering's own scores (``instance_test``, the first repeat's, as the object-level table gives
     it) where its experiment or baseline ran, else the classification step's (the same definition: the
-    pre-clustered target, per 0.5 s frame); None for the point-wise classifier.
+    pre-clustered target, per 0.5 s time window); None for the point-wise classifier.
     """
     if row.background_share_before is None:
         return None

@@ -141,11 +141,11 @@ def _trend(f, w):
     grid = f.table_i.get(w.frame)
     if grid is None:
         return ""
-    frame = grid.errors.to_frame()
-    rows = [index for index in frame.index if abs(index - w.vr_threshold) < 1e-9]
+    errors = grid.errors.to_frame()
+    rows = [index for index in errors.index if abs(index - w.vr_threshold) < 1e-9]
     if not rows:
         return ""
-    row = frame.loc[rows[0]]
+    row = errors.loc[rows[0]]
     first, last = row.index[0], row.index[-1]
     if not row[last] < row[first]:
         return ""

@@ -17,7 +17,7 @@ def markdown(results: RunResults) -> list[str]:
     rows = [row for row in rows if row[2] is not None]
     if not rows:
         return []
-    frame = rows[0][2].frame_s
+    window = rows[0][2].window_s
     objective = "panoptic quality (PQ)" if results.meta.objective == "pq" else "the paper's V-measure (V1)"
     lines = [
         "",
@@ -25,8 +25,8 @@ def markdown(results: RunResults) -> list[str]:
         "",
         f"The searches maximised {objective}. The paper's V-measure does not penalise clusters made of static "
         "background, so tuning for it can cluster guard rails for free. The scores below count what a user of "
-        f"one cluster per moving road user counts, per {frame:g} s frame of each test sequence (Scheiner et al. "
-        "2021): a ground-truth segment is one object's detections in a frame, a predicted segment one cluster's; a "
+        f"one cluster per moving road user counts, per {window:g} s time window of each test sequence (Scheiner et al. "
+        "2021): a ground-truth segment is one object's detections in a window, a predicted segment one cluster's; a "
         "match needs IoU > 0.5. PQ = SQ x RQ (Kirillov et al. 2019), RQ is the F1 score of the matches, SQ their "
         "mean IoU; every unmatched cluster segment is a false positive, background-only ones included. mCov and "
         "mWCov are the mean and size-weighted mean best IoU of each ground-truth segment (they ignore extra "
