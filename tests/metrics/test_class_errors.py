@@ -42,14 +42,14 @@ def test_background_cluster_without_instance_is_missed():
     assert without["confusion"].loc[2, -1] == 0 and without["per_class"][2].missed == 1
 
 
-def test_frames_and_sequences_make_separate_segments():
-    # The same car and cluster over two frames and in a second sequence: three matched segments.
+def test_windows_and_sequences_make_separate_segments():
+    # The same car and cluster over two windows and in a second sequence: three matched segments.
     times = [0.0, 0.1, 0.6, 0.7, 0.0, 0.1]
     groups = [0, 0, 0, 0, 1, 1]
     errors = class_errors([0] * 6, [0] * 6, [0] * 6, [4] * 6, times=times, groups=groups)
     assert errors["confusion"].loc[0, 0] == 3 and errors["per_class"][0].n_true == 3
-    one_frame = class_errors([0] * 6, [0] * 6, [0] * 6, [4] * 6, times=times, groups=groups, frame=None)
-    assert one_frame["per_class"][0].tp == 2
+    one_window = class_errors([0] * 6, [0] * 6, [0] * 6, [4] * 6, times=times, groups=groups, window=None)
+    assert one_window["per_class"][0].tp == 2
 
 
 def test_ignored_detections_are_left_out():
