@@ -21,13 +21,11 @@ averaged with the true positives as weights.
 
 from __future__ import annotations
 
-from numbers import Real
-
 import numpy as np
 from scipy.optimize import linear_sum_assignment
-from sklearn.utils._param_validation import Interval, validate_params
+from sklearn.utils._param_validation import validate_params
 
-from ._tracking import _window_cells
+from ._tracking import TRACKING_PARAMETERS, _tracking_inputs, _window_cells
 
 #: The localisation thresholds over which HOTA is averaged (TrackEval's).
 ALPHAS = np.arange(0.05, 0.99, 0.05)
@@ -35,16 +33,7 @@ ALPHAS = np.arange(0.05, 0.99, 0.05)
 _EPS = np.finfo(float).eps
 
 
-@validate_params(
-    {
-        "labels_true": ["array-like"],
-        "labels_pred": ["array-like"],
-        "times": ["array-like"],
-        "groups": ["array-like", None],
-        "window": [Interval(Real, 0, None, closed="neither"), None],
-    },
-    prefer_skip_nested_validation=True,
-)
+@validate_params(TRACKING_PARAMETERS, prefer_skip_nested_validation=True)
 def hota_scores(labels_true, labels_pred, *, times, groups=None, window=0.5):
     """HOTA, DetA, AssA and LocA of predicted object ids against ground-truth objects, per time window.
 
@@ -90,17 +79,7 @@ def hota_scores(labels_true, labels_pred, *, times, groups=None, window=0.5):
     >>> round(scores["deta"], 3), round(scores["assa"], 3), round(scores["hota"], 3)
     (1.0, 0.5, 0.707)
     """
-    labels_true = np.asarray(labels_true).ravel()
-    labels_pred = np.asarray(labels_pred).ravel()
-    times = np.asarray(times, dtype=np.float64).ravel()
-    groups = np.zeros(len(times)) if groups is None else np.asarray(groups).ravel()
-    if not (len(labels_true) == len(labels_pred) == len(times) == len(groups)):
-        raise ValueError(
-            "labels_true, labels_pred, times and groups must have equal lengths, got "
-            f"{len(labels_true)}, {len(labels_pred)}, {len(times)} and {len(groups)}"
-        )
-    if not np.isfinite(times).all():
-        raise ValueError("times must be finite")
+    labels_true, labels_pred, times, groups = _tracking_inputs(labels_true, labels_pred, times, groups)
     totals = _Totals()
     if len(times):
         cell, sequence = _window_cells(times, groups, window)

@@ -56,16 +56,33 @@ def _segments(cell, sequence, labels):
     return rows, segment, segment_cell, segment_track
 
 
-@validate_params(
-    {
-        "labels_true": ["array-like"],
-        "labels_pred": ["array-like"],
-        "times": ["array-like"],
-        "groups": ["array-like", None],
-        "window": [Interval(Real, 0, None, closed="neither"), None],
-    },
-    prefer_skip_nested_validation=True,
-)
+#: The arguments of the tracking scores, as validate_params checks them.
+TRACKING_PARAMETERS = {
+    "labels_true": ["array-like"],
+    "labels_pred": ["array-like"],
+    "times": ["array-like"],
+    "groups": ["array-like", None],
+    "window": [Interval(Real, 0, None, closed="neither"), None],
+}
+
+
+def _tracking_inputs(labels_true, labels_pred, times, groups):
+    """The four per-detection arrays as 1-D arrays (one sequence without groups); ValueError if they disagree."""
+    labels_true = np.asarray(labels_true).ravel()
+    labels_pred = np.asarray(labels_pred).ravel()
+    times = np.asarray(times, dtype=np.float64).ravel()
+    groups = np.zeros(len(times)) if groups is None else np.asarray(groups).ravel()
+    if not (len(labels_true) == len(labels_pred) == len(times) == len(groups)):
+        raise ValueError(
+            "labels_true, labels_pred, times and groups must have equal lengths, got "
+            f"{len(labels_true)}, {len(labels_pred)}, {len(times)} and {len(groups)}"
+        )
+    if not np.isfinite(times).all():
+        raise ValueError("times must be finite")
+    return labels_true, labels_pred, times, groups
+
+
+@validate_params(TRACKING_PARAMETERS, prefer_skip_nested_validation=True)
 def tracking_scores(labels_true, labels_pred, *, times, groups=None, window=0.5):
     """ID switches, MOTA and IDF1 of predicted object ids against ground-truth objects, per time window.
 
@@ -108,17 +125,7 @@ def tracking_scores(labels_true, labels_pred, *, times, groups=None, window=0.5)
     >>> scores["id_switches"], scores["mota"], scores["idf1"]
     (1, 0.5, 0.5)
     """
-    labels_true = np.asarray(labels_true).ravel()
-    labels_pred = np.asarray(labels_pred).ravel()
-    times = np.asarray(times, dtype=np.float64).ravel()
-    groups = np.zeros(len(times)) if groups is None else np.asarray(groups).ravel()
-    if not (len(labels_true) == len(labels_pred) == len(times) == len(groups)):
-        raise ValueError(
-            "labels_true, labels_pred, times and groups must have equal lengths, got "
-            f"{len(labels_true)}, {len(labels_pred)}, {len(times)} and {len(groups)}"
-        )
-    if not np.isfinite(times).all():
-        raise ValueError("times must be finite")
+    labels_true, labels_pred, times, groups = _tracking_inputs(labels_true, labels_pred, times, groups)
     if len(times) == 0:
         return _scores(0, 0, 0, 0, 0, 0, 0, 0)
     cell, sequence = _window_cells(times, groups, window)
