@@ -13,7 +13,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from .._executor import _effective_n_jobs, thread_bound
 from .._labels import consecutive_labels, drop_small_clusters, roots_to_rows
-from .._schema import CLUSTER_FEATURE_READS
+from .._schema import CLASSIFIER_LAYOUT, CLUSTER_FEATURE_READS, ArrayLayout, ColumnsRead
 from .._validation import read_columns, sequence_slices
 from ._agglomeration import mean_link_merges, roots_at
 from ._link_features import (
@@ -27,6 +27,20 @@ from ._link_features import (
 )
 from ._link_training import cross_fit, fold_of_groups, positive_proba, tune
 
+#: Working detections as LinkClustering reads them from an array: the classifiers' layout, then the ego speed
+#: ``ego_vx`` (m/s; a measurement without a neutral value: absent, its feature is left out).
+LINK_LAYOUT = ArrayLayout(
+    name="link detection array",
+    columns=(*CLASSIFIER_LAYOUT.columns, "ego_vx"),
+    neutral=dict(CLASSIFIER_LAYOUT.neutral),
+)
+#: The columns LinkClustering reads.
+LINK_READS = ColumnsRead(
+    required=CLUSTER_FEATURE_READS.required,
+    optional=(*CLUSTER_FEATURE_READS.optional, "ego_vx"),
+    layout=LINK_LAYOUT,
+)
+
 #: The settings the automatic tuning tries (each fixed parameter replaces its grid by its value).
 OBJECTNESS_GRID = (0.05, 0.15, 0.3, 0.5)
 LINK_GRID = tuple(np.round(np.arange(0.1, 0.951, 0.05), 2).tolist())
@@ -36,13 +50,13 @@ CANDIDATE_OBJECTNESS = 0.05
 
 
 #: The order of the detections within a sequence (time first), so that nothing depends on the row order.
-_SORT_KEY = ("t", "x", "y", "v", "los", "rcs", "range", "sensor")
+_SORT_KEY = ("t", "x", "y", "v", "los", "rcs", "range", "sensor", "ego")
 
 
 class _Sequence(NamedTuple):
     """The kept detections of one sequence in their row-order-free order, with their features."""
 
-    rows: np.ndarray  # global row numbers, sorted by (t, x, y, v_r, line of sight, rcs, range, sensor)
+    rows: np.ndarray  # global row numbers, sorted by _SORT_KEY
     detections: Detections
     features: np.ndarray  # DETECTION_FEATURES (all columns)
     local: object  # LocalMotion
@@ -155,11 +169,13 @@ class LinkClustering(ClusterMixin, BaseEstimator):
     -----
     Reads the columns ``x``, ``y`` (m), ``v_r`` (m/s), ``t`` (s) and, when
     present, ``sequence``, ``keep``, ``range_sc`` (m), ``heading``,
-    ``azimuth_sc``, ``sensor_yaw`` (rad), ``rcs`` (dBsm) and ``sensor_id``;
+    ``azimuth_sc``, ``sensor_yaw`` (rad), ``rcs`` (dBsm), ``sensor_id`` and
+    ``ego_vx`` (m/s);
     the features that need an absent measurement are left out (without
     ``azimuth_sc`` and ``sensor_yaw`` there is no line of sight, hence no
     rigid-velocity feature).  A plain array is read by position in the
-    order of :data:`~sklearn_radar._schema.CLASSIFIER_LAYOUT`.
+    order of :data:`~sklearn_radar._schema.CLASSIFIER_LAYOUT` followed by
+    ``ego_vx``.
 
     Examples
     --------
@@ -225,7 +241,7 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         X : DataFrame or array-like of shape (n_detections, n_columns)
             Working detections (the output of :class:`FrameTransform`, optionally filtered by
             :class:`DopplerDensityFilter`), or an array in the order of
-            :data:`~sklearn_radar._schema.CLASSIFIER_LAYOUT`.
+            :data:`~sklearn_radar._schema.CLASSIFIER_LAYOUT` followed by ``ego_vx``.
         y : array-like of int, shape (n_detections,)
             Ground-truth instance of each detection, -1 for background
             (e.g. :func:`~sklearn_radar.instance_target` of the track ids, or
@@ -238,7 +254,7 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         -------
         self : LinkClustering
         """
-        X, c = read_columns(self, X, CLUSTER_FEATURE_READS, reset=True)
+        X, c = read_columns(self, X, LINK_READS, reset=True)
         y = _check_instances(y, len(c["x"]))
         sequences = _sequences(c)
         kept = np.concatenate([s.rows for s in sequences])
@@ -272,7 +288,7 @@ class LinkClustering(ClusterMixin, BaseEstimator):
             Cluster per row, -1 for noise; consecutive ids in order of each cluster's first row.
         """
         check_is_fitted(self, "link_classifier_")
-        X, c = read_columns(self, X, CLUSTER_FEATURE_READS, reset=False)
+        X, c = read_columns(self, X, LINK_READS, reset=False)
         sequences = _sequences(c)
         with thread_bound(_effective_n_jobs(self.n_jobs)):
             return self._labels(sequences, len(c["x"]))
@@ -428,7 +444,7 @@ def _present(c):
     present = set()
     if c["azimuth_sc"] is not None and c["sensor_yaw"] is not None:
         present.add("los")
-    for field, column in (("rcs", "rcs"), ("range", "range_sc"), ("sensor", "sensor_id")):
+    for field, column in (("rcs", "rcs"), ("range", "range_sc"), ("sensor", "sensor_id"), ("ego", "ego_vx")):
         if c[column] is not None:
             present.add(field)
     return present
@@ -451,6 +467,7 @@ def _sequences(c):
         "rcs": nan if c["rcs"] is None else c["rcs"],
         "range": nan if c["range_sc"] is None else c["range_sc"],
         "sensor": nan if c["sensor_id"] is None else c["sensor_id"],
+        "ego": nan if c["ego_vx"] is None else c["ego_vx"],
     }
     sequences = []
     for part in sequence_slices(c["sequence"]):

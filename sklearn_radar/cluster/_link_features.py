@@ -10,8 +10,8 @@ filtered exactly.  The local rigid velocity is the model of Eq. 6 (each
 detection's Doppler is the projection of one velocity on its line of
 sight) fitted to the moving neighbours.
 
-A measurement that X lacks (``rcs``, ``range_sc``, ``sensor_id``, the line
-of sight ``azimuth_sc`` + ``sensor_yaw``) is NaN here; the features that
+A measurement that X lacks (``rcs``, ``range_sc``, ``sensor_id``,
+``ego_vx``, the line of sight ``azimuth_sc`` + ``sensor_yaw``) is NaN here; the features that
 need it are NaN and the estimator leaves them out.
 """
 
@@ -41,6 +41,7 @@ DETECTION_FEATURES = {
     "v_r": ("m/s", "compensated Doppler", ()),
     "rcs": ("dBsm", "radar cross section", ("rcs",)),
     "range": ("m", "range to the sensor", ("range",)),
+    "ego_speed": ("m/s", "|ego speed|", ("ego",)),
     "n_local": ("", "neighbours within 2.5 m and 0.15 s", ()),
     "n_near": ("", "neighbours within 1 m and 0.1 s", ()),
     "n_similar": ("", "local neighbours whose Doppler differs by less than 0.5 m/s", ()),
@@ -103,6 +104,8 @@ class Detections(NamedTuple):
         Range to the sensor, m.
     sensor : ndarray
         Sensor id.
+    ego : ndarray
+        Ego speed, m/s.
     """
 
     x: np.ndarray
@@ -113,6 +116,7 @@ class Detections(NamedTuple):
     rcs: np.ndarray
     range: np.ndarray
     sensor: np.ndarray
+    ego: np.ndarray
 
 
 class LocalMotion(NamedTuple):
@@ -162,7 +166,7 @@ def pairs_within(x, y, t, radius, window, subset=None):
     found = cKDTree(points).query_pairs(radius * np.sqrt(2.0) * (1 + 1e-9), output_type="ndarray")
     i, j = idx[found[:, 0]], idx[found[:, 1]]
     i, j = np.minimum(i, j), np.maximum(i, j)
-    ok = ((x[i] - x[j]) ** 2 + (y[i] - y[j]) ** 2 <= radius**2) & (np.abs(t[i] - t[j]) <= window)
+    ok = (np.hypot(x[i] - x[j], y[i] - y[j]) <= radius) & (np.abs(t[i] - t[j]) <= window)
     i, j = i[ok], j[ok]
     order = np.lexsort((j, i))
     return i[order].astype(np.int64), j[order].astype(np.int64)
@@ -206,6 +210,7 @@ def detection_features(d: Detections):
             v,
             d.rcs,
             d.range,
+            np.abs(d.ego),
             count,
             near,
             similar,

@@ -12,10 +12,9 @@ from sklearn.pipeline import Pipeline
 from threadpoolctl import threadpool_info, threadpool_limits
 
 from sklearn_radar import DopplerDensityFilter, FrameTransform, instance_target
-from sklearn_radar._schema import CLUSTER_FEATURE_READS
 from sklearn_radar._validation import read_columns
 from sklearn_radar.cluster import LinkClustering, _link_training
-from sklearn_radar.cluster._link_clustering import LINK_GRID, MIN_SIZE_GRID, OBJECTNESS_GRID, _sequences
+from sklearn_radar.cluster._link_clustering import LINK_GRID, LINK_READS, MIN_SIZE_GRID, OBJECTNESS_GRID, _sequences
 from sklearn_radar.datasets import make_scenes
 
 #: Fixed thresholds: no tuning, so no out-of-fold fits (the cheap configuration of most tests).
@@ -237,8 +236,8 @@ def test_the_detections_of_a_sequence_are_numbered_free_of_the_row_order(data):
     X = X[X["sequence"] == X["sequence"].iloc[0]].reset_index(drop=True)
     permutation = np.random.default_rng(1).permutation(len(X))
     model = LinkClustering()
-    (forward,) = _sequences(read_columns(model, X, CLUSTER_FEATURE_READS, reset=True)[1])
-    (shuffled,) = _sequences(read_columns(model, X.iloc[permutation], CLUSTER_FEATURE_READS, reset=True)[1])
+    (forward,) = _sequences(read_columns(model, X, LINK_READS, reset=True)[1])
+    (shuffled,) = _sequences(read_columns(model, X.iloc[permutation], LINK_READS, reset=True)[1])
     np.testing.assert_array_equal(permutation[shuffled.rows], forward.rows)  # the same detection at each number
     for name in forward.detections._fields:
         np.testing.assert_array_equal(getattr(shuffled.detections, name), getattr(forward.detections, name))

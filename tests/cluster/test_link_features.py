@@ -32,6 +32,7 @@ def _detections(x, y, t, v, los=None, rcs=None, rng=None):
         rcs=rng.normal(0, 5, n) if rcs is None else np.asarray(rcs, float),
         range=rng.uniform(5, 80, n),
         sensor=rng.integers(1, 5, n).astype(float),
+        ego=np.full(n, 8.0),
     )
 
 
@@ -131,10 +132,10 @@ def test_without_a_line_of_sight_only_its_features_are_nan_and_left_out():
         rng.uniform(0, 3, n), rng.uniform(0, 3, n), np.zeros(n), rng.normal(0, 5, n), los=np.full(n, np.nan)
     )
     features, local = detection_features(d)
-    needs_los = ~usable(DETECTION_FEATURES, {"rcs", "range", "sensor"})
+    needs_los = ~usable(DETECTION_FEATURES, {"rcs", "range", "sensor", "ego"})
     assert np.all(np.isnan(features[:, needs_los])) and not np.any(np.isnan(features[:, ~needs_los]))
     i, j = pairs_within(d.x, d.y, d.t, 3.0, 0.25)
     pairs = pair_features(d, local, rng.random(n), i, j)
-    pair_needs_los = ~usable(PAIR_FEATURES, {"rcs", "range", "sensor"})
+    pair_needs_los = ~usable(PAIR_FEATURES, {"rcs", "range", "sensor", "ego"})
     assert len(i) and np.all(np.isnan(pairs[:, pair_needs_los])) and not np.any(np.isnan(pairs[:, ~pair_needs_los]))
-    assert usable(DETECTION_FEATURES, {"los", "rcs", "range", "sensor"}).all()
+    assert usable(DETECTION_FEATURES, {"los", "rcs", "range", "sensor", "ego"}).all()
