@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import numpy as np
-from sklearn.ensemble import HistGradientBoostingClassifier
-from sklearn.model_selection import GroupKFold
 
 from .._labels import drop_small_clusters, roots_to_rows
 from ._agglomeration import mean_link_merges, roots_at
@@ -31,6 +29,10 @@ def binary_classifier(max_iter, seed, early_stopping):
     -------
     classifier : HistGradientBoostingClassifier
     """
+    from sklearn.ensemble import (
+        HistGradientBoostingClassifier,
+    )  # on first use: importing the cluster package stays light
+
     return HistGradientBoostingClassifier(
         max_iter=max_iter, learning_rate=0.1, max_leaf_nodes=31, early_stopping=early_stopping, random_state=seed
     )
@@ -80,6 +82,8 @@ def fold_of_groups(groups, cv):
     folds : list of ndarray of int64
         Shaped as ``groups``.
     """
+    from sklearn.model_selection import GroupKFold  # on first use, as the classifier
+
     every = np.concatenate(groups)
     n_splits = min(cv, len(np.unique(every)))
     fold = np.empty(len(every), dtype=np.int64)
