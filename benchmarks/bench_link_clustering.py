@@ -9,9 +9,11 @@ the test half is scored with ``metrics.panoptic_quality`` (0.5 s frames).  ``fit
 scan (one sensor's cycle), batch-amortised; the front is excluded from both.  Wall and CPU seconds are printed
 (CPU sums the classifiers' threads), with the load average: on a shared machine the wall time depends on others.
 
-Run (``--threads`` bounds the classifiers' OpenMP threads, the issue's budget is 2 cores)::
+Run (``--threads`` bounds the classifiers' OpenMP threads, the issue's budget is 2 cores; ``--prototype`` runs the
+prototype's A-mean on the same data beside it, a few minutes per preset and seed)::
 
-    nice -n 19 python benchmarks/bench_link_clustering.py --data realistic --seeds 0 --threads 2
+    python benchmarks/bench_link_clustering.py --data realistic --seeds 0 --threads 2
+    python benchmarks/bench_link_clustering.py --data easy radarscenes --seeds 0 --threads 1 --prototype
 """
 
 from __future__ import annotations
@@ -20,10 +22,12 @@ import argparse
 import os
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 from sklearn.pipeline import Pipeline
+from threadpoolctl import threadpool_limits
 
 from sklearn_radar import DopplerDensityFilter, FrameTransform
 from sklearn_radar.cluster import LinkClustering
@@ -31,8 +35,30 @@ from sklearn_radar.datasets import make_scenes
 from sklearn_radar.metrics import panoptic_quality, precluster_target
 from sklearn_radar.model_selection import sequence_train_test_split
 
-#: Test PQ of the prototype's design A-mean (``experiment_learned_grouping.py --designs A-mean``, same data).
+#: Test PQ of the prototype's design A-mean (``experiment_learned_grouping.py --designs A-mean``, same data and
+#: split), where it was run; ``--prototype`` runs it again for any preset and seed.
 PROTOTYPE_PQ = {("realistic", 0): 0.699}
+
+
+def prototype_pq(preset, seed, options):
+    """Test PQ of the prototype's A-mean on the same data and split (one thread, as the prototype runs)."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    import experiment_learned_grouping as prototype
+
+    settings = argparse.Namespace(
+        designs=["A-mean"],
+        n_sequences=options.n_sequences,
+        duration=options.duration,
+        max_iter=150,
+        max_rows=400_000,
+        pair_radius=3.0,
+        pair_window=0.25,
+        thresholds=[0.05, 0.15, 0.3, 0.5],
+        min_sizes=[1, 3, 6, 10, 15, 20],
+    )
+    with threadpool_limits(1):
+        (record,) = prototype.run(preset, seed, settings)
+    return record["pq"]
 
 
 def load(preset, seed, n_sequences, duration):
@@ -58,6 +84,7 @@ def main(argv=None):
     parser.add_argument("--n-sequences", type=int, default=4)
     parser.add_argument("--duration", type=float, default=20.0, help="s per sequence")
     parser.add_argument("--threads", type=int, default=2, help="OpenMP threads of the classifiers (n_jobs)")
+    parser.add_argument("--prototype", action="store_true", help="also run the prototype's A-mean (minutes each)")
     options = parser.parse_args(argv)
     print(f"{'preset':<12} seed  test PQ  recall  precision  cv PQ  prototype  fit s  predict ms/scan  setting")
     for preset in options.data:
@@ -73,7 +100,7 @@ def main(argv=None):
             n_scans = test.groupby(["sequence", "sensor_id", "timestamp"]).ngroups
             scores = panoptic_quality(y_test, labels, times=test["t"].to_numpy(), groups=test["sequence"].to_numpy())
             setting = (model.link_threshold_, model.objectness_threshold_, model.min_cluster_size_)
-            prototype = PROTOTYPE_PQ.get((preset, seed))
+            prototype = prototype_pq(preset, seed, options) if options.prototype else PROTOTYPE_PQ.get((preset, seed))
             print(
                 f"{preset:<12} {seed:>4}  {scores.pq:.3f}    {scores.recall:.3f}   {scores.precision:.3f}      "
                 f"{model.cv_score_:.3f}  {'   -  ' if prototype is None else f'{prototype:.3f}'}     "
