@@ -20,6 +20,7 @@ from ._link_features import (
     DETECTION_FEATURES,
     PAIR_FEATURES,
     Detections,
+    LocalMotion,
     detection_features,
     pair_features,
     pairs_within,
@@ -59,7 +60,7 @@ class _Sequence(NamedTuple):
     rows: np.ndarray  # global row numbers, sorted by _SORT_KEY
     detections: Detections
     features: np.ndarray  # DETECTION_FEATURES (all columns)
-    local: object  # LocalMotion
+    local: LocalMotion
 
 
 class LinkClustering(ClusterMixin, BaseEstimator):
@@ -322,10 +323,15 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         grids = self._grids()
         tuning = any(len(grid) > 1 for grid in grids)
         if tuning and n_groups < 2:
+            tuned = [
+                name
+                for name in ("link_threshold", "objectness_threshold", "min_cluster_size")
+                if getattr(self, name) == "auto"
+            ]
             raise ValueError(
-                "LinkClustering: link_threshold, objectness_threshold and min_cluster_size='auto' are tuned on "
-                "out-of-fold predictions, which need at least two sequences (or one whose detections span more "
-                "than one time instant); set the three parameters to numbers to fit on this data"
+                f"LinkClustering: {' and '.join(tuned)}='auto' is tuned on out-of-fold predictions, which need at "
+                "least two sequences (or one whose kept detections span more than one time instant); give "
+                f"{'it a number' if len(tuned) == 1 else 'them numbers'} to fit on this data"
             )
         folds = fold_of_groups(groups, self.cv) if n_groups >= 2 else [np.zeros(len(g), np.int64) for g in groups]
         seeds = rng.randint(np.iinfo(np.int32).max, size=2)
@@ -337,12 +343,12 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         )
         floor = min(CANDIDATE_OBJECTNESS, min(grids[1]))
         pair_x, pair_y, pairs = [], [], []
-        for s, p, labels in zip(sequences, objectness, targets, strict=True):
-            i, j = self._pairs(s, p > floor)
+        for s, p, is_object in zip(sequences, objectness, targets, strict=True):
+            i, j = self._pairs(s, p > floor)  # a positive pair: both detections of one instance
             truth = y[s.rows]
             pairs.append((i, j))
             pair_x.append(pair_features(s.detections, s.local, p, i, j)[:, pair_columns])
-            pair_y.append((truth[i] == truth[j]) & labels[i])
+            pair_y.append((truth[i] == truth[j]) & is_object[i])
         pair_folds = [fold[i] for fold, (i, _) in zip(folds, pairs, strict=True)]
         self.n_training_pairs_ = int(sum(len(i) for i, _ in pairs))
         self.link_classifier_, links = cross_fit(

@@ -206,8 +206,10 @@ def test_bad_y_raises_naming_y(data, make_y, match):
 
 def test_tuning_on_one_instant_raises_naming_the_parameters():
     X = pd.DataFrame({"x": [0.0, 0.5, 5.0, 5.5], "y": 0.0, "v_r": 5.0, "t": 0.0})
-    with pytest.raises(ValueError, match="link_threshold, objectness_threshold and min_cluster_size='auto'"):
+    with pytest.raises(ValueError, match="link_threshold and objectness_threshold and min_cluster_size='auto'"):
         LinkClustering().fit(X, [0, 0, 1, 1])
+    with pytest.raises(ValueError, match=r"^LinkClustering: min_cluster_size='auto'"):
+        LinkClustering(link_threshold=0.5, objectness_threshold=0.5).fit(X, [0, 0, 1, 1])
     labels = LinkClustering(**FIXED).fit_predict(X, [0, 0, 1, 1])  # fixed thresholds: nothing to tune
     assert labels.shape == (4,)
 
