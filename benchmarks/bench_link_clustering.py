@@ -84,13 +84,14 @@ def main(argv=None):
     parser.add_argument("--n-sequences", type=int, default=4)
     parser.add_argument("--duration", type=float, default=20.0, help="s per sequence")
     parser.add_argument("--threads", type=int, default=2, help="OpenMP threads of the classifiers (n_jobs)")
+    parser.add_argument("--random-state", type=int, default=0, help="LinkClustering's seed (classifiers, subsampling)")
     parser.add_argument("--prototype", action="store_true", help="also run the prototype's A-mean (minutes each)")
     options = parser.parse_args(argv)
     print(f"{'preset':<12} seed  test PQ  recall  precision  cv PQ  prototype  fit s  predict ms/scan  setting")
     for preset in options.data:
         for seed in options.seeds:
             (train, y_train), (test, y_test) = load(preset, seed, options.n_sequences, options.duration)
-            model = LinkClustering(n_jobs=options.threads)
+            model = LinkClustering(n_jobs=options.threads, random_state=options.random_state)
             start, cpu = time.perf_counter(), time.process_time()
             model.fit(train, y_train)
             fit_s, fit_cpu = time.perf_counter() - start, time.process_time() - cpu
