@@ -7,7 +7,14 @@ from sklearn.utils.estimator_checks import parametrize_with_checks
 from sklearn_radar import ClusterMerger, DopplerDensityFilter, FrameTransform, RadarDBSCAN, config_context
 from sklearn_radar._skopt import Real
 from sklearn_radar.classification import ClusterClassifier, PointClassifier
-from sklearn_radar.cluster import SequenceDBSCAN, SequenceHDBSCAN, SlidingDBSCAN, WindowedDBSCAN, WindowedHDBSCAN
+from sklearn_radar.cluster import (
+    LinkClustering,
+    SequenceDBSCAN,
+    SequenceHDBSCAN,
+    SlidingDBSCAN,
+    WindowedDBSCAN,
+    WindowedHDBSCAN,
+)
 from sklearn_radar.model_selection import SequenceSearchCV
 
 #: A small search of RadarDBSCAN's eps_xy (m), two random candidates on two folds.
@@ -33,6 +40,15 @@ _NEEDS_GROUPS = (
     "estimator (as scikit-learn's searches do), so the input checks' messages are not its own.  Its search is "
     "tested against BayesSearchCV in tests/model_selection/test_sequence_search.py."
 )
+_NEEDS_INSTANCES = (
+    "LinkClustering learns from the ground-truth instances, so fit requires y (the instance of each detection) "
+    "and the check calls fit(X) without it: fit raises a ValueError naming y (tested in "
+    "tests/cluster/test_link_clustering.py)."
+)
+#: Given thresholds: the checks' arrays are one scan of one sequence, where the automatic tuning (on out-of-fold
+#: predictions of other sequences or time spans) has nothing to hold out and raises, naming the parameters
+#: (tests/cluster/test_link_clustering.py).
+_LINK_CLUSTERING = LinkClustering(link_threshold=0.5, objectness_threshold=0.5, min_cluster_size=1, max_iter=5)
 EXPECTED_FAILED_CHECKS = {
     "DopplerDensityFilter()": {
         "check_methods_subset_invariance": (
@@ -85,6 +101,24 @@ EXPECTED_FAILED_CHECKS = {
         "check_pipeline_consistency": _NEEDS_GROUPS,
         "check_positive_only_tag_during_fit": _NEEDS_GROUPS,
         "check_readonly_memmap_input": _NEEDS_GROUPS,
+    },
+    repr(_LINK_CLUSTERING): {
+        "check_clustering": _NEEDS_INSTANCES,
+        "check_clustering(readonly_memmap=True)": _NEEDS_INSTANCES,
+        "check_non_transformer_estimators_n_iter": (
+            "max_iter is the number of boosting iterations of its two classifiers (scikit-learn's "
+            "HistGradientBoostingClassifier, whose n_iter_ each fitted classifier has); the clustering itself "
+            "does not iterate, so there is no n_iter_ of its own."
+        ),
+        "check_methods_sample_order_invariance": (
+            "predict numbers the clusters 0, 1, ... in order of each cluster's first row (as labels_ of every "
+            "clusterer here), so permuting the rows renames the clusters; the partition itself does not depend on "
+            "the row order (tested with hypothesis in tests/cluster/test_link_clustering.py)."
+        ),
+        "check_methods_subset_invariance": (
+            "A detection's features count its neighbours among the detections given to predict (as Eq. 1's "
+            "filter does), so predicting a subset changes the features and hence the clusters, by design."
+        ),
     },
     "ClusterMerger()": {
         "check_clustering": "Its default stage 1 is RadarDBSCAN() with vr_min = 0.4 m/s: " + _BY_DESIGN_NOISE,
@@ -155,6 +189,7 @@ CHECKS = _strict(
             PointClassifier(),
             PointClassifier(radius=2.0),
             PointClassifier(radius=2.0, causal=True),
+            _LINK_CLUSTERING,
         ],
         expected_failed_checks=_expected_failed_checks,
     )

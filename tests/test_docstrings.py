@@ -187,6 +187,14 @@ def _fit_classifier(klass):
     return klass().fit(work, road_user_class(raw["label_id"]))
 
 
+def _fit_link_clustering(klass):
+    """The learned grouping on the FrameTransform output, with the instances of its track ids (few iterations)."""
+    from sklearn_radar import instance_target
+
+    raw, work = _detections()
+    return klass(max_iter=10).fit(work, instance_target(raw["track_id"], raw["sequence"]))
+
+
 #: How each estimator class of the public API is fitted: on the raw table or on FrameTransform's output.
 FIT = {
     "sklearn_radar.preprocessing.FrameTransform": lambda klass: klass().fit(_detections()[0]),
@@ -198,6 +206,7 @@ FIT = {
     "sklearn_radar.cluster.SequenceDBSCAN": lambda klass: klass().fit(_detections()[1]),
     "sklearn_radar.cluster.SequenceHDBSCAN": lambda klass: klass().fit(_detections()[1]),
     "sklearn_radar.cluster.SlidingDBSCAN": lambda klass: klass().fit(_detections()[1]),
+    "sklearn_radar.cluster.LinkClustering": _fit_link_clustering,
     "sklearn_radar.classification.ClusterClassifier": _fit_classifier,
     "sklearn_radar.classification.PointClassifier": _fit_classifier,
     "sklearn_radar.model_selection.ProgressBayesSearchCV": _fit_progress_bayes_search,

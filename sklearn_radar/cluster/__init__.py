@@ -1,6 +1,7 @@
-"""Stage 1 (RadarDBSCAN, Eqs. 2-5) and stage 2 (ClusterMerger, Eq. 6 and continuation)."""
+"""Stage 1 (RadarDBSCAN, Eqs. 2-5), stage 2 (ClusterMerger, Eq. 6 and continuation) and the learned grouping."""
 
 from ._cluster_merger import ClusterMerger
+from ._link_clustering import LinkClustering
 from ._radar_dbscan import RadarDBSCAN, min_points_at_range
 from ._radar_dbscan_stream import ScanStream
 from ._velocity import estimate_velocities, estimate_velocity
@@ -8,6 +9,7 @@ from ._windowed import SequenceDBSCAN, SequenceHDBSCAN, SlidingDBSCAN, WindowedD
 
 __all__ = [
     "ClusterMerger",
+    "LinkClustering",
     "RadarDBSCAN",
     "ScanStream",
     "SequenceDBSCAN",

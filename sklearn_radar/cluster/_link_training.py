@@ -1,0 +1,196 @@
+"""Training of LinkClustering: its classifiers, their out-of-fold probabilities, and the threshold search."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .._labels import drop_small_clusters, roots_to_rows
+from ._agglomeration import mean_link_merges, roots_at
+
+#: Rows from which the classifiers stop early (as scikit-learn's ``early_stopping="auto"``), and the fewest rows of
+#: the smaller class that allow it (its stratified hold-out of 10 % needs some of each class).
+EARLY_STOPPING_ROWS = 10_000
+EARLY_STOPPING_CLASS_ROWS = 50
+
+
+def binary_classifier(max_iter, seed, early_stopping):
+    """The classifier of objectness and links: histogram gradient boosting.
+
+    Parameters
+    ----------
+    max_iter : int
+        The most boosting iterations.
+    seed : int
+        Its random state.
+    early_stopping : bool
+        Stop when the loss on a 10 % hold-out has not improved for 10 iterations.
+
+    Returns
+    -------
+    classifier : HistGradientBoostingClassifier
+    """
+    from sklearn.ensemble import (
+        HistGradientBoostingClassifier,
+    )  # on first use: importing the cluster package stays light
+
+    return HistGradientBoostingClassifier(
+        max_iter=max_iter, learning_rate=0.1, max_leaf_nodes=31, early_stopping=early_stopping, random_state=seed
+    )
+
+
+def _fit(X, y, max_iter, seed):
+    """A fitted classifier of the boolean ``y``; the constant P(True) when ``y`` holds one class or none."""
+    n_true = int(np.count_nonzero(y))
+    if n_true in (0, len(y)):
+        return float(y[0]) if len(y) else 0.0
+    early = len(y) > EARLY_STOPPING_ROWS and min(n_true, len(y) - n_true) >= EARLY_STOPPING_CLASS_ROWS
+    return binary_classifier(max_iter, seed, early).fit(X, y)
+
+
+def positive_proba(model, X):
+    """P(True) of each row of ``X`` by a model of :func:`_fit`.
+
+    Parameters
+    ----------
+    model : HistGradientBoostingClassifier or float
+        A classifier of a boolean target, or a constant probability.
+    X : ndarray of shape (n, n_features)
+
+    Returns
+    -------
+    proba : ndarray of float64, shape (n,)
+    """
+    if isinstance(model, float):
+        return np.full(len(X), model)
+    if len(X) == 0:
+        return np.zeros(0)
+    return model.predict_proba(X)[:, 1]
+
+
+def fold_of_groups(groups, cv):
+    """``GroupKFold`` fold of each detection, per sequence, with at most ``cv`` folds.
+
+    Parameters
+    ----------
+    groups : list of ndarray of int
+        The group of each detection of each sequence (at least two distinct groups in all).
+    cv : int
+        The most folds.
+
+    Returns
+    -------
+    folds : list of ndarray of int64
+        Shaped as ``groups``.
+    """
+    from sklearn.model_selection import GroupKFold  # on first use, as the classifier
+
+    every = np.concatenate(groups)
+    n_splits = min(cv, len(np.unique(every)))
+    fold = np.empty(len(every), dtype=np.int64)
+    for k, (_, test) in enumerate(GroupKFold(n_splits=n_splits).split(every, groups=every)):
+        fold[test] = k
+    return np.split(fold, np.cumsum([len(g) for g in groups])[:-1])
+
+
+def cross_fit(features, targets, folds, max_iter, seed, max_rows, rng, *, out_of_fold):
+    """A classifier fitted on every sequence's rows, and its out-of-fold probabilities of them.
+
+    Parameters
+    ----------
+    features : list of ndarray of shape (n_k, n_features)
+        The rows of each sequence.
+    targets : list of ndarray of bool
+        Their targets.
+    folds : list of ndarray of int
+        Their folds.
+    max_iter : int
+        Boosting iterations.
+    seed : int
+        Seed of every classifier.
+    max_rows : int or None
+        Rows per fit; more are subsampled at random (``rng``).
+    rng : RandomState
+        For the subsampling.
+    out_of_fold : bool
+        True: the probabilities of each fold come from a classifier fitted on the other folds.  False: from the
+        final classifier (in-sample).
+
+    Returns
+    -------
+    model : HistGradientBoostingClassifier or float
+        Fitted on every row (or a subsample of ``max_rows``).
+    proba : list of ndarray of float64
+        P(True) of each sequence's rows.
+    """
+    X = np.concatenate(features) if features else np.zeros((0, 0))
+    y = np.concatenate(targets) if targets else np.zeros(0, dtype=bool)
+    fold = np.concatenate(folds) if folds else np.zeros(0, dtype=np.int64)
+
+    def fit(rows):
+        if max_rows is not None and len(rows) > max_rows:
+            rows = rows[np.sort(rng.choice(len(rows), max_rows, replace=False))]
+        return _fit(X[rows], y[rows], max_iter, seed)
+
+    proba = np.empty(len(y))
+    if out_of_fold:
+        for k in np.unique(fold):
+            held = fold == k
+            proba[held] = positive_proba(fit(np.flatnonzero(~held)), X[held])
+    model = fit(np.arange(len(y)))
+    if not out_of_fold:
+        proba = positive_proba(model, X)
+    return model, np.split(proba, np.cumsum([len(t) for t in targets])[:-1]) if targets else []
+
+
+def tune(sequences, objectness, pairs, links, grids, c, y, window):
+    """The (link, objectness, min size) setting of ``grids`` with the best panoptic quality, and that quality.
+
+    Parameters
+    ----------
+    sequences : list of _Sequence
+        The training sequences.
+    objectness : list of ndarray of float64
+        Out-of-fold P(road user) of each sequence's detections.
+    pairs : list of (ndarray, ndarray)
+        Each sequence's candidate pairs.
+    links : list of ndarray of float64
+        Their out-of-fold P(link).
+    grids : tuple of three sequences
+        The link thresholds, objectness thresholds and minimum sizes to try.
+    c : dict of ndarray
+        The columns read (``t`` in s, ``sequence``).
+    y : ndarray of int64
+        Ground-truth instance of every row.
+    window : float
+        Frame of the panoptic quality, s.
+
+    Returns
+    -------
+    setting : tuple
+        ``(link_threshold, objectness_threshold, min_cluster_size)``; the first of the grids' order among equals.
+    score : float
+        Its panoptic quality.
+    """
+    from ..metrics import panoptic_quality  # metrics imports the cluster package: a late import
+
+    n_rows = len(y)
+    groups = np.zeros(n_rows) if c["sequence"] is None else c["sequence"]
+    link_grid, objectness_grid, size_grid = grids
+    best, best_score = None, -1.0
+    for gate in objectness_grid:
+        merges = []
+        for s, p, (i, j), link in zip(sequences, objectness, pairs, links, strict=True):
+            node = p > gate
+            both = node[i] & node[j]
+            merges.append((node, mean_link_merges(len(s.rows), i[both], j[both], link[both], min(link_grid))))
+        for threshold in link_grid:
+            roots = np.full(n_rows, -1, dtype=np.int64)
+            for s, (node, merged) in zip(sequences, merges, strict=True):
+                local = np.where(node, roots_at(len(s.rows), *merged, threshold), -1)
+                roots_to_rows(s.rows, local, roots)
+            for size in size_grid:
+                labels = drop_small_clusters(roots, size)
+                score = panoptic_quality(y, labels, times=c["t"], groups=groups, window=window).pq
+                if score > best_score:
+                    best, best_score = (threshold, gate, size), score
+    return best, best_score
