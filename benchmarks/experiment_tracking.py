@@ -40,19 +40,18 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 
-from ablation_object_level import run_one, variants  # noqa: E402
+from ablation_object_level import run_one, variants
+from scipy.optimize import linear_sum_assignment
+from sklearn.base import clone
 
-from scipy.optimize import linear_sum_assignment  # noqa: E402
-from sklearn.base import clone  # noqa: E402
-
-from sklearn_radar import FrameTransform  # noqa: E402
-from sklearn_radar.datasets import make_scenes  # noqa: E402
-from sklearn_radar.experiments import object_pipeline  # noqa: E402
-from sklearn_radar.metrics import hota_scores, tracking_scores  # noqa: E402
-from sklearn_radar.model_selection import sequence_train_test_split  # noqa: E402
-from sklearn_radar.online import OnlinePipeline, Tracker  # noqa: E402
-from sklearn_radar.online._replay import replay  # noqa: E402
-from sklearn_radar.online._scans import scan_order  # noqa: E402
+from sklearn_radar import FrameTransform
+from sklearn_radar.datasets import make_scenes
+from sklearn_radar.experiments import object_pipeline
+from sklearn_radar.metrics import hota_scores, tracking_scores
+from sklearn_radar.model_selection import sequence_train_test_split
+from sklearn_radar.online import OnlinePipeline, Tracker
+from sklearn_radar.online._replay import replay
+from sklearn_radar.online._scans import scan_order
 
 PRESETS = ("realistic", "radarscenes", "easy")
 OBJECTS, SLIDING = "objects causal", "SlidingDBSCAN"
@@ -264,7 +263,7 @@ def measure(preset, seed, tuned, options):
     for name, (kind, space, clusters) in FORMS.items():
         start = time.perf_counter()
         train_mota, setting = tuned_tracker(train, kind, clusters, space, options.n_settings, seed)
-        test_ids = track(test, lambda: kind(**setting), clusters)
+        test_ids = track(test, lambda kind=kind, setting=setting: kind(**setting), clusters)
         rows[name] = {"scores": scores(test, test_ids), "setting": setting, "train_mota": train_mota}
         rows[name]["seconds"] = time.perf_counter() - start
     for name, row in rows.items():

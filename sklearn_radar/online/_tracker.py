@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 from numbers import Integral, Real
+from typing import ClassVar
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
@@ -102,7 +103,7 @@ class Tracker:
     array([0, 0])
     """
 
-    _parameter_constraints = {
+    _parameter_constraints: ClassVar[dict] = {
         "gate": [Interval(Real, 0, None, closed="neither")],
         "min_hits": [Interval(Integral, 1, None, closed="left")],
         "max_age": [Interval(Real, 0, None, closed="neither")],
