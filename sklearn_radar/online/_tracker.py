@@ -341,6 +341,18 @@ class Tracker:
         return np.arange(first, first + k)
 
 
+def sequence_frame(c, x, y, frame):
+    """x, y (m) and the line of sight (rad) in the sequence frame, from raw columns ``c`` and the working x, y.
+
+    ``frame``: FrameTransform's ``frame``, the frame of ``x`` and ``y`` (``"car"``: moved to the sequence frame
+    with the scan's odometry, as ``frame="frame"`` does).
+    """
+    if frame != "frame":
+        cos_e, sin_e = np.cos(c["ego_yaw_seq"]), np.sin(c["ego_yaw_seq"])
+        x, y = c["ego_x_seq"] + cos_e * x - sin_e * y, c["ego_y_seq"] + sin_e * x + cos_e * y
+    return x, y, c["azimuth_sc"] + c["sensor_yaw"] + c["ego_yaw_seq"]
+
+
 def _read(x, y, v_r, los, clusters):
     """The columns as contiguous float64 arrays (clusters int64), checked for length and finiteness."""
     names = ("x", "y", "v_r", "los")
