@@ -14,11 +14,17 @@ by ``sequence_train_test_split(random_state=seed)`` as ``benchmarks/ablation_obj
 
 Rows of the table, per preset (mean over seeds ± standard error; paired differences with their standard error):
 
-* ``objects``: the object setting's ids as reported at each scan (no tracker, OnlinePipeline as today);
-* ``objects + Tracker``: :class:`sklearn_radar.online.Tracker` on its clusters (and the noise with ``noise_gate``);
+* ``objects (reported)``: the object setting's ids as reported at each scan (OnlinePipeline without a tracker);
+* ``objects (final, not causal)``: the same after every alias, which a car never sees (for reference);
+* ``bound: truth on clustered``: the true object ids on the detections the object setting clusters, -1 on its
+  noise: what a tracker that labels only the clustered detections could reach at best;
+* ``objects + Tracker``: :class:`sklearn_radar.online.Tracker` on the reported ids (``noise_radius=None``);
+* ``objects + Tracker, noise``: the same with ``noise_radius`` tuned too (noise detections near a confirmed track
+  whose Doppler agrees take its id);
 * ``SlidingDBSCAN + nearest``: the baseline a user would write (:class:`NearestCentroidTracker` below):
   SlidingDBSCAN's clusters of each scan associated to the tracks' last centroids with the Hungarian method, a gate
-  in metres, the same confirmation and deletion rule.
+  in metres, the same confirmation and deletion rule.  It is a class of this script, not of the library: it is the
+  comparison point (no motion model, no Doppler), not a tracker to recommend.
 
 Run (about an hour per preset and 3 seeds on 2 shared cores)::
 
