@@ -14,7 +14,7 @@ Printed per setting:
 * latency per scan (all four stages: frame transform, filter, stage 1,
   stage 2), p50 / p99 / max, as wall time and as the CPU time of the
   thread (``time.thread_time``: what the load of a shared machine does not
-  inflate), without and with the object list;
+  inflate), without and with the object list, and with a Tracker;
 * the real-time factor: recorded time / processing time (above 1 is faster
   than real time);
 * peak RSS (``ru_maxrss``) and the rows the windows retain after the first
@@ -35,7 +35,7 @@ import time
 import numpy as np
 
 #: What each child process times.
-KINDS = {0: "all stages", 1: "with objects", 2: "stage 1 only"}
+KINDS = {0: "all stages", 1: "with objects", 2: "stage 1 only", 3: "with tracker"}
 
 
 def minute_of_data(k, difficulty="realistic"):
@@ -95,13 +95,14 @@ def current_rss_mb():
 def run(number, minutes, objects, one_minute=False):
     """Child process: stream ``minutes`` minutes with experiment ``number``; print the figures as JSON.
 
-    ``objects`` 2 times stage 1 alone (ScanStream) on the same scans instead.
+    ``objects`` 2 times stage 1 alone (ScanStream) on the same scans instead; 3 all stages and a Tracker
+    (``noise_radius=1`` m, the rest at its defaults) without the object list.
     """
     from sklearn_radar.experiments import experiment_pipeline
-    from sklearn_radar.online import OnlinePipeline
+    from sklearn_radar.online import OnlinePipeline, Tracker
     from sklearn_radar.online._replay import scan_order
 
-    online = OnlinePipeline(experiment_pipeline(number))
+    online = OnlinePipeline(experiment_pipeline(number), tracker=Tracker(noise_radius=1.0) if objects == 3 else None)
     wall, cpu, after = [], [], {}
     recorded = 0.0
     simulated = minute_of_data(0) if one_minute else None
@@ -119,7 +120,7 @@ def run(number, minutes, objects, one_minute=False):
         for rows in scan_order(data):
             scan = {name: values[rows] for name, values in columns.items()}
             start_cpu, start = time.thread_time(), time.perf_counter()
-            online.update(scan, objects=bool(objects))
+            online.update(scan, objects=objects == 1)
             wall.append(time.perf_counter() - start)
             cpu.append(time.thread_time() - start_cpu)
         recorded += (data["timestamp"].max() - data["timestamp"].min()) * 1e-6
@@ -148,7 +149,9 @@ def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--minutes", type=int, default=10)
     parser.add_argument("--experiments", type=int, nargs="+", default=[1, 8, 12, 13])
-    parser.add_argument("--kinds", type=int, nargs="+", default=[2, 0, 1], help="2: stage 1 alone, 0: all, 1: +objects")
+    parser.add_argument(
+        "--kinds", type=int, nargs="+", default=[2, 0, 1, 3], help="2: stage 1 alone, 0: all, 1: +objects, 3: +tracker"
+    )
     parser.add_argument("--repeat", type=int, default=1, help="runs of each setting and kind")
     parser.add_argument(
         "--one-minute", action="store_true", help="simulate one minute, replay it shifted (RSS of the stream alone)"
@@ -161,7 +164,7 @@ def main():
         return
     print(f"OnlinePipeline, realistic preset, 4 sensors, {args.minutes} min of recording per setting")
     for number in args.experiments:
-        for objects in args.kinds:  # stage 1 alone, the four stages, the four stages with the object list
+        for objects in args.kinds:  # stage 1 alone, the four stages, with the object list, with a tracker
             runs = [child_figures(number, args.minutes, objects, args.one_minute) for _ in range(args.repeat)]
             for f in runs:
                 print_figures(number, objects, args.minutes, f)

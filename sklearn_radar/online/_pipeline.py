@@ -16,6 +16,7 @@ from ..preprocessing import DopplerDensityFilter, FrameTransform
 from ._filter import FilterWindow
 from ._merger import MergeWindow
 from ._objects import ObjectIds, ObjectList, ObjectTable, empty_object_list, object_figures
+from ._tracker import Tracker, sequence_frame
 
 #: The raw columns a scan must hold (the detection table's, see :mod:`sklearn_radar._schema`).
 SCAN_COLUMNS = tuple(name for name in RAW_LAYOUT.columns if name != "sequence")
@@ -50,6 +51,10 @@ class ScanResult:
         The pairs of stage-1 labels that stage 2 made one object at this scan: ``merges`` when
         ``min_samples`` is 1; with a larger one the joins of the DBSCAN over clusters (core partners, a
         non-core cluster with its first core partner), each as soon as it is certain.
+    track_id : ndarray of int64, shape (n_detections,), or None
+        With a ``tracker``: the :class:`Tracker`'s confirmed track of each
+        detection (-1: none); ids are unique within a sequence.  None
+        without one.
     """
 
     labels: np.ndarray
@@ -60,12 +65,14 @@ class ScanResult:
     aliases: list
     merges: list
     joins: list
+    track_id: np.ndarray | None = None
 
 
 class _Sequence:
-    """The windows of one sequence (recording): filter, stage 2 and the last times seen."""
+    """The windows of one sequence (recording): filter, stage 2, its tracker and the last times seen."""
 
-    def __init__(self, filter_, merger, eps_t):
+    def __init__(self, filter_, merger, eps_t, tracker=None):
+        self.tracker = None if tracker is None else tracker.fresh()
         self.filter = None if filter_ is None else FilterWindow(filter_)
         self.merge = MergeWindow(merger, eps_t)
         self.objects = ObjectTable()
@@ -133,6 +140,10 @@ class OnlinePipeline:
         The offline pipeline; read once, at construction.  Stage 1's
         ``eps_t`` must be set (the window) and ``cluster_vr_min`` of both
         stages None (the gate judges whole clusters): a ValueError otherwise.
+    tracker : Tracker or None, default=None
+        Tracks the objects from scan to scan (a fresh copy per sequence):
+        :attr:`ScanResult.track_id` gives its track ids, from the object ids
+        of every scan (in the sequence frame).  None: no tracking.
 
     Attributes
     ----------
@@ -161,8 +172,11 @@ class OnlinePipeline:
     True
     """
 
-    def __init__(self, pipeline):
+    def __init__(self, pipeline, tracker=None):
+        if tracker is not None and not isinstance(tracker, Tracker):
+            raise ValueError(f"OnlinePipeline: tracker must be a Tracker or None, got {type(tracker).__name__}")
         self.pipeline = pipeline
+        self.tracker = tracker
         self.experiment = None
         frame, filter_, stage1, merger = _stages(pipeline)
         self._frame = frame
@@ -200,7 +214,8 @@ class OnlinePipeline:
     def __repr__(self):
         """``OnlinePipeline(pipeline=...)`` with the pipeline's repr, as scikit-learn shows an estimator."""
         head = f"{type(self).__name__}(pipeline="
-        return head + repr(self.pipeline).replace("\n", "\n" + " " * len(head)) + ")"
+        tail = "" if self.tracker is None else f", tracker={self.tracker!r}"
+        return head + repr(self.pipeline).replace("\n", "\n" + " " * len(head)) + tail + ")"
 
     @property
     def min_cluster_size(self):
@@ -262,11 +277,13 @@ class OnlinePipeline:
         c = _read_scan(scan)
         n = len(c["timestamp"])
         if n == 0:
-            return _empty_result([], [], [])
+            result = _empty_result([], [], [])
+            result.track_id = None if self.tracker is None else np.zeros(0, dtype=np.int64)
+            return result
         sequence, us = int(c["sequence"][0]), int(c["timestamp"][0])
         state = self._sequences.get(sequence)
         if state is None:
-            state = self._sequences[sequence] = _Sequence(self._filter_params, self._merger, self._eps_t)
+            state = self._sequences[sequence] = _Sequence(self._filter_params, self._merger, self._eps_t, self.tracker)
         _check_order(state, sequence, sorted(set(c["sensor_id"].tolist())), us)
         work = self._frame._working_columns(c)
         x, y, v_r, t, heading = work["x"], work["y"], work["v_r"], work["t"], work["heading"]
@@ -300,6 +317,9 @@ class OnlinePipeline:
             merges=merges,
             joins=joins,
         )
+        if state.tracker is not None:
+            x_seq, y_seq, los_seq = sequence_frame(c, x, y, self._frame.frame)
+            result.track_id = state.tracker.update(x_seq, y_seq, v_r, los_seq, t[0], object_ids)
         self._ids.forget(state.merge.gone)
         return result
 
