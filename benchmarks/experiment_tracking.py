@@ -216,8 +216,8 @@ def scores(parts, ids):
     truth = np.concatenate([p["truth"] for p in parts])
     times = np.concatenate([p["t"] for p in parts])
     groups = np.concatenate([p["sequence"] for p in parts])
-    clear = tracking_scores(truth, ids, times=times, groups=groups, frame=0.5)
-    hota = hota_scores(truth, ids, times=times, groups=groups, frame=0.5)
+    clear = tracking_scores(truth, ids, times=times, groups=groups, window=0.5)
+    hota = hota_scores(truth, ids, times=times, groups=groups, window=0.5)
     return {
         "mota": clear["mota"],
         "idf1": clear["idf1"],
