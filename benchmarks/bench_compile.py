@@ -90,7 +90,7 @@ def call_merge_kernels():
     for mode in ("velocity", "continuation"):
         a, b = k.candidate_pairs(runs, 0.5, 2.0, mode)
     k.time_compatible_pairs(runs, 0.5)
-    k.velocity_frames(runs, a, b, 2.0, 0.5)
+    k.velocity_windows(runs, a, b, 2.0, 0.5)
     k.continuation_edges(runs, a, b, 2.0, 1.0, 0.5, True)
     k.merge_components(7, [(0, 1), (1, 2)], 2)
 

@@ -20,8 +20,8 @@ from ._merge_kernels import (
     continuation_edges,
     merge_components,
     velocity_agreement,
-    velocity_frame_rows,
-    velocity_frames,
+    velocity_window_rows,
+    velocity_windows,
 )
 from ._radar_dbscan import RadarDBSCAN, _gate_static_clusters
 from ._velocity import _VELOCITY_DEFAULTS, _estimate, _estimate_velocities
@@ -261,19 +261,19 @@ class ClusterMerger(ClusterMixin, BaseEstimator):
         return roots, [(int(runs.ids[a]), int(runs.ids[b])) for a, b in edges]
 
     def _velocity_merges(self, runs, pair_a, pair_b, v_r, los):
-        """Eq. 6 for every pair; the velocities of all frames close enough in space are estimated in one batch."""
+        """Eq. 6 for every pair; the velocities of all windows close enough in space are estimated in one batch."""
         merge = np.zeros(len(pair_a), dtype=bool)
-        frames = velocity_frames(runs, pair_a, pair_b, self.eps_d, self.eps_t2)
-        if len(frames) == 0:
+        windows = velocity_windows(runs, pair_a, pair_b, self.eps_d, self.eps_t2)
+        if len(windows) == 0:
             return merge
-        # Rows of A's frame (group 2i) and of B's (group 2i + 1), in time order, for every kept pair i.
-        rows, group = velocity_frame_rows(frames, runs.order)
-        frame_v_r, frame_los = v_r[rows], los[rows]
-        if np.isfinite(frame_v_r.sum() + frame_los.sum()):  # groups 0, 1, ... sorted, none empty: no regrouping
-            vx, vy, _ = _estimate(frame_v_r, frame_los, group, 2 * len(frames), *_VELOCITY_DEFAULTS)
+        # Rows of A's window (group 2i) and of B's (group 2i + 1), in time order, for every kept pair i.
+        rows, group = velocity_window_rows(windows, runs.order)
+        window_v_r, window_los = v_r[rows], los[rows]
+        if np.isfinite(window_v_r.sum() + window_los.sum()):  # groups 0, 1, ... sorted, none empty: no regrouping
+            vx, vy, _ = _estimate(window_v_r, window_los, group, 2 * len(windows), *_VELOCITY_DEFAULTS)
         else:  # non-finite rows are left out, as estimate_velocities leaves them out
-            known_x, known_y, _, groups = _estimate_velocities(frame_v_r, frame_los, group)
-            vx, vy = np.full(2 * len(frames), np.nan), np.full(2 * len(frames), np.nan)
+            known_x, known_y, _, groups = _estimate_velocities(window_v_r, window_los, group)
+            vx, vy = np.full(2 * len(windows), np.nan), np.full(2 * len(windows), np.nan)
             vx[groups.astype(np.int64)], vy[groups.astype(np.int64)] = known_x, known_y
-        merge[frames[:, 0]] = velocity_agreement(vx, vy, self.eps_phi, self.eps_v, self.unknown_velocity == "accept")
+        merge[windows[:, 0]] = velocity_agreement(vx, vy, self.eps_phi, self.eps_v, self.unknown_velocity == "accept")
         return merge

@@ -301,7 +301,7 @@ def candidate_pairs(runs, eps_t2, eps_d, mode):
     * ``"velocity"``: d_min (m) is a distance between detections of A and
       B, at least the gap between their bounding boxes along x or y.
     * ``"continuation"``: a continued centre is the raw mean of a scan (in
-      the box) plus ``lag * v``, with ``|lag| <= 2 eps_t2`` (the frame
+      the box) plus ``lag * v``, with ``|lag| <= 2 eps_t2`` (the window
       ``[s_B, s_B + eps_t2]`` against an end time in ``(s_B - eps_t2, tau]``)
       and ``|v|`` at most the largest speed of any prefix of the track
       (:func:`_max_speeds`), so the two centres are at least the box gap
@@ -347,7 +347,7 @@ def time_compatible_pairs(runs, eps_t2):
 
 
 @numba.njit(cache=True, nogil=True)
-def _pair_frame(a, b, t, run_start, run_end, eps_t2):
+def _pair_window(a, b, t, run_start, run_end, eps_t2):
     """Decision time tau of pair (a, b) and its row ranges; ``ok`` is False when A ended eps_t2 or more before s_B.
 
     Returns (ok, tau, end of A's rows up to tau, end of B's rows up to tau):
@@ -364,8 +364,8 @@ def _pair_frame(a, b, t, run_start, run_end, eps_t2):
 
 
 @numba.njit(cache=True, nogil=True)
-def _velocity_frames(pair_a, pair_b, t, x, y, run_start, run_end, eps_d, eps_t2):
-    """Eq. 6's frames: A's rows in [s_B - eps_t2, tau], B's rows up to tau, kept when d_min < eps_d (m).
+def _velocity_windows(pair_a, pair_b, t, x, y, run_start, run_end, eps_d, eps_t2):
+    """Eq. 6's windows: A's rows in [s_B - eps_t2, tau], B's rows up to tau, kept when d_min < eps_d (m).
 
     Returns a (n_kept, 5) array of (pair index, A's first, A's end, B's first, B's end) flat positions.
     """
@@ -374,7 +374,7 @@ def _velocity_frames(pair_a, pair_b, t, x, y, run_start, run_end, eps_d, eps_t2)
     eps_d2 = eps_d * eps_d
     for k in range(len(pair_a)):
         a, b = pair_a[k], pair_b[k]
-        ok, _tau, past_a_end, b_end = _pair_frame(a, b, t, run_start, run_end, eps_t2)
+        ok, _tau, past_a_end, b_end = _pair_window(a, b, t, run_start, run_end, eps_t2)
         if not ok:
             continue
         a_first, a_end = time_range(t, run_start[a], past_a_end, t[run_start[b]] - eps_t2, np.inf)
@@ -396,9 +396,9 @@ def _velocity_frames(pair_a, pair_b, t, x, y, run_start, run_end, eps_d, eps_t2)
     return kept[:n_kept]
 
 
-def velocity_frames(runs, pair_a, pair_b, eps_d, eps_t2):
-    """Candidate pairs of Eq. 6 with their detection frames (see :func:`_velocity_frames`)."""
-    return _velocity_frames(
+def velocity_windows(runs, pair_a, pair_b, eps_d, eps_t2):
+    """Candidate pairs of Eq. 6 with their detection windows (see :func:`_velocity_windows`)."""
+    return _velocity_windows(
         pair_a, pair_b, runs.t, runs.x, runs.y, runs.run_start, runs.run_end, float(eps_d), float(eps_t2)
     )
 
@@ -503,7 +503,7 @@ def _continuation_edges(
     merge = np.zeros(len(pair_a), dtype=np.bool_)
     for k in range(len(pair_a)):
         a, b = pair_a[k], pair_b[k]
-        ok, tau, _past_a_end, _b_end = _pair_frame(a, b, t, run_start, run_end, eps_t2)
+        ok, tau, _past_a_end, _b_end = _pair_window(a, b, t, run_start, run_end, eps_t2)
         if not ok:
             continue
         n_a = _scans_up_to(scan_t, scan_start[a], scan_end[a], tau)
@@ -607,26 +607,26 @@ def merge_components(n_clusters, edges, min_samples):
 
 
 @numba.njit(cache=True, nogil=True)
-def _velocity_frame_rows(frames, order):
-    """Rows of every frame of :func:`velocity_frames`: A's of pair i as group 2i, B's as group 2i + 1, in time order."""
+def _velocity_window_rows(windows, order):
+    """Rows of every window of :func:`velocity_windows`: A's of pair i as group 2i, B's as 2i + 1, in time order."""
     total = 0
-    for k in range(len(frames)):
-        total += (frames[k, 2] - frames[k, 1]) + (frames[k, 4] - frames[k, 3])
+    for k in range(len(windows)):
+        total += (windows[k, 2] - windows[k, 1]) + (windows[k, 4] - windows[k, 3])
     rows = np.empty(total, dtype=np.int64)
     group = np.empty(total, dtype=np.int64)
     m = 0
-    for k in range(len(frames)):
+    for k in range(len(windows)):
         for side in range(2):
-            for position in range(frames[k, 1 + 2 * side], frames[k, 2 + 2 * side]):
+            for position in range(windows[k, 1 + 2 * side], windows[k, 2 + 2 * side]):
                 rows[m], group[m] = order[position], 2 * k + side
                 m += 1
     return rows, group
 
 
-def velocity_frame_rows(frames, order):
-    """(rows, group) of the frames: the detection rows (``order`` of :class:`ClusterRuns`) and each row's frame."""
-    return _velocity_frame_rows(
-        np.ascontiguousarray(frames, dtype=np.int64), np.ascontiguousarray(order, dtype=np.int64)
+def velocity_window_rows(windows, order):
+    """(rows, group) of the windows: the detection rows (``order`` of :class:`ClusterRuns`) and each row's window."""
+    return _velocity_window_rows(
+        np.ascontiguousarray(windows, dtype=np.int64), np.ascontiguousarray(order, dtype=np.int64)
     )
 
 
@@ -644,7 +644,7 @@ def _velocity_agreement(vx, vy, eps_phi, eps_v, accept_unknown):
 
 
 def velocity_agreement(vx, vy, eps_phi, eps_v, accept_unknown):
-    """Eq. 6's velocity test per frame pair (A's velocity at 2i, B's at 2i + 1, m/s; NaN unknown).
+    """Eq. 6's velocity test per window pair (A's velocity at 2i, B's at 2i + 1, m/s; NaN unknown).
 
     True when the directions differ by less than ``eps_phi`` (rad) and the
     speeds by less than ``eps_v`` (m/s); a pair with an unknown velocity

@@ -46,7 +46,7 @@ KERNELS = (
     "sklearn_radar._neighbors._count_capped",
     "sklearn_radar.cluster._merge_kernels._continuation_edges",
     "sklearn_radar.cluster._merge_kernels._max_speeds",
-    "sklearn_radar.cluster._merge_kernels._velocity_frames",
+    "sklearn_radar.cluster._merge_kernels._velocity_windows",
     "sklearn_radar._labels._number_by_first_row",
     "sklearn_radar.cluster._merge_kernels._merge_components",
     "sklearn_radar._neighbors._counting_order",

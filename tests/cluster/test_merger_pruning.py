@@ -12,7 +12,7 @@ from sklearn_radar.cluster._merge_kernels import (
     cluster_runs,
     continuation_edges,
     time_compatible_pairs,
-    velocity_frames,
+    velocity_windows,
 )
 
 
@@ -48,9 +48,9 @@ def test_pruned_pairs_give_the_same_merges_as_all_time_compatible_pairs(seed, ep
         a, b = candidate_pairs(runs, eps_t2, eps_d, "continuation")
         kept = continuation_edges(runs, a, b, eps_d, 2.72, eps_t2, accept)
         np.testing.assert_array_equal(np.c_[a[kept], b[kept]], np.c_[all_a[merge], all_b[merge]])
-    frames_all = velocity_frames(runs, all_a, all_b, eps_d, eps_t2)
+    frames_all = velocity_windows(runs, all_a, all_b, eps_d, eps_t2)
     a, b = candidate_pairs(runs, eps_t2, eps_d, "velocity")
-    frames = velocity_frames(runs, a, b, eps_d, eps_t2)
+    frames = velocity_windows(runs, a, b, eps_d, eps_t2)
     np.testing.assert_array_equal(
         np.c_[a[frames[:, 0]], b[frames[:, 0]]], np.c_[all_a[frames_all[:, 0]], all_b[frames_all[:, 0]]]
     )
@@ -66,9 +66,9 @@ def test_clusters_beyond_the_cell_keys_range_are_compared_with_all():
     labels, x, y, t = _random_clusters(np.random.default_rng(0), 60, spread=15.0, offset=1e12)
     runs = cluster_runs(labels, x, y, t)
     all_a, all_b = time_compatible_pairs(runs, 0.35)
-    frames_all = velocity_frames(runs, all_a, all_b, 0.94, 0.35)
+    frames_all = velocity_windows(runs, all_a, all_b, 0.94, 0.35)
     a, b = candidate_pairs(runs, 0.35, 0.94, "velocity")
-    frames = velocity_frames(runs, a, b, 0.94, 0.35)
+    frames = velocity_windows(runs, a, b, 0.94, 0.35)
     assert len(frames_all) > 0
     np.testing.assert_array_equal(
         np.c_[a[frames[:, 0]], b[frames[:, 0]]], np.c_[all_a[frames_all[:, 0]], all_b[frames_all[:, 0]]]
