@@ -1,7 +1,8 @@
 """Saving and loading a fitted ClusterClassifier: joblib, with the versions it was made with, written atomically.
 
 The same file layout holds other fitted models of the package (:func:`save_model`, :func:`load_model`: the
-learned grouping of ``sklearn-radar reproduce``).  A classifier file is a header of two text lines, then the joblib pickle:
+learned grouping of ``sklearn-radar reproduce``).  A classifier file is a header of two text lines, then the
+joblib pickle:
 
 1. ``sklearn-radar classifier`` (how a file is recognised as ours);
 2. one JSON object: ``format`` (1), ``sklearn_radar`` and ``sklearn``
