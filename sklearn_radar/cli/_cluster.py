@@ -18,6 +18,7 @@ from ..classification import devkit_class_index
 from ..classification._classes import CLASS_OF_LABEL, DEVKIT_CLASS_INDEX, DEVKIT_CLASS_NAMES, IGNORED
 from ..datasets import load_radarscenes
 from ..datasets._radarscenes_reader import _read_sensors_json, _read_sequences_json, _resolve_data_dir
+from ..experiments._learned import LEARNED_EXPERIMENT
 from ..experiments._saved import SAVED_EXPERIMENT, params_setting
 from ._classifier_setting import classifier_setting, classify_sequence
 
@@ -68,9 +69,11 @@ def cluster_radarscenes(data, params, out, experiment=None, *, classifier=None, 
         clustering).
     out : str or path-like
         Predictions file to write.
-    experiment : int or "objects", default=None
-        Which saved experiment (a number, or the object experiment); None:
-        the best (by the cross-validated training score).
+    experiment : int, "objects" or "learned", default=None
+        Which saved experiment (a number, the object experiment, or the
+        learned grouping, whose fitted model the run saved beside
+        ``params``: each sequence is labelled by its ``predict``, the model
+        never refitted); None: the best (by the cross-validated training score).
     classifier : str or path-like, default=None
         File written by :func:`~sklearn_radar.classification.save_classifier`.
         A whole pipeline from raw detections ending in a ClusterClassifier
@@ -110,7 +113,9 @@ def cluster_radarscenes(data, params, out, experiment=None, *, classifier=None, 
         model = classifier_setting(classifier, setting, params, pipeline)
         run, head, counted = classify_sequence, _CLASSES_HEAD, {name: 0 for name in DEVKIT_CLASS_NAMES.values()}
     else:
-        model, run, head, counted = pipeline, cluster_sequence, _PREDICTIONS_HEAD, None
+        learned = setting["experiment"] == LEARNED_EXPERIMENT
+        run = predict_sequence if learned else cluster_sequence
+        model, head, counted = pipeline, _PREDICTIONS_HEAD, None
     check_predictions_file(out)
     data_dir = _resolve_data_dir(Path(data))
     _read_sensors_json(data_dir / "sensors.json")  # a malformed folder fails here, before any worker starts
@@ -195,6 +200,22 @@ def cluster_sequence(task):
     data_dir, number, pipeline = task
     scenes = load_radarscenes(data_dir, sequences=number)
     labels = clone(pipeline).fit_predict(scenes.data)
+    return scenes.data["uuid"].to_numpy(), np.asarray(labels, dtype=np.int64)
+
+
+def predict_sequence(task):
+    """Load one sequence, label it with a fitted model: ``(data folder, sequence number, model)`` -> (uuids, labels).
+
+    The learned grouping's :func:`cluster_sequence`: the model, fitted on a run's training half, is applied as it is,
+    to the columns it was fitted on (a ValueError names those the folder lacks).
+    """
+    data_dir, number, model = task
+    scenes = load_radarscenes(data_dir, sequences=number)
+    columns = list(getattr(model, "feature_names_in_", scenes.data.columns))
+    missing = [c for c in columns if c not in scenes.data.columns]
+    if missing:
+        raise ValueError(f"{data_dir}: sequence {number} lacks the columns {missing} the learned model was fitted on")
+    labels = model.predict(scenes.data[columns])
     return scenes.data["uuid"].to_numpy(), np.asarray(labels, dtype=np.int64)
 
 

@@ -86,7 +86,7 @@ def _silence_stdout():
 
 
 def _named(experiment):
-    """``#13`` for a paper experiment, ``'objects'`` for the object experiment."""
+    """``#13`` for a paper experiment, ``'objects'`` for the object experiment (``'learned'`` the learned one)."""
     return f"#{experiment}" if isinstance(experiment, int) else repr(experiment)
 
 
@@ -166,7 +166,7 @@ def _parser():
     reproduce.add_argument(
         "--experiments",
         metavar="LIST",
-        help="comma-separated steps to run (default: all): " + ", ".join(_STEP_HELP),
+        help="comma-separated steps to run (default: all but learned): " + ", ".join(_STEP_HELP),
     )
     reproduce.add_argument(
         "--full", action="store_true", help="the paper's budget (100 iterations, 30 random) on ~1M detections"
@@ -237,7 +237,7 @@ def _parser():
         "classified after the replay (per 0.5 s time window, not causally) and each detection's class is the devkit's "
         "ClassificationLabel index, as for 'cluster'.",
     )
-    stream.set_defaults(run=_stream, parser=stream, together=_check_setting_options)
+    stream.set_defaults(run=_stream, parser=stream, together=_check_stream_options)
     replaced_only = "an existing file is replaced only if it is such"
     for flag, required, text in (
         ("--data", True, "RadarScenes data folder (or its parent)"),
@@ -302,6 +302,16 @@ def _check_setting_options(args):
         raise ValueError(f"--objects and --out name the same file: {_shown(args.out)}")
 
 
+def _check_stream_options(args):
+    """``stream``: as :func:`_check_setting_options`, and a setting with an online version."""
+    _check_setting_options(args)
+    if args.experiment == _LEARNED:
+        raise ValueError(
+            f"--experiment {_LEARNED}: the learned grouping has no online (causal) version yet; apply it offline with "
+            f"'sklearn-radar cluster --experiment {_LEARNED}'"
+        )
+
+
 def _at_least(low):
     """The check of a whole number ``>= low`` (None stays None: the option's default applies)."""
 
@@ -320,6 +330,7 @@ _STEP_HELP = (
     "baselines (scikit-learn clusterers)",
     "tracking (object ids online)",
     "classification (the classifier of clusters)",
+    "learned (the grouping learned from the training half; not in the default run)",
 )
 
 #: When to use which of ``reproduce``'s options for parallel work.
@@ -344,19 +355,21 @@ _CLASSIFIER_HELP = (
 
 #: What ``--experiment`` of ``cluster`` and ``stream`` takes.
 _SAVED_EXPERIMENT_HELP = (
-    "which saved experiment: a number 1-13 or 'objects' (default: the run's best by cross-validated score on the "
-    "training half)"
+    "which saved experiment: a number 1-13, 'objects' or 'learned' (the learned grouping's saved model; 'cluster' "
+    "only: it has no online version yet) (default: the run's best by cross-validated score on the training half)"
 )
+#: The learned experiment's key (the CLI imports no experiment module).
+_LEARNED = "learned"
 
 
 def _saved_experiment(text, flag):
-    """An experiment number >= 1, or the object experiment's key (the CLI imports no experiment module)."""
-    if text == "objects":
+    """An experiment number >= 1, or the object or learned experiment's key (the CLI imports no experiment module)."""
+    if text in ("objects", _LEARNED):
         return text
     try:
         return _whole(text, flag, 1, None)
     except ValueError:
-        raise ValueError(f"{flag} must be a whole number >= 1 or 'objects', got {text!r}") from None
+        raise ValueError(f"{flag} must be a whole number >= 1, 'objects' or '{_LEARNED}', got {text!r}") from None
 
 
 def _seed(text, flag):
@@ -478,7 +491,7 @@ def _written(out):
     marker = run_marker(os.path.join(out, RUN_MARKER)) or {}
     names = list(marker.get("files") or {})
     figures = [name for name in names if name.endswith(".png")]
-    classifiers = [name for name in names if name.endswith(".joblib")]
+    classifiers = [name for name in names if name.endswith(".joblib") and name.startswith("classifier")]
     parts = [name for name in names if name not in figures and name not in classifiers]
     parts += [_counted(len(figures), "figure")] if figures else []
     parts += [_counted(len(classifiers), "classifier file")] if classifiers else []

@@ -16,11 +16,22 @@ from pathlib import Path
 from sklearn.base import BaseEstimator
 from sklearn.utils._param_validation import Interval, StrOptions, validate_params
 
+from ._learned import LEARNED_EXPERIMENT, load_learned
 from ._objects import OBJECT_EXPERIMENT, object_pipeline
 from ._paper import experiment_pipeline, get_experiment
 
-#: The ``experiment`` argument: a paper experiment's number, the object experiment, or None (the run's best).
-SAVED_EXPERIMENT = [Interval(Integral, 1, None, closed="left"), StrOptions({OBJECT_EXPERIMENT}), None]
+#: The ``experiment`` argument: a paper experiment's number, the object experiment, the learned grouping, or None
+#: (the run's best).
+SAVED_EXPERIMENT = [
+    Interval(Integral, 1, None, closed="left"),
+    StrOptions({OBJECT_EXPERIMENT, LEARNED_EXPERIMENT}),
+    None,
+]
+#: Why the learned grouping does not stream.
+NO_ONLINE_LEARNED = (
+    f"experiment {LEARNED_EXPERIMENT!r}: the learned grouping has no online (causal) version yet; apply it offline "
+    f"with 'sklearn-radar cluster --experiment {LEARNED_EXPERIMENT}'"
+)
 
 
 @validate_params({"path": [str, os.PathLike], "experiment": SAVED_EXPERIMENT}, prefer_skip_nested_validation=True)
@@ -31,8 +42,9 @@ def load_params(path, experiment=None):
     ----------
     path : str or path-like
         ``params.json`` written by ``sklearn-radar reproduce``.
-    experiment : int or "objects", default=None
-        Experiment number, or the object experiment; None: the run's best
+    experiment : int, "objects" or "learned", default=None
+        Experiment number, the object experiment, or the learned grouping
+        (whose setting points to its fitted model); None: the run's best
         (the highest cross-validated training score of the run's objective,
         see :ref:`user-guide-command-line`).
 
@@ -41,7 +53,8 @@ def load_params(path, experiment=None):
     setting : dict
         ``experiment`` (its number), ``v1_test``, ``params`` (pipeline
         parameters) and ``stage1_params`` (stage 2: the fixed stage-1
-        setting; otherwise None).
+        setting; otherwise None); the learned grouping's also ``model``,
+        its file.
 
     Raises
     ------
@@ -101,10 +114,13 @@ def _checked_setting(saved, path, experiment):
         if key not in setting:
             raise bad(where, f"lacks the key {key!r}")
     number = setting["experiment"]
-    if chosen == OBJECT_EXPERIMENT:
-        if number != OBJECT_EXPERIMENT:
-            raise bad(f"the key 'experiment' of {where}", f"must be {OBJECT_EXPERIMENT!r}, got {number!r}")
-        stage = 2  # the object experiment merges its own stage 1
+    if chosen in (OBJECT_EXPERIMENT, LEARNED_EXPERIMENT):
+        if number != chosen:
+            raise bad(f"the key 'experiment' of {where}", f"must be {chosen!r}, got {number!r}")
+        stage = 2 if chosen == OBJECT_EXPERIMENT else 1  # the object experiment merges its own stage 1
+        model = setting.get("model")
+        if chosen == LEARNED_EXPERIMENT and (not isinstance(model, str) or not model):
+            raise bad(where, f"must name its fitted model's file in the key 'model', got {_json_type(model)}")
     else:
         if isinstance(number, bool) or not isinstance(number, int) or str(number) != chosen:
             raise bad(f"the key 'experiment' of {where}", f"must be the number {chosen}, got {number!r}")
@@ -151,8 +167,14 @@ def _json_type(value):
 
 
 def setting_pipeline(setting, path):
-    """The pipeline of a checked setting; ValueError names the file and the parameter it cannot set."""
+    """The pipeline of a checked setting; ValueError names the file and the parameter it cannot set.
+
+    The learned grouping has no pipeline to build (it is a fitted model, :func:`learned_model`), nor an online
+    version: a ValueError says so.
+    """
     number = setting["experiment"]
+    if number == LEARNED_EXPERIMENT:
+        raise ValueError(f"{path}: {NO_ONLINE_LEARNED}")
     where = f"{path}: experiments['{number}']"
     named = f"#{number}" if number != OBJECT_EXPERIMENT else repr(number)
     params = {k: v for k, v in setting["params"].items() if k.split("__")[0] in ("cluster", "merge", "filter")}
@@ -177,12 +199,42 @@ def setting_pipeline(setting, path):
     return pipeline
 
 
+def learned_model(setting, path):
+    """The fitted pipeline of the learned grouping's checked setting, from the file its ``model`` names.
+
+    The file is read relative to the folder of ``params.json`` (``path``), checked before it is unpickled
+    (:func:`~sklearn_radar.experiments._learned.load_learned`: **only load files you trust**), and its front must
+    have the setting's ``params``.
+
+    Raises
+    ------
+    FileNotFoundError
+        Naming the model file, if it is missing.
+    ValueError
+        Naming the file: not a learned model written by a run, or with another front than ``params``.
+    """
+    file = Path(path).parent / setting["model"]
+    model = load_learned(file)
+    if not hasattr(model, "steps"):
+        raise ValueError(f"{file}: holds a bare LinkClustering; the run saves the whole pipeline from raw detections")
+    front = model.get_params()
+    # As params.json holds them (a tuple is a JSON array).
+    differ = sorted(k for k, v in setting["params"].items() if k not in front or json.loads(json.dumps(front[k])) != v)
+    if differ:
+        raise ValueError(
+            f"{path}: experiments['{LEARNED_EXPERIMENT}'] does not describe the model in {file}: its params "
+            f"{differ} differ from the model's (a model file of another run?)"
+        )
+    return model
+
+
 def params_setting(params, experiment, classifier):
     """``(setting, pipeline, chosen)`` of the ``params.json`` at ``params`` (all None without it).
 
     ValueError when neither ``params`` nor ``classifier`` is given.
 
-    ``chosen`` says why the file names the setting its best (None when ``experiment`` chose it).
+    ``chosen`` says why the file names the setting its best (None when ``experiment`` chose it).  For the learned
+    grouping ``pipeline`` is its fitted model (:func:`learned_model`), which takes no ``classifier``.
     """
     if params is None:
         if classifier is None:
@@ -194,4 +246,11 @@ def params_setting(params, experiment, classifier):
     saved = _read_params(path)
     setting = _checked_setting(saved, path, experiment)
     chosen = None if experiment is not None else saved.get("best_reason", _UNEXPLAINED_BEST)
+    if setting["experiment"] == LEARNED_EXPERIMENT:
+        if classifier is not None:
+            raise ValueError(
+                f"--classifier does not go with experiment {LEARNED_EXPERIMENT!r} of {path}: the classifiers are "
+                "trained on the clusters of a parameter setting, not on the learned grouping's"
+            )
+        return setting, learned_model(setting, path), chosen
     return setting, setting_pipeline(setting, params), chosen

@@ -10,6 +10,7 @@ stage 2 build on, and so on.
 from __future__ import annotations
 
 from ..experiments import OBJECT_EXPERIMENT, PAPER_EXPERIMENTS, get_experiment
+from ..experiments._learned import LEARNED_EXPERIMENT
 
 #: Every experiment number (1-13), in run order.
 NUMBERS = tuple(e.number for e in PAPER_EXPERIMENTS)
@@ -48,8 +49,23 @@ TRACKING = "tracking"
 #: Beyond the paper: the paper's next stage, a classifier of the clusters.
 CLASSIFICATION = "classification"
 
+#: Beyond the paper: the grouping learned from the training half's instances (``experiments._learned``).
+LEARNED = LEARNED_EXPERIMENT
+
 #: Every step key, in the order they run.
-ALL_EXPERIMENTS = (FILTER, *(str(n) for n in NUMBERS), OBJECTS, FILTER_EFFECT, BASELINES, TRACKING, CLASSIFICATION)
+ALL_EXPERIMENTS = (
+    FILTER,
+    *(str(n) for n in NUMBERS),
+    OBJECTS,
+    FILTER_EFFECT,
+    BASELINES,
+    TRACKING,
+    CLASSIFICATION,
+    LEARNED,
+)
+#: The steps a run without ``--experiments`` runs: all but the learned grouping, whose fit (25-40 s at one thread
+#: on the default run's training half) would add a quarter to the default run's time.
+DEFAULT_EXPERIMENTS = tuple(key for key in ALL_EXPERIMENTS if key != LEARNED)
 
 #: The settings the tracking step streams online (causal): the expert's, the best stage 1 and both stage-2 modes.
 TRACKED = (EXPERT, BEST_STAGE1, *STAGE2)

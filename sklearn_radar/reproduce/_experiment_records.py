@@ -270,3 +270,91 @@ class ObjectExperimentResult(JsonRecord):
     def every_repeat(self):
         """list of ObjectRepeat : The repeats, or the one run."""
         return self.repeats or [self.kept]
+
+
+@record
+class InstanceErrors(JsonRecord):
+    """Where a labelling of the test half loses panoptic quality (:func:`~sklearn_radar.metrics.instance_errors`).
+
+    Attributes
+    ----------
+    n_true, n_pred : int
+        Ground-truth and predicted per-window segments.
+    matched, missed : int
+        Ground-truth segments matched (IoU > 0.5) and not.
+    noise, merged_with_object, merged_with_background, split : int
+        The missed segments by cause (they add up to ``missed``).
+    false : int
+        Predicted segments that match none.
+    background, part_of_object, several_objects : int
+        The false segments by cause (they add up to ``false``).
+    median_size_matched, median_size_missed : float
+        Median detections of the matched and of the missed ground-truth segments (NaN without any).
+    """
+
+    n_true: int
+    n_pred: int
+    matched: int
+    missed: int
+    noise: int
+    merged_with_object: int
+    merged_with_background: int
+    split: int
+    false: int
+    background: int
+    part_of_object: int
+    several_objects: int
+    median_size_matched: float
+    median_size_missed: float
+
+
+@record
+class LearnedResult(JsonRecord):
+    """Beyond the paper: the learned grouping (``learned``), fitted on the training half, scored offline.
+
+    The pipeline is :func:`~sklearn_radar.experiments._learned.learned_pipeline`: the object experiment's front and
+    :class:`~sklearn_radar.cluster.LinkClustering`, fitted once with the pre-clustered target
+    (:func:`~sklearn_radar.metrics.precluster_target`), its thresholds tuned for PQ inside ``fit``.
+
+    Attributes
+    ----------
+    params : dict
+        The pipeline's parameters as set (the front's and ``link__``'s).
+    model_file : str
+        The fitted pipeline's file in the run's folder.
+    link_threshold, objectness_threshold : float
+        The tuned thresholds (``LinkClustering.link_threshold_``, ``objectness_threshold_``).
+    min_cluster_size : int
+        The tuned minimum cluster size, detections.
+    cv_pq : float
+        PQ of the tuned thresholds on the out-of-fold predictions of the training half (``cv_score_``).
+    n_training_pairs : int
+        Candidate pairs of the training half.
+    fit_wall_time_s : float
+        Time of the fit, s.
+    v1_test : float
+        Radar V-measure on the test half, 0-1.
+    n_clusters_test : int
+        Clusters found on the test half.
+    instance_test : InstanceScores
+        Object-level scores on the test half, offline.
+    errors : dict of str to InstanceErrors
+        The error anatomy on the test half of the learned grouping, and of the object experiment's and the
+        strongest offline baseline's kept settings where they ran, by name.
+    wall_time_s : float
+        Fit, scoring and error anatomy, s.
+    """
+
+    params: dict[str, Any]
+    model_file: str
+    link_threshold: float
+    objectness_threshold: float
+    min_cluster_size: int
+    cv_pq: float
+    n_training_pairs: int
+    fit_wall_time_s: float
+    v1_test: float
+    n_clusters_test: int
+    instance_test: InstanceScores
+    errors: dict[str, InstanceErrors]
+    wall_time_s: float

@@ -26,6 +26,7 @@ EXPECTED_S_PER_UNIT = {
     "baselines": 1.8,
     "tracking": 5.3,
     "classification": 40.0,
+    "learned": 35.0,
 }
 #: The weight of a unit of a kind missing from :data:`EXPECTED_S_PER_UNIT`.
 EXPECTED_S_OTHER = 1.0
@@ -38,6 +39,7 @@ KIND_NAMES = {
     "stage 2": "stage-2 searches",
     "filter-effect": "the filter's effect",
     "baselines": "the baselines",
+    "learned": "the learned grouping",
 }
 #: The numba kernels a run compiles on an empty cache (a new environment): the first steps then run slower.
 KERNELS = (

@@ -13,9 +13,10 @@ from pathlib import Path
 from typing import Any
 
 from ..experiments import OBJECT_EXPERIMENT
+from ..experiments._learned import LEARNED_EXPERIMENT
 from ._budget import Budget
 from ._classification import ClassificationResult
-from ._experiment_records import BaselineResult, ExperimentResult, ObjectExperimentResult
+from ._experiment_records import BaselineResult, ExperimentResult, LearnedResult, ObjectExperimentResult
 from ._filter_records import FilterEffectResult, FilterResult
 from ._records import ABSENT_AT_DEFAULT, NOT_WRITTEN, WRITTEN_FLAT, JsonRecord, record, to_json
 from ._tracking import TrackingResult
@@ -140,6 +141,8 @@ class RunResults(JsonRecord):
         (and in results of older versions).
     classification : ClassificationResult or None, default=None
         The classifier of clusters on the test half, when it ran.
+    learned : LearnedResult or None, default=None
+        The learned grouping, when it ran.
     figures : FigureRecord, default=FigureRecord()
         Figures drawn; written to ``results.json`` only on request.
     """
@@ -153,6 +156,7 @@ class RunResults(JsonRecord):
     objects: ObjectExperimentResult | None = None
     tracking: dict[int, TrackingResult] | None = None
     classification: ClassificationResult | None = None
+    learned: LearnedResult | None = None
     figures: FigureRecord = field(default_factory=FigureRecord, metadata=NOT_WRITTEN)
 
     def v1_test(self):
@@ -160,16 +164,18 @@ class RunResults(JsonRecord):
         return {number: result.v1_test for number, result in self.experiments.items()}
 
     def saved_classifiers(self):
-        """The file names of the classifiers the classification step saved in the run's folder, in order."""
+        """The file names of the models the run saved in its folder: the classifiers, then the learned grouping."""
+        files = [] if self.learned is None else [self.learned.model_file]
         if self.classification is None:
-            return []
-        return [row.classifier_file for row in self.classification.settings.values() if row.classifier_file]
+            return files
+        return [row.classifier_file for row in self.classification.settings.values() if row.classifier_file] + files
 
     def to_json_dict(self, *, figures=False):
         """What ``results.json`` holds, a dict; with ``figures``, also the figures drawn (which it does not hold).
 
         ``meta``, ``statistics`` (when measured), ``experiments`` (keyed by the number as a string), then
-        ``filter``, ``filter_effect``, ``baselines``, ``objects``, ``tracking`` and ``classification`` where they ran.
+        ``filter``, ``filter_effect``, ``baselines``, ``objects``, ``tracking``, ``classification`` and ``learned``
+        where they ran.
         """
         document = to_json(self)
         if figures:
@@ -208,7 +214,10 @@ class RunResults(JsonRecord):
             #11, the object experiment of a V1 run).  ``best`` is the first experiment with the highest such
             score (never chosen by a test score), the only experiment when one ran, else null; ``best_reason``
             says which rule chose it.  The object experiment, when it ran, is the key ``"objects"`` (with
-            ``causal_pq_test`` besides).  An experiment whose clusters the classification step classified has
+            ``causal_pq_test`` besides).  The learned grouping, when it ran, is the key ``"learned"``: its front's
+            parameters (``params``), ``model`` (the fitted pipeline's file in the run's folder) and a null
+            ``cv_<objective>`` (its thresholds are tuned inside its fit, on other folds than the run's searches, so
+            it is not ranked).  An experiment whose clusters the classification step classified has
             ``"classifier"``: the file of its saved classifier in the run's folder (``sklearn-radar cluster
             --classifier``).
         """
@@ -235,6 +244,16 @@ class RunResults(JsonRecord):
                 cv_key: self.objects.search.cv_best if objective == "pq" else None,
                 "params": self.objects.kept.params,
                 "stage1_params": self.objects.kept.stage1_params,
+            }
+        if self.learned is not None:
+            experiments[LEARNED_EXPERIMENT] = {
+                "experiment": LEARNED_EXPERIMENT,
+                "v1_test": self.learned.v1_test,
+                "pq_test": self.learned.instance_test.pq,
+                cv_key: None,
+                "params": {k: v for k, v in self.learned.params.items() if not k.startswith("link__")},
+                "stage1_params": None,
+                "model": self.learned.model_file,
             }
         if not experiments:
             return None

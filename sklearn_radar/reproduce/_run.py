@@ -36,6 +36,7 @@ from .._files import (
 from ..classification import save_classifier
 from ..datasets._presets import DIFFICULTY_PRESETS
 from ..experiments import SKLEARN_BASELINES, get_experiment
+from ..experiments._learned import save_learned
 from ..metrics._parts import OBJECTIVES  # what the searches can maximise: "v1", "pq"
 from ._budget import Budget
 from ._classification import CLASSIFIER_FILES
@@ -43,14 +44,17 @@ from ._constants import (
     ALL_EXPERIMENTS,
     BASELINES,
     CLASSIFICATION,
+    DEFAULT_EXPERIMENTS,
     FILTER,
     FILTER_EFFECT,
+    LEARNED,
     NUMBERS,
     OBJECTS,
     TRACKING,
 )
 from ._context import RunContext
 from ._io import RUN_TOOL, check_apart, check_run_folder, previous_run_files, run_marker
+from ._learned import LEARNED_FILE
 from ._progress import DATA, REPORT, RunProgress, duration, uncompiled_kernels
 from ._report import write_report
 from ._results import DataMeta, RunMeta, RunResults
@@ -76,6 +80,7 @@ RUN_FILES = (
     SCENE,
     CONVERGENCE,
     *CLASSIFIER_FILES.values(),
+    LEARNED_FILE,
 )
 #: Simulated data of at most this many sequence-seconds (the default run's 4 x 20 s) with one search at a time
 #: runs in this process although ``--workers`` asks for a local cluster (why: :ref:`contributing-runner`).
@@ -116,7 +121,8 @@ def parse_experiments(text):
     text : str or None
         Comma-separated keys: ``filter``, experiment numbers ``1``-``13``,
         ranges such as ``2-9``, ``objects``, ``filter-effect``, ``baselines``,
-        ``tracking`` and ``classification``.  None selects every step.
+        ``tracking``, ``classification`` and ``learned``.  None selects every step but ``learned``
+        (:data:`~._constants.DEFAULT_EXPERIMENTS`).
 
     Returns
     -------
@@ -124,7 +130,7 @@ def parse_experiments(text):
         The selected steps, each once, in the order a run executes them.
     """
     if text is None:
-        return list(ALL_EXPERIMENTS)
+        return list(DEFAULT_EXPERIMENTS)
     first, last = min(NUMBERS), max(NUMBERS)
     chosen = set()
     for part in (p.strip() for p in text.split(",") if p.strip()):
@@ -133,7 +139,7 @@ def parse_experiments(text):
             if not (low.isdigit() and high.isdigit()) or not first <= int(low) <= int(high) <= last:
                 raise ValueError(
                     f"unknown experiment range {part!r}; experiments are {first}-{last}, "
-                    f"{FILTER}, {FILTER_EFFECT}, {BASELINES}, {TRACKING}, {CLASSIFICATION}"
+                    f"{FILTER}, {FILTER_EFFECT}, {BASELINES}, {TRACKING}, {CLASSIFICATION}, {LEARNED}"
                 )
             chosen.update(str(n) for n in range(int(low), int(high) + 1))
         elif part in ALL_EXPERIMENTS:
@@ -207,7 +213,9 @@ def reproduce(
     experiments : str, default=None
         Comma-separated keys (``filter``, ``1``-``13``, ranges such as
         ``2-9``, ``objects``, ``filter-effect``, ``baselines``, ``tracking``,
-        ``classification``); None runs all.
+        ``classification``, ``learned``); None runs all but ``learned`` (the
+        grouping learned from the training half's instances, saved as
+        ``learned.joblib``: its fit would add a quarter to the default run).
     full : bool, default=False
         The paper's budget on about a million simulated detections.
     seed : int, default=0
@@ -441,7 +449,7 @@ def _run_step(run, env, keys, context, found, position, key, ahead):
     if outcome.labels is not None:
         context.labels[int(key)] = outcome.labels
     for name, model in (outcome.models or {}).items():
-        save_classifier(model, run.out / name)
+        (save_learned if name == LEARNED_FILE else save_classifier)(model, run.out / name)
     if outcome.summary:
         run.say(outcome.summary)
     run.results.meta.completed.append(key)
@@ -583,4 +591,5 @@ def _title(key):
         OBJECTS: "the object experiment (the framework's stages tuned for PQ)",
         TRACKING: "object tracking online (IDF1, ID switches, MOTA of the streamed ids)",
         CLASSIFICATION: "the classifier of clusters (class PQ, mAP@0.5, macro-F1, mCov)",
+        LEARNED: "the learned grouping (fitted on the training half's instances, scored offline)",
     }[key]

@@ -51,6 +51,7 @@ from ._constants import (
     FILTER,
     FILTER_EFFECT,
     FRAMES,
+    LEARNED,
     OBJECTS,
     PAPER_FILTER_SETTING,
     STAGE2,
@@ -78,6 +79,7 @@ from ._filter_records import (
     GridTable,
     time_savings_percent,
 )
+from ._learned import run_learned
 from ._progress import SCORING
 from ._results import DataStatistics
 from ._sections._base import values_cell
@@ -620,6 +622,15 @@ def run_classification_step(env, key, needed):
     return Outcome(result, summary, models=models)
 
 
+# ----------------------------------------------------------------------------- the learned grouping
+
+
+def run_learned_step(env, key, needed):
+    """The learned grouping fitted on the training half and scored offline; its fitted pipeline to save."""
+    result, summary, models = run_learned(env, key, needed)
+    return Outcome(result, summary, models=models)
+
+
 # ----------------------------------------------------------------------------- scoring and searching
 
 
@@ -680,7 +691,8 @@ def _experiment_step(number):
 #: #10 and #11 (#8's setting transferred), stage 2 (#12, #13: merging #8's clusters) and the filter's effect (at
 #: #8's setting) need #8; the tracking step the settings it streams (#1, #8, #12, #13); every other step needs
 #: none (the object experiment tunes its own stage 1); the classification step the settings whose clusters it
-#: classifies (#1, #3, #8, #13) and the baselines (the strongest one's clusters).
+#: classifies (#1, #3, #8, #13) and the baselines (the strongest one's clusters); the learned grouping the object
+#: experiment and the baselines (whose kept settings' errors it sets beside its own).
 STEPS = {
     FILTER: Step(run_filter, kind=FILTER),
     **{key: _experiment_step(int(key)) for key in ALL_EXPERIMENTS if key.isdigit()},
@@ -691,6 +703,7 @@ STEPS = {
     CLASSIFICATION: Step(
         run_classification_step, (*(str(number) for number in CLASSIFIED), BASELINES), kind=CLASSIFICATION
     ),
+    LEARNED: Step(run_learned_step, (OBJECTS, BASELINES), kind=LEARNED),
 }
 
 

@@ -1,0 +1,141 @@
+"""The learned step: the learned grouping fitted on the training half, scored on the test half, its errors by cause.
+
+The pipeline (:func:`~sklearn_radar.experiments._learned.learned_pipeline`) is fitted once, in this process (it
+needs every training example at once), with the pre-clustered target that the object experiment's PQ is scored
+against, and the run's seed; each test sequence is labelled where it lives by the fitted model's ``predict``.  The
+error anatomy (:func:`~sklearn_radar.metrics.instance_errors`) is taken on the test half for it and, where they
+ran, for the object experiment's and the strongest offline baseline's kept settings (re-labelled here, so that a
+run without this step keeps its records as they were).  Why: :ref:`user-guide-objects`.
+"""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+import pandas as pd
+from sklearn.base import clone
+
+from ..experiments import baseline_pipeline, object_pipeline
+from ..experiments._learned import learned_pipeline
+from ..metrics import instance_errors
+from ..metrics._parts import combine_instance_parts, combine_parts, instance_parts, score_parts
+from ._classification import strongest_offline_baseline
+from ._constants import BASELINES, OBJECTS
+from ._experiment_records import InstanceErrors, InstanceScores, LearnedResult
+from ._tuning import native_params
+
+#: The fitted learned pipeline's file in the run's folder (``params.json``'s ``"learned"`` entry points to it).
+LEARNED_FILE = "learned.joblib"
+#: The learned grouping's parameters in the run beside the front's (LinkClustering's defaults otherwise).
+LEARNED_PARAMS = {}
+#: Length of the time windows of the scores and the error anatomy, s (the object-level scores').
+LEARNED_WINDOW_S = 0.5
+#: The object-level scores kept (those of :class:`InstanceScores`).
+_SCORES = tuple(name for name in InstanceScores.__dataclass_fields__ if name != "window_s")
+#: The error anatomy's name of each setting.
+LEARNED_NAME, OBJECTS_NAME = "learned grouping", "object experiment"
+
+
+def run_learned(env, key, needed):
+    """Fit the learned grouping on the training half, score it offline on the test half; the error anatomy."""
+    start = time.perf_counter()
+    params = {
+        **LEARNED_PARAMS,
+        "link__window": LEARNED_WINDOW_S,
+        "link__random_state": env.seed,
+        "link__n_jobs": env.executor.threads if hasattr(env.executor, "threads") else 1,
+    }
+    model = learned_pipeline(params)
+    tables = env.sequences.map(training_table, env.train, executor=env.executor)
+    X_train = pd.concat([X for X, _ in tables], ignore_index=True)
+    y_train = np.concatenate([y for _, y in tables])
+    fit_start = time.perf_counter()
+    model.fit(X_train, y_train)
+    fit_s = time.perf_counter() - fit_start
+    parts = env.sequences.map(predicted_sequence, env.test, model, executor=env.executor)
+    scores = combine_instance_parts([p["instance"] for p in parts])
+    errors = {LEARNED_NAME: _errors(parts)}
+    for name, pipeline in _compared(needed):
+        errors[name] = _errors(env.sequences.map(refitted_sequence, env.test, pipeline, executor=env.executor))
+    link = model[-1]
+    result = LearnedResult(
+        params=native_params({k: v for k, v in model.get_params().items() if _is_setting(k)}),
+        model_file=LEARNED_FILE,
+        link_threshold=link.link_threshold_,
+        objectness_threshold=link.objectness_threshold_,
+        min_cluster_size=link.min_cluster_size_,
+        cv_pq=link.cv_score_,
+        n_training_pairs=link.n_training_pairs_,
+        fit_wall_time_s=fit_s,
+        v1_test=combine_parts("v1", [p["v1"] for p in parts]),
+        n_clusters_test=int(sum(p["n_clusters"] for p in parts)),
+        instance_test=InstanceScores(window_s=LEARNED_WINDOW_S, **{k: float(scores[k]) for k in _SCORES}),
+        errors=errors,
+        wall_time_s=time.perf_counter() - start,
+    )
+    summary = (
+        f"    learned: test PQ {result.instance_test.pq:.3f} offline (fitted in {fit_s:.1f} s; no causal version), "
+        f"missed segments {errors[LEARNED_NAME].missed} of {errors[LEARNED_NAME].n_true}"
+    )
+    return result, summary, {LEARNED_FILE: model}
+
+
+def _is_setting(name):
+    """Whether a deep parameter of the learned pipeline is a step's setting (not a step, not the pipeline's)."""
+    return "__" in name and name.split("__")[0] in ("frame", "filter", "link")
+
+
+def _compared(needed):
+    """``(name, unfitted pipeline)`` of the object experiment's and the strongest offline baseline's kept settings."""
+    found = []
+    objects = needed.get(OBJECTS)
+    if objects is not None:
+        kept = objects.kept
+        found.append((OBJECTS_NAME, object_pipeline(2, stage1_params=kept.stage1_params, params=kept.params)))
+    strongest = strongest_offline_baseline(needed.get(BASELINES))
+    if strongest is not None:
+        name, result = strongest
+        found.append((name, baseline_pipeline(name).set_params(**result.params)))
+    return found
+
+
+def training_table(sequence):
+    """One training sequence: the estimators' input and its pre-clustered target."""
+    return sequence.X, np.asarray(sequence.target, dtype=np.int64)
+
+
+def predicted_sequence(sequence, model):
+    """One test sequence labelled by the fitted ``model``: its scores' parts and what the error anatomy needs."""
+    return _labelled(sequence, np.asarray(model.predict(sequence.X), dtype=np.int64))
+
+
+def refitted_sequence(sequence, pipeline):
+    """One test sequence labelled by an unsupervised ``pipeline`` (fitted on it, as the run scores it)."""
+    return _labelled(sequence, np.asarray(clone(pipeline).fit_predict(sequence.X), dtype=np.int64))
+
+
+def _labelled(sequence, labels):
+    times = sequence.scenes.data["timestamp"].to_numpy(dtype=np.float64) * 1e-6
+    target = np.asarray(sequence.target, dtype=np.int64)
+    return {
+        "id": sequence.id,
+        "v1": score_parts("v1", target, labels),
+        "instance": instance_parts(target, labels, times=times, window=LEARNED_WINDOW_S),
+        "n_clusters": len(np.unique(labels[labels >= 0])),
+        "target": target,
+        "predicted": labels,
+        "times": times,
+    }
+
+
+def _errors(parts):
+    """The error anatomy of the test half from its sequences' labels (pooled, each sequence its own group)."""
+    found = instance_errors(
+        np.concatenate([p["target"] for p in parts]),
+        np.concatenate([p["predicted"] for p in parts]),
+        times=np.concatenate([p["times"] for p in parts]),
+        groups=np.concatenate([np.full(len(p["times"]), p["id"]) for p in parts]),
+        window=LEARNED_WINDOW_S,
+    )
+    return InstanceErrors(**{k: found[k] for k in InstanceErrors.__dataclass_fields__})

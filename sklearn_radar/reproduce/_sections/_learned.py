@@ -1,0 +1,86 @@
+"""Beyond the paper: the learned grouping beside the object experiment and the strongest baseline, and where each
+loses panoptic quality (the error anatomy)."""
+
+from __future__ import annotations
+
+from .._results import RunResults
+from ._base import Section, format_params, values_cell
+
+#: The error anatomy's columns: (field of InstanceErrors, header).
+ERROR_COLUMNS = (
+    ("n_true", "GT segments"),
+    ("missed", "missed"),
+    ("noise", "as noise"),
+    ("split", "split"),
+    ("merged_with_object", "merged w/ object"),
+    ("merged_with_background", "merged w/ background"),
+    ("false", "false segments"),
+    ("background", "background only"),
+    ("part_of_object", "part of one object"),
+    ("several_objects", "several objects"),
+)
+
+
+def markdown(results: RunResults) -> list[str]:
+    """The learned grouping's test scores and the error anatomy of the settings it is set beside."""
+    learned = results.learned
+    if learned is None:
+        return []
+    link = {k: v for k, v in learned.params.items() if k.startswith("link__")}
+    lines = [
+        "",
+        "### The learned grouping",
+        "",
+        "The learned grouping is the object experiment's front (FCS and the Doppler-density filter at the paper's "
+        "setting) followed by `LinkClustering`: a gradient-boosting classifier of each detection's objectness and "
+        "one of pairs of neighbouring detections (same road user or not), their links joined by mean-link "
+        "agglomeration. It is fitted once, with the run's seed, on the training half's pre-clustered instances (the "
+        "target the object-level scores use), its three thresholds tuned inside the fit for PQ on out-of-fold "
+        "predictions of the training half; the fitted model, saved as "
+        f"`{learned.model_file}`, labels the test half. It has no online version yet, so it is scored offline "
+        "only. "
+        f"Tuned: link threshold {learned.link_threshold:.2f}, objectness threshold "
+        f"{learned.objectness_threshold:.2f}, minimum cluster size {learned.min_cluster_size} (out-of-fold PQ "
+        f"{learned.cv_pq:.3f}); fitted in {learned.fit_wall_time_s:.1f} s on "
+        f"{learned.n_training_pairs:,} candidate pairs; {format_params(link)}.",
+        "",
+        "| setting | decides from | PQ (test) | recall | precision | V1 (test) |",
+        "|---|---|---|---|---|---|",
+        _row("learned grouping", learned.instance_test, learned.v1_test),
+    ]
+    if results.objects is not None:
+        kept = results.objects.kept
+        lines.append(_row("object experiment", kept.instance_test, kept.v1_test, repeat=results.objects.repeats))
+    for name, baseline in (results.baselines or {}).items():
+        if name in learned.errors and baseline.instance_test is not None:
+            tuned = f", tuned for {results.meta.objective.upper()}"
+            lines.append(_row(name + tuned, baseline.instance_test, baseline.v1_test, repeat=baseline.repeats))
+    lines += [
+        "",
+        "Where each setting loses PQ on the test half (segments: one object, or one cluster, per 0.5 s window of a "
+        "sequence; a ground-truth segment is missed when no cluster matches it with IoU > 0.5, as noise when more "
+        "than half of it is noise, merged when one cluster holds more than half of it with another object's or "
+        "background detections, split otherwise; a cluster's segment is false when it matches none). The object "
+        "experiment and the baseline are their steps' kept settings (the first repeat), labelled again here; the "
+        f"baseline is the offline one with the highest cross-validated {results.meta.objective.upper()} on the "
+        "training half.",
+        "",
+        "| setting | " + " | ".join(header for _, header in ERROR_COLUMNS) + " | median size matched / missed |",
+        "|---|" + "---|" * (len(ERROR_COLUMNS) + 1),
+    ]
+    for name, errors in learned.errors.items():
+        cells = [str(getattr(errors, field)) for field, _ in ERROR_COLUMNS]
+        sizes = f"{errors.median_size_matched:.0f} / {errors.median_size_missed:.0f}"
+        lines.append(f"| {name} | " + " | ".join(cells) + f" | {sizes} |")
+    return lines
+
+
+def _row(name, scores, v1, repeat=None):
+    first = " (first repeat)" if repeat else ""
+    return (
+        f"| {name}{first} | past and future | {values_cell([scores.pq], 'pq')} | {scores.recall:.3f} | "
+        f"{scores.precision:.3f} | {values_cell([v1])} |"
+    )
+
+
+SECTION = Section("learned", markdown)
