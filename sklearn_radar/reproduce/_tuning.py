@@ -131,7 +131,7 @@ class TrainingData:
         with self._lock:
             if self._raw is None:
                 self._raw = self.sequences.search_data(self.train)
-            return self._with(self._raw, executor)
+            return self._raw.on(executor)
 
     def prepared(self, executor, stage0):
         raw = self.raw(executor)
@@ -142,11 +142,7 @@ class TrainingData:
                 found = self._prepared[key] = raw.prepare(stage0)
                 while len(self._prepared) > PREPARED_KEPT:
                     self._prepared.pop(next(iter(self._prepared)))
-        return self._with(found, executor)
-
-    @staticmethod
-    def _with(data, executor):
-        return data.on(executor)
+        return found.on(executor)
 
 
 def native_params(params):

@@ -97,12 +97,6 @@ def values_cell(values, score="v1", sign="\u00b1"):
     return f"{scale * np.mean(values):.{digits}f} {sign} {scale * np.std(values, ddof=1):.{digits}f}{unit}"
 
 
-def mean_score(result, results: RunResults):
-    """The mean test score over the repeats in the run's objective (V1, or PQ when tuned for PQ)."""
-    values = repeated_scores(result, "pq" if results.meta.objective == "pq" else "v1")
-    return float(np.mean(values)) if values else result.v1_test
-
-
 def repeats_legend(results: RunResults):
     """What a score cell means in a run of several repeats; ``""`` for a single run."""
     repeats = results.meta.repeats
