@@ -21,6 +21,7 @@ from ..classification import ROAD_USER_CLASSES, ClusterClassifier, PointClassifi
 from ..experiments import BASELINE_INPUT, SKLEARN_BASELINES, SLIDING_BASELINE, baseline_pipeline, experiment_pipeline
 from ..metrics import background_share, semantic_scores
 from ._constants import BEST_STAGE1, CLASSIFIED
+from ._context import Outcome
 from ._records import JsonRecord, record
 from ._tracking import run_setting_pipeline, tracked_setting
 
@@ -246,7 +247,7 @@ def classified_sequence(sequence, model):
 def run_classification(env, key, needed):
     """Train the classifier on each setting's training clusters, score it on the test half; the point-wise too.
 
-    Returns ``(ClassificationResult, summary, models)``, ``models`` the fitted pipelines to save, by file name.
+    Its models are the fitted pipelines to save, by file name.
     """
     start = time.perf_counter()
     tables = env.sequences.map(training_table, env.train, executor=env.executor)
@@ -274,7 +275,7 @@ def run_classification(env, key, needed):
             f"mCov {scores.mcov:.3f}" + (f" (first of {len(repeats)} repeats)" if len(repeats) > 1 else "")
         )
     result = ClassificationResult(settings=rows, test_sequences=list(env.test), wall_time_s=time.perf_counter() - start)
-    return result, "\n".join(lines), models
+    return Outcome(result, "\n".join(lines), models=models)
 
 
 def _classifier_file(name, source):

@@ -22,6 +22,7 @@ from ..metrics import instance_errors
 from ..metrics._parts import combine_instance_parts, combine_parts, instance_parts, score_parts
 from ._classification import strongest_offline_baseline
 from ._constants import BASELINES, OBJECTS
+from ._context import Outcome
 from ._experiment_records import InstanceErrors, InstanceScores, LearnedResult
 from ._tuning import native_params
 
@@ -78,7 +79,7 @@ def run_learned(env, key, needed):
         f"    learned: test PQ {result.instance_test.pq:.3f} offline (fitted in {fit_s:.1f} s; no causal version), "
         f"missed segments {errors[LEARNED_NAME].missed} of {errors[LEARNED_NAME].n_true}"
     )
-    return result, summary, {LEARNED_FILE: model}
+    return Outcome(result, summary, models={LEARNED_FILE: model})
 
 
 def _is_setting(name):

@@ -58,6 +58,7 @@ from ._constants import (
     TRACKED,
     TRACKING,
 )
+from ._context import Outcome
 from ._experiment_records import (
     BaselineResult,
     ExperimentResult,
@@ -144,29 +145,6 @@ class RunEnv:
     def drawn(self):
         """The test sequence the figures draw (the first), whose labels the steps keep."""
         return self.test[0]
-
-
-@dataclass(frozen=True)
-class Outcome:
-    """What a step found: its result (as ``results.json`` holds it) and what the figures draw besides.
-
-    Attributes
-    ----------
-    result : object
-        :class:`FilterResult`, :class:`ExperimentResult`,
-        :class:`FilterEffectResult` or a dict of :class:`BaselineResult` by name.
-    summary : str or None
-        The line that says it.
-    labels : ndarray or None
-        An experiment's labels of the test sequence the figures draw.
-    models : dict of str to estimator or None
-        Fitted classifiers the run saves in its folder, by file name (the classification step's).
-    """
-
-    result: Any
-    summary: str | None = None
-    labels: np.ndarray | None = None
-    models: dict | None = None
 
 
 @dataclass(frozen=True)
@@ -613,24 +591,6 @@ def run_tracking(env, key, needed):
     return Outcome(found, "\n".join(lines))
 
 
-# ----------------------------------------------------------------------------- the classifier of clusters
-
-
-def run_classification_step(env, key, needed):
-    """The classifier trained on the clusters of :data:`CLASSIFIED` and of the best baseline; the point-wise one."""
-    result, summary, models = run_classification(env, key, needed)
-    return Outcome(result, summary, models=models)
-
-
-# ----------------------------------------------------------------------------- the learned grouping
-
-
-def run_learned_step(env, key, needed):
-    """The learned grouping fitted on the training half and scored offline; its fitted pipeline to save."""
-    result, summary, models = run_learned(env, key, needed)
-    return Outcome(result, summary, models=models)
-
-
 # ----------------------------------------------------------------------------- scoring and searching
 
 
@@ -700,10 +660,8 @@ STEPS = {
     FILTER_EFFECT: Step(run_filter_effect, (str(BEST_STAGE1),), kind=FILTER_EFFECT),
     BASELINES: Step(run_baselines, kind=BASELINES),
     TRACKING: Step(run_tracking, tuple(str(number) for number in TRACKED), kind=TRACKING),
-    CLASSIFICATION: Step(
-        run_classification_step, (*(str(number) for number in CLASSIFIED), BASELINES), kind=CLASSIFICATION
-    ),
-    LEARNED: Step(run_learned_step, (OBJECTS, BASELINES), kind=LEARNED),
+    CLASSIFICATION: Step(run_classification, (*(str(number) for number in CLASSIFIED), BASELINES), kind=CLASSIFICATION),
+    LEARNED: Step(run_learned, (OBJECTS, BASELINES), kind=LEARNED),
 }
 
 
