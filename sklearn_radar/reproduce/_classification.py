@@ -20,13 +20,10 @@ from sklearn.base import clone
 from ..classification import ROAD_USER_CLASSES, ClusterClassifier, PointClassifier, road_user_class
 from ..experiments import BASELINE_INPUT, SKLEARN_BASELINES, SLIDING_BASELINE, baseline_pipeline, experiment_pipeline
 from ..metrics import background_share, semantic_scores
-from ._constants import BEST_STAGE1, CLASSIFIED
+from ._constants import BEST_STAGE1, CLASSIFIED, SCORE_WINDOW_S
 from ._context import Outcome
 from ._records import JsonRecord, record
 from ._tracking import run_setting_pipeline, tracked_setting
-
-#: Time window of the semantic scores and of the classifier's segments, s (as the object-level scores').
-CLASSIFICATION_WINDOW_S = 0.5
 
 #: Name of the point-wise classifier's row.
 POINT_WISE = "point-wise (no clustering)"
@@ -191,7 +188,7 @@ def classifier_model(pipeline):
     steps = [(name, clone(step)) for name, step in pipeline.steps[:-1]]
     clusterer = clone(pipeline.steps[-1][1])
     model = clone(pipeline)
-    model.steps = [*steps, ("classify", ClusterClassifier(clusterer, frame_length=CLASSIFICATION_WINDOW_S))]
+    model.steps = [*steps, ("classify", ClusterClassifier(clusterer, frame_length=SCORE_WINDOW_S))]
     return model
 
 
@@ -324,7 +321,7 @@ def _scores(arrays, groups):
         arrays["confidence"],
         times=arrays["times"],
         groups=groups,
-        window=CLASSIFICATION_WINDOW_S,
+        window=SCORE_WINDOW_S,
     )
     per_class = {
         ROAD_USER_CLASSES[int(code)]: {k: float(v) for k, v in figures.items()}
@@ -332,7 +329,7 @@ def _scores(arrays, groups):
         if int(code) in ROAD_USER_CLASSES
     }
     return SemanticScores(
-        window_s=CLASSIFICATION_WINDOW_S,
+        window_s=SCORE_WINDOW_S,
         **{k: float(found[k]) for k in ("pq", "sq", "rq", "map", "macro_f1", "mcov")},
         per_class=per_class,
     )
@@ -343,7 +340,5 @@ def _background_share(arrays, labels, groups):
 
     The target of the object-level scores (``instance_test``): the share of a clustering is the same figure there.
     """
-    share = background_share(
-        arrays["target"], labels, times=arrays["times"], groups=groups, window=CLASSIFICATION_WINDOW_S
-    )
+    share = background_share(arrays["target"], labels, times=arrays["times"], groups=groups, window=SCORE_WINDOW_S)
     return float(share.background_segment_share)

@@ -54,6 +54,7 @@ from ._constants import (
     LEARNED,
     OBJECTS,
     PAPER_FILTER_SETTING,
+    SCORE_WINDOW_S,
     STAGE2,
     TRACKED,
     TRACKING,
@@ -87,8 +88,6 @@ from ._sections._base import values_cell
 from ._tracking import combine_tracking, streamable, track_sequence, tracked_setting
 from ._tuning import native_params, search_seed, tune, with_cluster_gate
 
-#: Length of the time windows of the object-level scores, s (Scheiner et al. 2021 evaluate 500 ms).
-INSTANCE_WINDOW_S = 0.5
 #: The object-level scores kept per experiment (:class:`InstanceScores`).
 INSTANCE_FIELDS = tuple(name for name in InstanceScores.__dataclass_fields__ if name != "window_s")
 #: The error windows' setting: the paper's chosen filter (FCS, eta_1 = 0.10 m/s, d_xy = 1.4 m).
@@ -606,7 +605,7 @@ def score_on_test(env, pipeline):
     counts = {name: _sum_or_none([p[name] for p in parts]) for name in ("n_clusters", "n_merges", "n_stage1")}
     return TestScores(
         v1=combine_parts("v1", [p["v1"] for p in parts]),
-        instance=InstanceScores(window_s=INSTANCE_WINDOW_S, **{name: float(scores[name]) for name in INSTANCE_FIELDS}),
+        instance=InstanceScores(window_s=SCORE_WINDOW_S, **{name: float(scores[name]) for name in INSTANCE_FIELDS}),
         labels=next(p["labels"] for p in parts if p["labels"] is not None),
         **counts,
     )
@@ -624,7 +623,7 @@ def _score_sequence(sequence, pipeline, drawn):
     times = X["timestamp"].to_numpy(dtype=np.float64) * 1e-6
     found = {
         "v1": score_parts("v1", sequence.target, labels),
-        "instance": instance_parts(sequence.target, labels, times=times, window=INSTANCE_WINDOW_S),
+        "instance": instance_parts(sequence.target, labels, times=times, window=SCORE_WINDOW_S),
         "n_clusters": len(np.unique(labels[labels >= 0])),
         "n_merges": None,
         "n_stage1": None,
