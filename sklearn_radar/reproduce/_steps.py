@@ -170,18 +170,7 @@ class Repeat:
 
 @dataclass(frozen=True)
 class Step:
-    """A step of :data:`STEPS`: its function, the steps whose results it reads, and where its result goes.
-
-    Attributes
-    ----------
-    run : callable
-        ``run(env, key, needed) -> Outcome``.
-    needs : tuple of str
-        Step keys whose results it reads when they ran (otherwise it uses
-        the paper's setting instead).
-    kind : str
-        Its kind of work for the progress (:mod:`._progress`).
-    """
+    """A step of :data:`STEPS`: ``run(env, key, needed) -> Outcome``, the keys it reads the results of, its kind."""
 
     run: Callable
     needs: tuple = ()
@@ -323,10 +312,7 @@ def run_experiment(env, key, needed):
 
 
 def _stage1_settings(best, repeats):
-    """#8's setting of each repeat (its ``cluster__`` parameters), or None for each when #8 did not run.
-
-    Repeat ``k`` of #10, #11 and stage 2 builds on repeat ``k`` of #8.
-    """
+    """#8's cluster__ setting for each repeat (repeat k builds on #8's repeat k); Nones when #8 did not run."""
     if best is None:
         return [None] * repeats
     settings = [_stage1_setting(r.params) for r in best.repeats or [best]]
@@ -433,12 +419,7 @@ def run_filter_effect(env, key, needed):
 
 
 def _filter_effect_sequence(sequence, params):
-    """One test sequence clustered with and without the filter: ``{filtered: (time per round s, clusters)}``.
-
-    After a warm-up of each (JIT compilation is not clustering time), every
-    round clusters both, in turn first, so that a drift of the machine's
-    speed touches both alike.
-    """
+    """One test sequence clustered with and without the filter: ``{filtered: (seconds per timing round, clusters)}``."""
     found = {"id": sequence.id}
     clusterers, prepared = {}, {}
     for filtered in (True, False):
@@ -459,10 +440,7 @@ def _filter_effect_sequence(sequence, params):
 
 
 def run_baselines(env, key, needed):
-    """The clusterers a user would otherwise pick, on the same FCS + filter input, same budget and split.
-
-    Every repeat of every baseline is one :meth:`map` over the executor.
-    """
+    """The scikit-learn clusterers on the same FCS + filter input, budget and split; each repeat one executor job."""
     names = list(SKLEARN_BASELINES)
     jobs = [(name, k) for name in names for k in range(env.repeats)]
     found = env.executor.map(_BaselineRepeat(env), jobs, on_done=_said_ended(env, env.repeats))
@@ -505,11 +483,7 @@ class _BaselineRepeat:
 
 
 def run_objects(env, key, needed):
-    """The object experiment: stage 1 searched for PQ, stage 2 on it; scored on the test half offline and causally.
-
-    It is tuned for PQ whatever the run's objective: it is the framework set up for counting objects.  Every
-    repeat is one :meth:`map` job.
-    """
+    """The object experiment, tuned for PQ whatever the objective: stage 1, stage 2 on it; tested offline, causally."""
     start = time.perf_counter()
     found = env.executor.map(_ObjectRepeat(env), range(env.repeats), on_done=_said_ended(env, env.repeats, OBJECTS))
     result = ObjectExperimentResult(
@@ -594,12 +568,7 @@ def run_tracking(env, key, needed):
 
 
 def score_on_test(env, pipeline):
-    """Fit-predict on each test sequence; radar V-measure and object-level scores against the pre-clustered target.
-
-    The number of clusters and, for stage 2, of merges and stage-1 clusters
-    are summed over the test sequences; the labels are those of the
-    sequence the figures draw.
-    """
+    """Fit-predict each test sequence: V1, object-level scores, summed counts, the labels of the sequence drawn."""
     parts = env.sequences.map(_score_sequence, env.test, pipeline, env.drawn, executor=env.executor)
     scores = combine_instance_parts([p["instance"] for p in parts])
     counts = {name: _sum_or_none([p[name] for p in parts]) for name in ("n_clusters", "n_merges", "n_stage1")}
