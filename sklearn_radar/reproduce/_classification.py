@@ -134,14 +134,7 @@ class ClassificationResult(JsonRecord):
 
 
 def classified_settings(needed):
-    """``[(name, source, pipelines, params)]``: the clusterings whose clusters are classified, in the table's order.
-
-    The settings of :data:`CLASSIFIED` (their run's results in ``needed`` by key, the paper's otherwise), then
-    the strongest offline baseline of the run by its cross-validated training score (none when the baselines did
-    not run).
-    ``pipelines`` holds one pipeline per repeat of the search (repeat ``k`` of #13 on repeat ``k`` of #8, as the
-    run built it); ``params`` is the kept setting, the first repeat's.
-    """
+    """``[(name, source, pipelines, params)]``: :data:`CLASSIFIED`, then the strongest baseline; a pipeline a repeat."""
     found = []
     for number in CLASSIFIED:
         result = needed.get(str(number))
@@ -170,11 +163,7 @@ def _later_repeats(number, result, needed):
 
 
 def strongest_offline_baseline(baselines):
-    """``(name, result)`` of the offline baseline with the highest cross-validated score, or None (no baselines).
-
-    The score is the kept setting's mean cross-validated score of the run's objective on the training half: a
-    choice on the test half would select on the data it is scored on.
-    """
+    """``(name, result)`` of the offline baseline with the best cross-validated score; None without baselines."""
     scored = [
         (name, result)
         for name, result in (baselines or {}).items()
@@ -200,10 +189,7 @@ def point_model():
 
 
 def model_input(data):
-    """A detection table as the models read it: every column but the uuid and the ground-truth ``label_id``.
-
-    ``track_id`` stays: ``fit`` reads the instances there (prediction does not).
-    """
+    """A detection table as the models read it: every column but ``uuid`` and ``label_id`` (fit reads ``track_id``)."""
     return data[[c for c in data.columns if c not in _NOT_INPUT]]
 
 
@@ -214,11 +200,7 @@ def training_table(sequence):
 
 
 def classified_sequence(sequence, model):
-    """One test sequence classified by the fitted ``model``: the arrays its scores need.
-
-    ``clusters`` are the labels the classifier classified (None for the point-wise classifier, which has none),
-    for the background share before it.
-    """
+    """One test sequence classified by the fitted ``model``: its scores' arrays (``clusters`` None point-wise)."""
     data = sequence.scenes.data
     working = model[:-1].transform(model_input(data))
     classifier = model[-1]
@@ -242,10 +224,7 @@ def classified_sequence(sequence, model):
 
 
 def run_classification(env, key, needed):
-    """Train the classifier on each setting's training clusters, score it on the test half; the point-wise too.
-
-    Its models are the fitted pipelines to save, by file name.
-    """
+    """The classifier trained on each setting's training clusters, and the point-wise one, scored on the test half."""
     start = time.perf_counter()
     tables = env.sequences.map(training_table, env.train, executor=env.executor)
     X_train = pd.concat([X for X, _ in tables], ignore_index=True)
@@ -276,11 +255,7 @@ def run_classification(env, key, needed):
 
 
 def _classifier_file(name, source):
-    """The file the run saves the classifier of ``name`` to: None for the point-wise one and the paper's settings.
-
-    A classifier of the paper's setting (an experiment that did not run) is not saved: ``params.json`` has no such
-    setting to go with it.
-    """
+    """The file the classifier of ``name`` is saved to; None point-wise and for a paper's setting (no params.json)."""
     if name == POINT_WISE or source.startswith("paper's"):
         return None
     return CLASSIFIER_FILES.get(name, CLASSIFIER_FILES["baseline"])
@@ -336,9 +311,6 @@ def _scores(arrays, groups):
 
 
 def _background_share(arrays, labels, groups):
-    """Share of the per-window segments of ``labels`` with no detection of a road user of the pre-clustered target.
-
-    The target of the object-level scores (``instance_test``): the share of a clustering is the same figure there.
-    """
+    """Share of the per-window segments of ``labels`` without a road user of the pre-clustered target."""
     share = background_share(arrays["target"], labels, times=arrays["times"], groups=groups, window=SCORE_WINDOW_S)
     return float(share.background_segment_share)
