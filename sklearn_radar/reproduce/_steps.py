@@ -312,7 +312,7 @@ def run_experiment(env, key, needed):
 
 
 def _stage1_settings(best, repeats):
-    """#8's cluster__ setting for each repeat (repeat k builds on #8's repeat k); Nones when #8 did not run."""
+    """#8's ``cluster__`` setting for each repeat (repeat k builds on #8's repeat k); Nones when #8 did not run."""
     if best is None:
         return [None] * repeats
     settings = [_stage1_setting(r.params) for r in best.repeats or [best]]
