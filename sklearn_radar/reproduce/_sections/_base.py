@@ -50,7 +50,7 @@ class Section:
 
 
 def format_params(params):
-    """``{"cluster__eps_xy": 0.6, ...}`` -> ``"eps_xy=0.6, ..."`` (3 significant digits), the shared settings left out."""
+    """``{"cluster__eps_xy": 0.6, ...}`` -> ``"eps_xy=0.6, ..."`` (3 significant digits; shared settings left out)."""
     shown = []
     for key, value in (params or {}).items():
         name = key.split("__")[-1]
@@ -77,7 +77,7 @@ def percent(value):
 
 
 def score_cell(result, score="v1"):
-    """A test score (``"v1"`` in %, ``"pq"``) of ``result``: one value, or mean and sd over repeats; ``"-"`` for none."""
+    """A test score (``"v1"`` in %, ``"pq"``) of ``result``: one value, or mean and sd over repeats; or ``"-"``."""
     return values_cell(repeated_scores(result, score), score)
 
 
