@@ -211,7 +211,7 @@ def reproduce(
     seed : int, default=0
         Random seed of the simulated data and the split; each search draws
         from its own stream, derived from it and the experiment (or
-        baseline) by :func:`~._steps.search_seed`, so that searches of
+        baseline) by :func:`~._tuning.search_seed`, so that searches of
         equal spaces are independent (``seed + repeats - 1`` at most
         ``2**32 - 1``).
     stream : file-like, default=None
