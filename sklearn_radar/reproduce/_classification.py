@@ -20,12 +20,10 @@ from sklearn.base import clone
 from ..classification import ROAD_USER_CLASSES, ClusterClassifier, PointClassifier, road_user_class
 from ..experiments import BASELINE_INPUT, SKLEARN_BASELINES, SLIDING_BASELINE, baseline_pipeline, experiment_pipeline
 from ..metrics import background_share, semantic_scores
-from ._constants import BEST_STAGE1, CLASSIFIED
+from ._constants import BEST_STAGE1, CLASSIFIED, SCORE_WINDOW_S
+from ._context import Outcome
 from ._records import JsonRecord, record
 from ._tracking import run_setting_pipeline, tracked_setting
-
-#: Time window of the semantic scores and of the classifier's segments, s (as the object-level scores').
-CLASSIFICATION_WINDOW_S = 0.5
 
 #: Name of the point-wise classifier's row.
 POINT_WISE = "point-wise (no clustering)"
@@ -136,14 +134,7 @@ class ClassificationResult(JsonRecord):
 
 
 def classified_settings(needed):
-    """``[(name, source, pipelines, params)]``: the clusterings whose clusters are classified, in the table's order.
-
-    The settings of :data:`CLASSIFIED` (their run's results in ``needed`` by key, the paper's otherwise), then
-    the strongest offline baseline of the run by its cross-validated training score (none when the baselines did
-    not run).
-    ``pipelines`` holds one pipeline per repeat of the search (repeat ``k`` of #13 on repeat ``k`` of #8, as the
-    run built it); ``params`` is the kept setting, the first repeat's.
-    """
+    """``[(name, source, pipelines, params)]``: :data:`CLASSIFIED`, then the strongest baseline; a pipeline a repeat."""
     found = []
     for number in CLASSIFIED:
         result = needed.get(str(number))
@@ -172,11 +163,7 @@ def _later_repeats(number, result, needed):
 
 
 def strongest_offline_baseline(baselines):
-    """``(name, result)`` of the offline baseline with the highest cross-validated score, or None (no baselines).
-
-    The score is the kept setting's mean cross-validated score of the run's objective on the training half: a
-    choice on the test half would select on the data it is scored on.
-    """
+    """``(name, result)`` of the offline baseline with the best cross-validated score; None without baselines."""
     scored = [
         (name, result)
         for name, result in (baselines or {}).items()
@@ -190,7 +177,7 @@ def classifier_model(pipeline):
     steps = [(name, clone(step)) for name, step in pipeline.steps[:-1]]
     clusterer = clone(pipeline.steps[-1][1])
     model = clone(pipeline)
-    model.steps = [*steps, ("classify", ClusterClassifier(clusterer, frame_length=CLASSIFICATION_WINDOW_S))]
+    model.steps = [*steps, ("classify", ClusterClassifier(clusterer, frame_length=SCORE_WINDOW_S))]
     return model
 
 
@@ -202,10 +189,7 @@ def point_model():
 
 
 def model_input(data):
-    """A detection table as the models read it: every column but the uuid and the ground-truth ``label_id``.
-
-    ``track_id`` stays: ``fit`` reads the instances there (prediction does not).
-    """
+    """A detection table as the models read it: every column but ``uuid`` and ``label_id`` (fit reads ``track_id``)."""
     return data[[c for c in data.columns if c not in _NOT_INPUT]]
 
 
@@ -216,11 +200,7 @@ def training_table(sequence):
 
 
 def classified_sequence(sequence, model):
-    """One test sequence classified by the fitted ``model``: the arrays its scores need.
-
-    ``clusters`` are the labels the classifier classified (None for the point-wise classifier, which has none),
-    for the background share before it.
-    """
+    """One test sequence classified by the fitted ``model``: its scores' arrays (``clusters`` None point-wise)."""
     data = sequence.scenes.data
     working = model[:-1].transform(model_input(data))
     classifier = model[-1]
@@ -244,10 +224,7 @@ def classified_sequence(sequence, model):
 
 
 def run_classification(env, key, needed):
-    """Train the classifier on each setting's training clusters, score it on the test half; the point-wise too.
-
-    Returns ``(ClassificationResult, summary, models)``, ``models`` the fitted pipelines to save, by file name.
-    """
+    """The classifier trained on each setting's training clusters, and the point-wise one, scored on the test half."""
     start = time.perf_counter()
     tables = env.sequences.map(training_table, env.train, executor=env.executor)
     X_train = pd.concat([X for X, _ in tables], ignore_index=True)
@@ -274,15 +251,11 @@ def run_classification(env, key, needed):
             f"mCov {scores.mcov:.3f}" + (f" (first of {len(repeats)} repeats)" if len(repeats) > 1 else "")
         )
     result = ClassificationResult(settings=rows, test_sequences=list(env.test), wall_time_s=time.perf_counter() - start)
-    return result, "\n".join(lines), models
+    return Outcome(result, "\n".join(lines), models=models)
 
 
 def _classifier_file(name, source):
-    """The file the run saves the classifier of ``name`` to: None for the point-wise one and the paper's settings.
-
-    A classifier of the paper's setting (an experiment that did not run) is not saved: ``params.json`` has no such
-    setting to go with it.
-    """
+    """The file the classifier of ``name`` is saved to; None point-wise and for a paper's setting (no params.json)."""
     if name == POINT_WISE or source.startswith("paper's"):
         return None
     return CLASSIFIER_FILES.get(name, CLASSIFIER_FILES["baseline"])
@@ -323,7 +296,7 @@ def _scores(arrays, groups):
         arrays["confidence"],
         times=arrays["times"],
         groups=groups,
-        window=CLASSIFICATION_WINDOW_S,
+        window=SCORE_WINDOW_S,
     )
     per_class = {
         ROAD_USER_CLASSES[int(code)]: {k: float(v) for k, v in figures.items()}
@@ -331,18 +304,13 @@ def _scores(arrays, groups):
         if int(code) in ROAD_USER_CLASSES
     }
     return SemanticScores(
-        window_s=CLASSIFICATION_WINDOW_S,
+        window_s=SCORE_WINDOW_S,
         **{k: float(found[k]) for k in ("pq", "sq", "rq", "map", "macro_f1", "mcov")},
         per_class=per_class,
     )
 
 
 def _background_share(arrays, labels, groups):
-    """Share of the per-window segments of ``labels`` with no detection of a road user of the pre-clustered target.
-
-    The target of the object-level scores (``instance_test``): the share of a clustering is the same figure there.
-    """
-    share = background_share(
-        arrays["target"], labels, times=arrays["times"], groups=groups, window=CLASSIFICATION_WINDOW_S
-    )
+    """Share of the per-window segments of ``labels`` without a road user of the pre-clustered target."""
+    share = background_share(arrays["target"], labels, times=arrays["times"], groups=groups, window=SCORE_WINDOW_S)
     return float(share.background_segment_share)

@@ -75,6 +75,10 @@ TRACKED = (EXPERT, BEST_STAGE1, *STAGE2)
 #: offline scikit-learn baseline and the point-wise classifier.
 CLASSIFIED = (EXPERT, FCS_BASELINE, BEST_STAGE1, STAGE2[-1])
 
+#: Length of the time windows of the object-level, tracking and semantic scores, s (Scheiner et al. 2021 evaluate
+#: 500 ms).
+SCORE_WINDOW_S = 0.5
+
 #: The paper's chosen filter setting (eta_1 in m/s, d_xy in m): the defaults of DopplerDensityFilter.
 PAPER_FILTER_SETTING = (0.10, 1.4)
 

@@ -1,4 +1,4 @@
-"""What the figures of a reproduce run draw besides ``results.json``: one test sequence and the labels of it."""
+"""What a step returns (:class:`Outcome`), and what the figures draw besides ``results.json`` (:class:`RunContext`)."""
 
 from __future__ import annotations
 
@@ -25,3 +25,25 @@ class RunContext:
     sequences: Any
     drawn_sequence: int
     labels: dict[int, np.ndarray] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What a step found: its result (as ``results.json`` holds it) and what the figures draw besides.
+
+    Attributes
+    ----------
+    result : object
+        The step's record (or dict of records), as ``results.json`` holds it.
+    summary : str or None
+        The line that says it.
+    labels : ndarray or None
+        An experiment's labels of the test sequence the figures draw.
+    models : dict of str to estimator or None
+        Fitted models the run saves in its folder, by file name (the classifiers, the learned grouping).
+    """
+
+    result: Any
+    summary: str | None = None
+    labels: np.ndarray | None = None
+    models: dict | None = None

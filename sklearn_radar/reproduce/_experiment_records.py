@@ -96,19 +96,7 @@ class RepeatResult(JsonRecord):
 
 
 def repeated_scores(result, score="v1"):
-    """The test scores of an experiment or baseline, one per repeat (one value for a single run).
-
-    Parameters
-    ----------
-    result : ExperimentResult or BaselineResult
-    score : {"v1", "pq"}, default="v1"
-        The radar V-measure or the panoptic quality.
-
-    Returns
-    -------
-    scores : list of float
-        Per repeat, in order; ``[]`` for PQ when the record has no object-level scores.
-    """
+    """The test ``score`` (``"v1"`` or ``"pq"``) of an experiment or baseline per repeat; ``[]`` for a missing PQ."""
     records = result.repeats or [result]
     if score == "v1":
         return [float(r.v1_test) for r in records]

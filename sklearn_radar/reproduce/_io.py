@@ -30,11 +30,7 @@ def run_marker(file):
 
 
 def check_apart(data, out, data_name="data", out_name="out"):
-    """Refuse (ValueError naming both) an output folder ``out`` that is the folder ``data``, lies inside it or holds it.
-
-    Both paths are compared resolved (symbolic links followed, ``..`` removed), whether they exist or not;
-    ``data_name`` and ``out_name`` are how the error names them (the command line's options).
-    """
+    """Refuse (ValueError naming both) an ``out`` that is, lies inside or holds the folder ``data`` (paths resolved)."""
     data_path, out_path = Path(data).resolve(), Path(out).resolve()
     if out_path == data_path:
         where = "is"
@@ -51,11 +47,7 @@ def check_apart(data, out, data_name="data", out_name="out"):
 
 
 def check_run_folder(folder, marker_name, run_files):
-    """Refuse (FileExistsError naming it) a folder where a run would replace a file that no run wrote.
-
-    A run replaces the files ``marker_name`` and ``run_files`` in ``folder``: they must be absent, or the folder a
-    run's (its marker written by a run).  Other files stay either way.
-    """
+    """Refuse (FileExistsError) a ``folder`` where a run would replace a file no run wrote (it has no run marker)."""
     folder = Path(folder)
     if not folder.is_dir() or run_marker(folder / marker_name) is not None:
         return  # absent (created later), a file (check_writable says so), or a run's folder

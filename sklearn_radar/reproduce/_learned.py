@@ -21,7 +21,8 @@ from ..experiments._learned import learned_pipeline
 from ..metrics import instance_errors
 from ..metrics._parts import combine_instance_parts, combine_parts, instance_parts, score_parts
 from ._classification import strongest_offline_baseline
-from ._constants import BASELINES, OBJECTS
+from ._constants import BASELINES, OBJECTS, SCORE_WINDOW_S
+from ._context import Outcome
 from ._experiment_records import InstanceErrors, InstanceScores, LearnedResult
 from ._tuning import native_params
 
@@ -29,8 +30,6 @@ from ._tuning import native_params
 LEARNED_FILE = "learned.joblib"
 #: The learned grouping's parameters in the run beside the front's (LinkClustering's defaults otherwise).
 LEARNED_PARAMS = {}
-#: Length of the time windows of the scores and the error anatomy, s (the object-level scores').
-LEARNED_WINDOW_S = 0.5
 #: The object-level scores kept (those of :class:`InstanceScores`).
 _SCORES = tuple(name for name in InstanceScores.__dataclass_fields__ if name != "window_s")
 #: The error anatomy's name of each setting.
@@ -42,7 +41,7 @@ def run_learned(env, key, needed):
     start = time.perf_counter()
     params = {
         **LEARNED_PARAMS,
-        "link__window": LEARNED_WINDOW_S,
+        "link__window": SCORE_WINDOW_S,
         "link__random_state": env.seed,
         "link__n_jobs": env.executor.threads if hasattr(env.executor, "threads") else 1,
     }
@@ -70,7 +69,7 @@ def run_learned(env, key, needed):
         fit_wall_time_s=fit_s,
         v1_test=combine_parts("v1", [p["v1"] for p in parts]),
         n_clusters_test=int(sum(p["n_clusters"] for p in parts)),
-        instance_test=InstanceScores(window_s=LEARNED_WINDOW_S, **{k: float(scores[k]) for k in _SCORES}),
+        instance_test=InstanceScores(window_s=SCORE_WINDOW_S, **{k: float(scores[k]) for k in _SCORES}),
         errors=errors,
         wall_time_s=time.perf_counter() - start,
     )
@@ -78,7 +77,7 @@ def run_learned(env, key, needed):
         f"    learned: test PQ {result.instance_test.pq:.3f} offline (fitted in {fit_s:.1f} s; no causal version), "
         f"missed segments {errors[LEARNED_NAME].missed} of {errors[LEARNED_NAME].n_true}"
     )
-    return result, summary, {LEARNED_FILE: model}
+    return Outcome(result, summary, models={LEARNED_FILE: model})
 
 
 def _is_setting(name):
@@ -121,7 +120,7 @@ def _labelled(sequence, labels):
     return {
         "id": sequence.id,
         "v1": score_parts("v1", target, labels),
-        "instance": instance_parts(target, labels, times=times, window=LEARNED_WINDOW_S),
+        "instance": instance_parts(target, labels, times=times, window=SCORE_WINDOW_S),
         "n_clusters": len(np.unique(labels[labels >= 0])),
         "target": target,
         "predicted": labels,
@@ -136,6 +135,6 @@ def _errors(parts):
         np.concatenate([p["predicted"] for p in parts]),
         times=np.concatenate([p["times"] for p in parts]),
         groups=np.concatenate([np.full(len(p["times"]), p["id"]) for p in parts]),
-        window=LEARNED_WINDOW_S,
+        window=SCORE_WINDOW_S,
     )
     return InstanceErrors(**{k: found[k] for k in InstanceErrors.__dataclass_fields__})

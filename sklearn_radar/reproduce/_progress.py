@@ -56,13 +56,7 @@ KERNELS = (
 
 
 def uncompiled_kernels():
-    """The :data:`KERNELS` not in numba's cache yet (their cache index is missing or stale).
-
-    Returns
-    -------
-    names : list of str
-        Empty when every kernel is cached (or numba's cache cannot be read).
-    """
+    """The :data:`KERNELS` not in numba's cache yet (empty when all are, or the cache cannot be read)."""
     names = []
     for name in KERNELS:
         module, kernel = name.rsplit(".", 1)
@@ -84,21 +78,7 @@ def duration(seconds):
 
 
 class RunProgress:
-    """Where a run stands: its work done, measured per kind, and the time left at the measured rates.
-
-    Parameters
-    ----------
-    work : dict of str to (str, float)
-        Per step key, its kind and its units of work, in run order.
-    started : float
-        ``time.perf_counter()`` at the start of the run.
-    stream : file-like or None
-        Where :meth:`say` prints (None: nowhere).
-    searches : int, default=0
-        The run's searches, for the lines of :meth:`search_ended`.
-
-    A copy in another process (joblib) prints nothing and counts for itself.
-    """
+    """Where a run stands: ``work`` (per step key, its kind and units), done and timed per kind; the time left."""
 
     def __init__(self, work, started, stream=None, searches=0):
         self.work = dict(work)
@@ -165,11 +145,7 @@ class RunProgress:
         return self._spent[kind] / self._units[kind] if self._units.get(kind) else None
 
     def expected_rate(self, kind):
-        """Seconds per unit of ``kind``: its measured rate, else its expected one at the measured speed.
-
-        The speed is the measured seconds of the timed kinds over their
-        expected seconds (:data:`EXPECTED_S_PER_UNIT`); 1 before any is timed.
-        """
+        """Seconds per unit of ``kind``: measured, else :data:`EXPECTED_S_PER_UNIT`'s at the timed kinds' speed."""
         measured = self.rate(kind)
         if measured is not None:
             return measured
@@ -201,16 +177,7 @@ class RunProgress:
         return [kind for kind in self._remaining() if self.rate(kind) is None]
 
     def left(self, known_only=False):
-        """Seconds left of the steps at the measured rates; None while a kind still to come is not timed.
-
-        The rates are scaled by how much of the work ran at once (its
-        measured seconds add up to more than the time elapsed then).
-
-        Parameters
-        ----------
-        known_only : bool, default=False
-            Count only the kinds timed so far (never None).
-        """
+        """Seconds left at the measured rates, scaled by the overlap; None while a kind to come is not timed."""
         remaining = self._remaining()
         rates = {kind: self.rate(kind) for kind in remaining}
         if None in rates.values() and not known_only:
@@ -221,12 +188,7 @@ class RunProgress:
         return overlap * sum(remaining[kind] * rate for kind, rate in rates.items() if rate is not None)
 
     def status(self):
-        """``"run 42 %, 0:53 elapsed, about 1:13 left"`` (the share never goes back; 100 % once the steps ended).
-
-        While a kind of work still to come is not timed: ``"run 42 %, 0:53
-        elapsed, time left unknown (not timed yet: the baselines; the rest
-        about 0:40)"``.
-        """
+        """``"run 42 %, 0:53 elapsed, about 1:13 left"``, or the kinds not timed yet and the rest's time left."""
         with self._lock:
             elapsed = time.perf_counter() - self.started
             remaining = self._remaining()
@@ -246,13 +208,7 @@ class RunProgress:
             return f"{text}, time left unknown (not timed yet: {named}{rest})"
 
     def search_status(self, key):
-        """A ``status`` for :class:`~sklearn_radar.model_selection.ProgressPrinter` of a search of step ``key``.
-
-        Returns
-        -------
-        status : callable
-            ``status(i, n) -> str`` after each iteration: one unit of ``key`` done.
-        """
+        """``status(i, n) -> str`` for a :class:`~sklearn_radar.model_selection.ProgressPrinter`: a unit of ``key``."""
 
         def status(i, n):
             self.advance(key)

@@ -250,10 +250,7 @@ class JsonRecord:
 
     @classmethod
     def from_json_dict(cls, document, *, source="results.json"):
-        """The record of :meth:`to_json_dict`'s form ``document`` (parsed JSON) read from ``source``.
-
-        A key missing or not known, or a value of the wrong type, raises a ValueError naming ``source`` and the key.
-        """
+        """The record of ``document`` (parsed JSON) read from ``source``; ValueError naming it and a bad key."""
         record = _from_json(cls, document, source)
         cls._check_read(document, source)
         return record

@@ -11,10 +11,7 @@ from ._sections import SECTIONS
 
 
 def write_figures(out, results: RunResults, context: RunContext, sections=SECTIONS):
-    """Draw every section's figures into the folder ``out``; return ``results.figures``, where they are recorded.
-
-    Without matplotlib none is drawn, and ``results.figures.missing`` says so.
-    """
+    """Draw every section's figures into ``out`` (none without matplotlib); return ``results.figures``."""
     out = Path(out)
     try:
         import matplotlib
@@ -38,11 +35,7 @@ def report_markdown(results: RunResults, sections=SECTIONS):
 
 
 def write_report(out, results: RunResults, context: RunContext | None = None, sections=SECTIONS):
-    """Write ``report.md`` into the folder ``out`` (atomically) and return its path; with ``context``, figures first.
-
-    Without ``context`` (e.g. ``results`` read back from ``results.json``) the text refers to the figures
-    already recorded in ``results.figures``.
-    """
+    """Write ``report.md`` into ``out`` atomically, figures first with ``context``; return its path."""
     out = Path(out)
     if context is not None:
         write_figures(out, results, context, sections)

@@ -171,12 +171,7 @@ class RunResults(JsonRecord):
         return [row.classifier_file for row in self.classification.settings.values() if row.classifier_file] + files
 
     def to_json_dict(self, *, figures=False):
-        """What ``results.json`` holds, a dict; with ``figures``, also the figures drawn (which it does not hold).
-
-        ``meta``, ``statistics`` (when measured), ``experiments`` (keyed by the number as a string), then
-        ``filter``, ``filter_effect``, ``baselines``, ``objects``, ``tracking``, ``classification`` and ``learned``
-        where they ran.
-        """
+        """What ``results.json`` holds, a dict; with ``figures``, also the figures drawn (which it does not hold)."""
         document = to_json(self)
         if figures:
             document["figures"] = to_json(self.figures)
@@ -190,10 +185,7 @@ class RunResults(JsonRecord):
 
     @classmethod
     def read(cls, path):
-        """The :class:`RunResults` of the ``results.json`` file at ``path``.
-
-        A file that is not valid JSON or not a run's results raises a ValueError naming the file and the key.
-        """
+        """The :class:`RunResults` of the ``results.json`` file at ``path`` (ValueError naming the file and the key)."""
         path = Path(path)
         try:
             document = json.loads(path.read_text(encoding="utf-8"))
@@ -262,10 +254,7 @@ class RunResults(JsonRecord):
 
 
 def _best_setting(experiments, cv_key, objective):
-    """``(key, why)`` of ``params.json``'s best setting: the highest cross-validated training score, never a test one.
-
-    See :ref:`user-guide-command-line` for the rule and the settings without such a score.
-    """
+    """``(key, why)`` of ``params.json``'s best: the highest cross-validated score (:ref:`user-guide-command-line`)."""
     scored = {key: entry[cv_key] for key, entry in experiments.items() if entry[cv_key] is not None}
     name = OBJECTIVE_NAMES[objective]
     if scored:

@@ -89,17 +89,7 @@ IN_PROCESS_MAX_SEQUENCE_S = 80.0
 
 @dataclass
 class Run:
-    """One reproduce run: where it writes, what it found so far, and its progress.
-
-    Attributes
-    ----------
-    out : Path
-        Output folder.
-    results : RunResults
-    progress : RunProgress
-    started : float
-        ``time.perf_counter()`` at the start.
-    """
+    """One reproduce run: its output folder, its results so far, its progress, its ``perf_counter`` start, its id."""
 
     out: Path
     results: RunResults
@@ -221,7 +211,7 @@ def reproduce(
     seed : int, default=0
         Random seed of the simulated data and the split; each search draws
         from its own stream, derived from it and the experiment (or
-        baseline) by :func:`~._steps.search_seed`, so that searches of
+        baseline) by :func:`~._tuning.search_seed`, so that searches of
         equal spaces are independent (``seed + repeats - 1`` at most
         ``2**32 - 1``).
     stream : file-like, default=None
@@ -414,12 +404,7 @@ def _reproduce(data, out, keys, budget, seed, repeats, stream, objective, diffic
 
 
 def run_steps(run, env, keys, context):
-    """Run the steps ``keys`` in order, each with the results of the steps it needs; save after each.
-
-    The steps that need none of the others start at once, where the
-    executor runs work at once (:meth:`~sklearn_radar._executor.DaskExecutor.ahead`),
-    and are collected in order.
-    """
+    """Run the steps ``keys`` in order, each with the results it needs, saving after each (the free ones at once)."""
     found = {}
     first = [key for key in keys if _runs_ahead(key, keys)]
     ahead = env.executor.ahead(_started(run, env, found), first)
@@ -508,13 +493,7 @@ def _utc_now():
 
 
 def _start_folder(run):
-    """Claim the output folder for this run: the marker first ("running"), then the previous run's files go.
-
-    Only files a run wrote go: the run's file names in a folder that a run
-    marked (:func:`check_run_folder`, checked again as the folder may have
-    changed while the data were made), and the names the old marker lists
-    whose contents are unchanged.
-    """
+    """Claim the output folder: the marker first ("running"), then the previous run's files (a run wrote them) go."""
     out = run.out
     check_run_folder(out, RUN_MARKER, RUN_FILES)
     remove_stale_temporaries(out, legacy=(*RUN_FILES, RUN_MARKER))

@@ -27,21 +27,7 @@ LABEL_COLUMNS = ("uuid", "track_id", "label_id")
 
 @dataclass
 class Sequence:
-    """One sequence of a run.
-
-    Attributes
-    ----------
-    id : int
-        Sequence number (the ``sequence`` column).
-    scenes : Bunch
-        Its part of the data Bunch (:func:`~sklearn_radar.datasets.make_scenes`
-        or :func:`~sklearn_radar.datasets.load_radarscenes`): ``data``,
-        ``target`` (annotated instance, -1 for background), ``groups``,
-        ``odometry``, ``sensors``, ``sequences``.
-    target : ndarray of int
-        The pre-clustered target (:func:`~sklearn_radar.metrics.precluster_target`)
-        of its detections.
-    """
+    """One sequence of a run: its ``id``, its part of the data Bunch (``scenes``) and its pre-clustered ``target``."""
 
     id: int
     scenes: Bunch
@@ -76,11 +62,7 @@ def load_sequence(data_dir, number):
 
 
 def simulate_sequence(number, seed, duration, difficulty):
-    """Sequence ``number`` of :func:`~sklearn_radar.datasets.make_scenes` (its seed given), simulated where it runs.
-
-    Its rows are those of the same sequence in ``make_scenes`` with the
-    random state that gave ``seed`` (:func:`sequence_seeds`).
-    """
+    """Sequence ``number`` of :func:`~sklearn_radar.datasets.make_scenes` with its ``seed``, simulated where it runs."""
     knobs = _check_knobs(difficulty, None)
     description = f"Simulated RadarScenes-layout sequence {number} of {duration:g} s (difficulty {difficulty!r})."
     scenes = simulate_sequences([number], [seed], duration, SIMULATED_OBJECTS, 1.0, knobs, description)
@@ -108,19 +90,7 @@ def _search_block(*sequences):
 
 
 class RunSequences:
-    """Every sequence of a run, where its executor keeps them.
-
-    Parameters
-    ----------
-    ids : list of int
-        Sequence numbers, increasing.
-    sizes : list of int
-        Detections per sequence.
-    items : list
-        The executor's handle of each :class:`Sequence`.
-    executor : LocalExecutor or DaskExecutor
-        Where they live and their tasks run (:mod:`sklearn_radar._executor`).
-    """
+    """Every sequence of a run (``ids``, ``sizes`` in detections), the executor's handle of each where it keeps them."""
 
     def __init__(self, ids, sizes, items, executor):
         self.ids = [int(i) for i in ids]
@@ -130,12 +100,7 @@ class RunSequences:
 
     @classmethod
     def simulated(cls, n_sequences, duration, random_state, difficulty="realistic", executor=None):
-        """:func:`~sklearn_radar.datasets.make_scenes`'s sequences, each simulated where it lives.
-
-        The same detections as ``make_scenes(n_sequences, duration,
-        random_state, difficulty=difficulty)``: each sequence has a seed of
-        its own, drawn first.
-        """
+        """:func:`~sklearn_radar.datasets.make_scenes`'s detections, each sequence simulated where it lives."""
         numbers = list(range(1, n_sequences + 1))
         calls = [
             (number, int(seed), duration, difficulty)
@@ -169,13 +134,7 @@ class RunSequences:
         return sum(sizes[i] for i in ids)
 
     def split(self, random_state=None):
-        """Training and test sequence ids: :func:`~sklearn_radar.model_selection.sequence_train_test_split`'s split.
-
-        Raises
-        ------
-        ValueError
-            With fewer than two sequences.
-        """
+        """Training and test ids by :func:`~sklearn_radar.model_selection.sequence_train_test_split`'s rule."""
         if len(self.ids) < 2:
             raise ValueError(f"the data must hold at least 2 sequences to split by sequence, got {len(self.ids)}")
         side = sequence_sides(np.asarray(self.sizes), 0.5, random_state)
@@ -183,12 +142,7 @@ class RunSequences:
         return [int(i) for i in ids[side == 0]], [int(i) for i in ids[side == 1]]
 
     def map(self, function, ids=None, *args, executor=None):
-        """``function(sequence, *args)`` for each sequence of ``ids`` (None: all), in order, where it lives.
-
-        ``function`` must be a module-level function (the workers import
-        it) and should return a small summary.  ``executor`` (default: the
-        sequences') submits the tasks.
-        """
+        """Module-level ``function(sequence, *args)`` of each sequence of ``ids`` (None: all), in order, where it is."""
         executor = executor or self.executor
         ids = self.ids if ids is None else [int(i) for i in ids]
         return executor.gather([executor.submit(_apply, function, self.items[i], args) for i in ids])
@@ -198,12 +152,7 @@ class RunSequences:
         return self.executor.fetch(self.items[int(number)])
 
     def search_data(self, ids, executor=None):
-        """The sequences ``ids`` as a search's training data (a ``SearchData``), where they live.
-
-        See :class:`~sklearn_radar.model_selection._sequence_search.SearchData`.  They are grouped into the
-        executor's blocks (:meth:`~sklearn_radar._executor.DaskExecutor.blocks`), each block built where its
-        sequences are.
-        """
+        """The sequences ``ids`` as a search's ``SearchData``, in the executor's blocks, each built where it lives."""
         executor = executor or self.executor
         ids = sorted(int(i) for i in ids)
         positions = executor.blocks([self.size([i]) for i in ids])

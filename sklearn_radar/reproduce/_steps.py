@@ -54,10 +54,12 @@ from ._constants import (
     LEARNED,
     OBJECTS,
     PAPER_FILTER_SETTING,
+    SCORE_WINDOW_S,
     STAGE2,
     TRACKED,
     TRACKING,
 )
+from ._context import Outcome
 from ._experiment_records import (
     BaselineResult,
     ExperimentResult,
@@ -86,8 +88,6 @@ from ._sections._base import values_cell
 from ._tracking import combine_tracking, streamable, track_sequence, tracked_setting
 from ._tuning import native_params, search_seed, tune, with_cluster_gate
 
-#: Length of the time windows of the object-level scores, s (Scheiner et al. 2021 evaluate 500 ms).
-INSTANCE_WINDOW_S = 0.5
 #: The object-level scores kept per experiment (:class:`InstanceScores`).
 INSTANCE_FIELDS = tuple(name for name in InstanceScores.__dataclass_fields__ if name != "window_s")
 #: The error windows' setting: the paper's chosen filter (FCS, eta_1 = 0.10 m/s, d_xy = 1.4 m).
@@ -147,29 +147,6 @@ class RunEnv:
 
 
 @dataclass(frozen=True)
-class Outcome:
-    """What a step found: its result (as ``results.json`` holds it) and what the figures draw besides.
-
-    Attributes
-    ----------
-    result : object
-        :class:`FilterResult`, :class:`ExperimentResult`,
-        :class:`FilterEffectResult` or a dict of :class:`BaselineResult` by name.
-    summary : str or None
-        The line that says it.
-    labels : ndarray or None
-        An experiment's labels of the test sequence the figures draw.
-    models : dict of str to estimator or None
-        Fitted classifiers the run saves in its folder, by file name (the classification step's).
-    """
-
-    result: Any
-    summary: str | None = None
-    labels: np.ndarray | None = None
-    models: dict | None = None
-
-
-@dataclass(frozen=True)
 class TestScores:
     """A setting's scores on the test half (:func:`score_on_test`), summed or combined over its sequences."""
 
@@ -193,18 +170,7 @@ class Repeat:
 
 @dataclass(frozen=True)
 class Step:
-    """A step of :data:`STEPS`: its function, the steps whose results it reads, and where its result goes.
-
-    Attributes
-    ----------
-    run : callable
-        ``run(env, key, needed) -> Outcome``.
-    needs : tuple of str
-        Step keys whose results it reads when they ran (otherwise it uses
-        the paper's setting instead).
-    kind : str
-        Its kind of work for the progress (:mod:`._progress`).
-    """
+    """A step of :data:`STEPS`: ``run(env, key, needed) -> Outcome``, the keys it reads the results of, its kind."""
 
     run: Callable
     needs: tuple = ()
@@ -346,10 +312,7 @@ def run_experiment(env, key, needed):
 
 
 def _stage1_settings(best, repeats):
-    """#8's setting of each repeat (its ``cluster__`` parameters), or None for each when #8 did not run.
-
-    Repeat ``k`` of #10, #11 and stage 2 builds on repeat ``k`` of #8.
-    """
+    """#8's ``cluster__`` setting for each repeat (repeat k builds on #8's repeat k); Nones when #8 did not run."""
     if best is None:
         return [None] * repeats
     settings = [_stage1_setting(r.params) for r in best.repeats or [best]]
@@ -456,12 +419,7 @@ def run_filter_effect(env, key, needed):
 
 
 def _filter_effect_sequence(sequence, params):
-    """One test sequence clustered with and without the filter: ``{filtered: (time per round s, clusters)}``.
-
-    After a warm-up of each (JIT compilation is not clustering time), every
-    round clusters both, in turn first, so that a drift of the machine's
-    speed touches both alike.
-    """
+    """One test sequence clustered with and without the filter: ``{filtered: (seconds per timing round, clusters)}``."""
     found = {"id": sequence.id}
     clusterers, prepared = {}, {}
     for filtered in (True, False):
@@ -482,10 +440,7 @@ def _filter_effect_sequence(sequence, params):
 
 
 def run_baselines(env, key, needed):
-    """The clusterers a user would otherwise pick, on the same FCS + filter input, same budget and split.
-
-    Every repeat of every baseline is one :meth:`map` over the executor.
-    """
+    """The scikit-learn clusterers on the same FCS + filter input, budget and split; each repeat one executor job."""
     names = list(SKLEARN_BASELINES)
     jobs = [(name, k) for name in names for k in range(env.repeats)]
     found = env.executor.map(_BaselineRepeat(env), jobs, on_done=_said_ended(env, env.repeats))
@@ -528,11 +483,7 @@ class _BaselineRepeat:
 
 
 def run_objects(env, key, needed):
-    """The object experiment: stage 1 searched for PQ, stage 2 on it; scored on the test half offline and causally.
-
-    It is tuned for PQ whatever the run's objective: it is the framework set up for counting objects.  Every
-    repeat is one :meth:`map` job.
-    """
+    """The object experiment, tuned for PQ whatever the objective: stage 1, stage 2 on it; tested offline, causally."""
     start = time.perf_counter()
     found = env.executor.map(_ObjectRepeat(env), range(env.repeats), on_done=_said_ended(env, env.repeats, OBJECTS))
     result = ObjectExperimentResult(
@@ -613,40 +564,17 @@ def run_tracking(env, key, needed):
     return Outcome(found, "\n".join(lines))
 
 
-# ----------------------------------------------------------------------------- the classifier of clusters
-
-
-def run_classification_step(env, key, needed):
-    """The classifier trained on the clusters of :data:`CLASSIFIED` and of the best baseline; the point-wise one."""
-    result, summary, models = run_classification(env, key, needed)
-    return Outcome(result, summary, models=models)
-
-
-# ----------------------------------------------------------------------------- the learned grouping
-
-
-def run_learned_step(env, key, needed):
-    """The learned grouping fitted on the training half and scored offline; its fitted pipeline to save."""
-    result, summary, models = run_learned(env, key, needed)
-    return Outcome(result, summary, models=models)
-
-
 # ----------------------------------------------------------------------------- scoring and searching
 
 
 def score_on_test(env, pipeline):
-    """Fit-predict on each test sequence; radar V-measure and object-level scores against the pre-clustered target.
-
-    The number of clusters and, for stage 2, of merges and stage-1 clusters
-    are summed over the test sequences; the labels are those of the
-    sequence the figures draw.
-    """
+    """Fit-predict each test sequence: V1, object-level scores, summed counts, the labels of the sequence drawn."""
     parts = env.sequences.map(_score_sequence, env.test, pipeline, env.drawn, executor=env.executor)
     scores = combine_instance_parts([p["instance"] for p in parts])
     counts = {name: _sum_or_none([p[name] for p in parts]) for name in ("n_clusters", "n_merges", "n_stage1")}
     return TestScores(
         v1=combine_parts("v1", [p["v1"] for p in parts]),
-        instance=InstanceScores(window_s=INSTANCE_WINDOW_S, **{name: float(scores[name]) for name in INSTANCE_FIELDS}),
+        instance=InstanceScores(window_s=SCORE_WINDOW_S, **{name: float(scores[name]) for name in INSTANCE_FIELDS}),
         labels=next(p["labels"] for p in parts if p["labels"] is not None),
         **counts,
     )
@@ -664,7 +592,7 @@ def _score_sequence(sequence, pipeline, drawn):
     times = X["timestamp"].to_numpy(dtype=np.float64) * 1e-6
     found = {
         "v1": score_parts("v1", sequence.target, labels),
-        "instance": instance_parts(sequence.target, labels, times=times, window=INSTANCE_WINDOW_S),
+        "instance": instance_parts(sequence.target, labels, times=times, window=SCORE_WINDOW_S),
         "n_clusters": len(np.unique(labels[labels >= 0])),
         "n_merges": None,
         "n_stage1": None,
@@ -700,10 +628,8 @@ STEPS = {
     FILTER_EFFECT: Step(run_filter_effect, (str(BEST_STAGE1),), kind=FILTER_EFFECT),
     BASELINES: Step(run_baselines, kind=BASELINES),
     TRACKING: Step(run_tracking, tuple(str(number) for number in TRACKED), kind=TRACKING),
-    CLASSIFICATION: Step(
-        run_classification_step, (*(str(number) for number in CLASSIFIED), BASELINES), kind=CLASSIFICATION
-    ),
-    LEARNED: Step(run_learned_step, (OBJECTS, BASELINES), kind=LEARNED),
+    CLASSIFICATION: Step(run_classification, (*(str(number) for number in CLASSIFIED), BASELINES), kind=CLASSIFICATION),
+    LEARNED: Step(run_learned, (OBJECTS, BASELINES), kind=LEARNED),
 }
 
 

@@ -17,10 +17,8 @@ from ..metrics import tracking_scores
 from ..metrics._tracking import _scores
 from ..online import OnlinePipeline
 from ..online._replay import replay
+from ._constants import SCORE_WINDOW_S
 from ._records import JsonRecord, record
-
-#: Time window of the tracking scores, s (as the object-level scores').
-TRACKING_WINDOW_S = 0.5
 
 #: The counts of :func:`tracking_scores` that add up over sequences.
 _COUNTS = ("id_switches", "misses", "false_positives", "n_objects", "n_matches", "idtp", "idfp", "idfn", "n_windows")
@@ -127,7 +125,7 @@ def track_sequence(sequence, pipeline):
     truth = np.asarray(sequence.scenes.target)
     found = {"n_scans": len(replayed["latency"]), "n_aliases": len(replayed["aliases"])}
     for name, ids in (("reported", replayed["reported"]), ("final", replayed["object_ids"])):
-        scores = tracking_scores(truth, ids, times=times, window=TRACKING_WINDOW_S)
+        scores = tracking_scores(truth, ids, times=times, window=SCORE_WINDOW_S)
         found[name] = {count: scores[count] for count in _COUNTS}
     return found
 
@@ -148,7 +146,7 @@ def combine_tracking(number, params, source, parts):
             total["idfp"],
             total["n_windows"],
         )
-        return TrackingScores(window_s=TRACKING_WINDOW_S, **{name: figures[name] for name in ("mota", "idf1")}, **total)
+        return TrackingScores(window_s=SCORE_WINDOW_S, **{name: figures[name] for name in ("mota", "idf1")}, **total)
 
     return TrackingResult(
         number=number,

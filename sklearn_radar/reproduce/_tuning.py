@@ -27,25 +27,13 @@ PREPARED_KEPT = 4
 
 
 def search_seed(run_seed, key):
-    """The seed in ``[0, 2**32)`` of the search of ``key`` (``"3"``, or a baseline's name) in repeat ``run_seed``.
-
-    ``run_seed`` is the run's seed plus the repeat's index.  Each search has its own stream,
-    ``SeedSequence(run_seed, spawn_key=(id,))`` with ``id`` the experiment's number or, for a name, its CRC-32
-    (stable across processes, unlike ``hash``): :ref:`user-guide-tuning`.
-    """
+    """The seed in ``[0, 2**32)`` of the search of ``key`` in repeat ``run_seed`` (:ref:`user-guide-tuning`)."""
     stream = int(key) if key.isdigit() else zlib.crc32(key.encode("utf-8"))
     return int(np.random.SeedSequence(run_seed, spawn_key=(stream,)).generate_state(1)[0])
 
 
 def with_cluster_gate(space, stage, objective):
-    """The paper's search space, plus the cluster-level Doppler gate when tuning for PQ.
-
-    The paper's V-measure does not see clusters of static background, so the
-    gate (``cluster_vr_min``, m/s: clusters whose median |v_r| is at most it
-    become noise) only enters the searches for the panoptic quality, which
-    counts them as false positives; tuned for V1 the experiments stay as
-    printed.
-    """
+    """The search space, plus the cluster-level Doppler gate ``cluster_vr_min`` (m/s) when tuning for PQ."""
     if objective != "pq":
         return space
     name = f"{'merge' if stage == 2 else 'cluster'}__cluster_vr_min"
@@ -107,14 +95,7 @@ def _search(executor, blocks, ids, estimator, space, folds, options, callback):
 
 
 class TrainingData:
-    """The training half per sequence, placed once per run where its tasks run.
-
-    A search builds its
-    :class:`~sklearn_radar.model_selection._sequence_search.SearchData` from
-    these blocks.  Its stage-0 outputs (:meth:`prepared`) are shared by the searches with
-    the same stage 0 (repeats, experiments on the same input); the last
-    :data:`PREPARED_KEPT` are kept.  Concurrent searches (threads) share it.
-    """
+    """The training half placed once per run; the last :data:`PREPARED_KEPT` stage-0 outputs shared by searches."""
 
     def __init__(self, sequences, train):
         self.sequences, self.train = sequences, train
@@ -131,7 +112,7 @@ class TrainingData:
         with self._lock:
             if self._raw is None:
                 self._raw = self.sequences.search_data(self.train)
-            return self._with(self._raw, executor)
+            return self._raw.on(executor)
 
     def prepared(self, executor, stage0):
         raw = self.raw(executor)
@@ -142,11 +123,7 @@ class TrainingData:
                 found = self._prepared[key] = raw.prepare(stage0)
                 while len(self._prepared) > PREPARED_KEPT:
                     self._prepared.pop(next(iter(self._prepared)))
-        return self._with(found, executor)
-
-    @staticmethod
-    def _with(data, executor):
-        return data.on(executor)
+        return found.on(executor)
 
 
 def native_params(params):

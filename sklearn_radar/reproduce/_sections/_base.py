@@ -50,10 +50,7 @@ class Section:
 
 
 def format_params(params):
-    """``{"cluster__eps_xy": 0.6, ...}`` -> ``"eps_xy=0.6, ..."``: what the experiment sets, 3 significant digits.
-
-    Without ``eps_t``, ``n_jobs``, ``mode`` and ``metric``, which every setting of a method shares.
-    """
+    """``{"cluster__eps_xy": 0.6, ...}`` -> ``"eps_xy=0.6, ..."`` (3 significant digits; shared settings left out)."""
     shown = []
     for key, value in (params or {}).items():
         name = key.split("__")[-1]
@@ -80,10 +77,7 @@ def percent(value):
 
 
 def score_cell(result, score="v1"):
-    """A test score (``"v1"`` in percent, ``"pq"`` with 3 decimals) of ``result`` over its repeats, as text.
-
-    ``"71.55 %"`` for one run, ``"71.20 \u00b1 0.35 %"`` (mean \u00b1 sd) for more, ``"-"`` without the score.
-    """
+    """A test score (``"v1"`` in %, ``"pq"``) of ``result``: one value, or mean and sd over repeats; or ``"-"``."""
     return values_cell(repeated_scores(result, score), score)
 
 
@@ -95,12 +89,6 @@ def values_cell(values, score="v1", sign="\u00b1"):
     if len(values) == 1:
         return f"{scale * values[0]:.{digits}f}{unit}"
     return f"{scale * np.mean(values):.{digits}f} {sign} {scale * np.std(values, ddof=1):.{digits}f}{unit}"
-
-
-def mean_score(result, results: RunResults):
-    """The mean test score over the repeats in the run's objective (V1, or PQ when tuned for PQ)."""
-    values = repeated_scores(result, "pq" if results.meta.objective == "pq" else "v1")
-    return float(np.mean(values)) if values else result.v1_test
 
 
 def repeats_legend(results: RunResults):
@@ -187,10 +175,7 @@ def overfit_lines(named, results: RunResults):
 
 
 def experiment_table(title, rows: list[ExperimentResult], results: RunResults, stage2=False):
-    """The lines of a heading ``title``, Table III or IV of ``rows`` (one row per experiment, by number), a legend.
-
-    ``stage2`` adds the stage-1 clusters and the merges (Table IV).
-    """
+    """The lines of a heading ``title``, Table III (or IV, ``stage2``) of ``rows`` by number, and its legend."""
     score = objective_name(results)
     extra = " stage-1 clusters | merges |" if stage2 else ""
     lines = [
@@ -263,12 +248,7 @@ FIGURE_LEFT_MARGIN, PANEL_GAP = 0.9, 0.15
 
 
 def scene_size(x, y, *, width, extra_height, panels=1):
-    """(width, height) in inches of a figure of ``panels`` equal-aspect scatter panels in a row, fitted to ``x, y``.
-
-    The panels' height follows the data's extent (m) so that the figure has
-    no empty bands above and below them; ``extra_height`` (in) holds the
-    titles, axis labels and legend.
-    """
+    """``(width, height)``, in, of a row of ``panels`` equal-aspect scatter panels fitted to ``x, y`` (m)."""
     span_x = max(float(np.ptp(x)), 1.0) if len(x) else 1.0
     span_y = max(float(np.ptp(y)), 1.0) if len(y) else 1.0
     panel_width = (width - FIGURE_LEFT_MARGIN) / panels - PANEL_GAP * (panels - 1) / panels

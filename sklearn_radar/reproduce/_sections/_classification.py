@@ -99,12 +99,7 @@ def clustering_scores(results: RunResults, name):
 
 
 def background_before(results: RunResults, name, row: ClassifiedSetting):
-    """Share of the clustering's segments that hold no detection of a road user: the object-level table's figure.
-
-    That of the clustering's own scores (``instance_test``, the first repeat's, as the object-level table gives
-    it) where its experiment or baseline ran, else the classification step's (the same definition: the
-    pre-clustered target, per 0.5 s time window); None for the point-wise classifier.
-    """
+    """The clustering's background-only segment share: its own ``instance_test``'s, else the step's; None point-wise."""
     if row.background_share_before is None:
         return None
     result = _clustering(results, name)
@@ -114,11 +109,7 @@ def background_before(results: RunResults, name, row: ClassifiedSetting):
 
 
 def cv_score(results: RunResults, name):
-    """The mean cross-validated score (the run's objective, training half) of clustering ``name``; None unsearched.
-
-    The mean over the repeats' searches; None for a setting that was not searched (the fixed #1, a paper's
-    setting of an experiment that did not run).
-    """
+    """The mean cross-validated score over the repeats of clustering ``name``; None when it was not searched."""
     result = _clustering(results, name)
     if result is None:
         return None
@@ -134,12 +125,7 @@ def _clustering(results: RunResults, name):
 
 
 def answer_lines(results: RunResults) -> list[str]:
-    """The paper's question: does the clustering chosen by its CV score give the best classifier, with its noise.
-
-    The clustering is chosen among the classified ones by its cross-validated score on the training half (the run's
-    objective), never by a test score; those whose CV score prints the same are tied with it and left out of the
-    rivals.
-    """
+    """Whether the clustering with the best CV score of those classified gives the best classifier, with its noise."""
     rows = {
         name: row for name, row in results.classification.settings.items() if row.background_share_before is not None
     }
@@ -183,11 +169,7 @@ def answer_lines(results: RunResults) -> list[str]:
 
 
 def _verdict(ours: ClassifiedSetting, theirs: ClassifiedSetting, rival, score, score_label):
-    """The paired comparison of one score by the report's rule (two standard errors).
-
-    Paired by repeat (repeat k against repeat k) when both were repeated alike, else by test sequence (the same
-    sequences for both).
-    """
+    """The paired comparison of one score by the report's rule: by repeat when both repeated alike, else by sequence."""
     mine, other = _values(ours, score), _values(theirs, score)
     if len(mine) > 1 and len(mine) == len(other):
         differences, unit = np.subtract(mine, other), "repeats"

@@ -134,22 +134,7 @@ def _paired(scores, a, b):
 
 
 def judge(finding: Finding, scores):
-    """The verdict on a finding from per-repeat test scores, and the numbers that decide it.
-
-    Parameters
-    ----------
-    finding : Finding
-    scores : dict of int to list of float
-        Test V1 (0-1) per repeat, by experiment number; repeat ``k`` of
-        every experiment shares its seed and split.
-
-    Returns
-    -------
-    verdict : {"holds", "does not hold", "cannot tell"}
-    values : str
-        The scores (single run) or each mean paired difference in points with twice its standard error, the
-        margin it has to exceed.
-    """
+    """``(verdict, values)`` of ``finding`` from the per-repeat test V1 ``scores`` by experiment number."""
     verdicts, shown = [], []
     single = all(len(scores[n]) == 1 for n in finding.numbers)
     for a, b, strict in finding.claims:
@@ -231,13 +216,7 @@ FILTER_TEXTS = frozenset(finding.text for finding in FILTER_FINDINGS)
 
 
 def checked(results: RunResults):
-    """Every finding that this run can check: (text, verdict, the numbers that decide it), in the report's order.
-
-    Returns
-    -------
-    checks : list of (str, str, str)
-        The verdict is ``"holds"``, ``"does not hold"`` or ``"cannot tell"`` (:func:`paired_verdict`).
-    """
+    """``[(text, verdict, values)]`` of every finding this run can check, in the report's order."""
     scores = {number: repeated_scores(result) for number, result in results.experiments.items()}
     checks = []
     if results.filter is not None:

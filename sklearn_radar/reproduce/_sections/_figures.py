@@ -85,12 +85,7 @@ def markdown(results: RunResults) -> list[str]:
 
 
 def scene_panels(results: RunResults):
-    """(baseline, best): the experiments of Fig. 6's clustered panels, from the run's results.
-
-    The baseline is the FCS box baseline #3 (or the first experiment run),
-    the best the experiment with the highest test score of the run's
-    objective.
-    """
+    """``(baseline, best)`` of Fig. 6: #3 (or the first experiment run) and the best test score of the objective."""
     experiments = results.experiments
     best = max(experiments, key=lambda number: test_score(experiments[number], results))
     baseline = FCS_BASELINE if FCS_BASELINE in experiments else min(experiments)
@@ -152,30 +147,14 @@ def _convergences(result):
 
 
 def best_so_far(convergences):
-    """(median, minimum, maximum) over repeats of the best score so far, per iteration.
-
-    Parameters
-    ----------
-    convergences : list of list of float
-        Each repeat's score per iteration; repeats of different lengths are cut to the shortest.
-
-    Returns
-    -------
-    median, low, high : ndarray
-    """
+    """``(median, low, high)`` over the repeats' ``convergences`` of the best score so far, cut to the shortest."""
     n = min(len(c) for c in convergences)
     best = np.maximum.accumulate(np.array([c[:n] for c in convergences], dtype=float), axis=1)
     return np.median(best, axis=0), best.min(axis=0), best.max(axis=0)
 
 
 def curve_styles(n):
-    """``n`` distinct (colour, line style, marker) triples: tab10's colours, the line styles in turn, a marker each.
-
-    The line styles and markers tell apart curves that coincide (a search
-    that found the same best score as another draws on top of it): each
-    curve's markers sit at other places along the line
-    (:func:`convergence_figure`).
-    """
+    """``n`` distinct ``(colour, line style, marker)``: tab10's colours, the line styles in turn, a marker each."""
     import matplotlib
 
     colours = matplotlib.colormaps["tab10"].colors
@@ -190,18 +169,7 @@ MARKERS = ("o", "s", "^", "v", "D", "P", "X", "<", ">", "h", "*")
 
 
 def convergence_figure(curves, results: RunResults):
-    """Best CV score so far per iteration: the paper's experiments (top, #8 highlighted) and the baselines (below).
-
-    Parameters
-    ----------
-    curves : dict of str to list of list of float
-        :func:`convergence_curves`.
-    results : RunResults
-
-    Returns
-    -------
-    fig : matplotlib Figure
-    """
+    """Best CV score so far per iteration of the ``curves``: the experiments (top, #8 highlighted), the baselines."""
     import matplotlib.pyplot as plt
 
     experiments = {name: c for name, c in curves.items() if name.startswith("#")}
@@ -234,10 +202,7 @@ def convergence_figure(curves, results: RunResults):
 
 
 def _end_labels(ax, curves, unit):
-    """The final best score right of each panel, once per value, with every curve that ends there (coinciding ones).
-
-    ``unit``: ``" %"`` for V1 in percent (two decimals, as the tables), ``""`` for PQ (three decimals).
-    """
+    """Each panel's final best scores on its right, once per value, naming every curve that ends there."""
     ends = {}
     for name, convergences in curves.items():
         final = best_so_far(convergences)[0][-1]
@@ -268,10 +233,7 @@ END_LABEL_GAP = 0.07
 
 
 def _convergence_panel(ax, curves, daggered=frozenset()):
-    """One line per search (the median over its repeats, a band from their minimum to maximum), markers staggered.
-
-    ``daggered``: the names whose table keeps the paper's setting, labelled with a dagger.
-    """
+    """One line per search (median over repeats, band min-max), markers staggered; ``daggered`` names get a dagger."""
     highlight = f"#{BEST_STAGE1}"
     others = [name for name in curves if name != highlight]
     styles = curve_styles(len(others))
@@ -372,12 +334,7 @@ BAR_LABEL = {
 
 
 def scene_figure(results: RunResults, context: RunContext):
-    """Raw data, target, the FCS baseline (#3, or the first experiment run) and the best experiment, one sequence.
-
-    Four panels in a 2 x 2 grid, each of the data's aspect.  Object clusters
-    are drawn in colour on top; background-only clusters small and dark
-    grey beneath them, noise light grey beneath those.
-    """
+    """Raw data, target, the FCS baseline and the best experiment on the sequence drawn, in a 2 x 2 grid."""
     import matplotlib.pyplot as plt
 
     sequence = context.sequences.fetch(context.drawn_sequence)
@@ -430,23 +387,7 @@ BACKGROUND_COLOUR = "0.5"
 
 
 def majority_object(labels, objects, target):
-    """Per row: the annotated road user most of its cluster's road-user detections belong to; -1 for none.
-
-    Parameters
-    ----------
-    labels : ndarray of int, shape (n_detections,)
-        Clusters, -1 noise.
-    objects : ndarray of int, shape (n_detections,)
-        Annotated road user of each detection, -1 background (the data's ``target``).
-    target : ndarray of int, shape (n_detections,)
-        The pre-clustered target: only its road-user detections (``target >= 0``) count, so that a cluster with
-        an object is one that :func:`_background_only` does not mark.
-
-    Returns
-    -------
-    owner : ndarray of int, shape (n_detections,)
-        The road user of the row's cluster (ties: the lowest id); -1 for noise and background-only clusters.
-    """
+    """Per row: the road user (``objects``) owning most of its cluster's road-user detections (lowest id), or -1."""
     owner = np.full(len(labels), -1, dtype=np.asarray(objects).dtype)
     counted = (labels >= 0) & (target >= 0)
     if not counted.any():
@@ -462,8 +403,7 @@ def majority_object(labels, objects, target):
 
 
 def distinct_colours(n):
-    """``n`` RGB colours, no two alike and none grey: tab10's hues, their light tab20 shades, tab20b, tab20c, then
-    evenly spaced hues."""
+    """``n`` RGB colours, no two alike and none grey: tab10's, tab20's light shades, tab20b, tab20c, then hues."""
     import matplotlib
 
     def coloured(colours):

@@ -195,12 +195,7 @@ ZOOM_MARGIN, ZOOM_MIN_SIDE = 5.0, 30.0
 
 
 def filter_scene_figure(context: RunContext):
-    """One test sequence in FCS at the chosen setting: the whole scene, and a zoom on the removed road-user detections.
-
-    The removed detections of moving road users are drawn on top, large and in their own colour, in both panels;
-    the right panel zooms on them (on the road users when the filter removed none of theirs), and a dashed box
-    marks its area on the left.
-    """
+    """One test sequence in FCS at the chosen setting: the whole scene, and a zoom on the removed road users."""
     import matplotlib.pyplot as plt
     from matplotlib.lines import Line2D
     from matplotlib.patches import Rectangle
@@ -260,21 +255,7 @@ def filter_scene_figure(context: RunContext):
 
 
 def zoom_box(x, y, mask):
-    """The zoomed panel's area: a square around the detections of ``mask``, or None without any.
-
-    Parameters
-    ----------
-    x, y : ndarray of shape (n_detections,)
-        Positions, m.
-    mask : ndarray of bool, shape (n_detections,)
-        The detections to zoom on.
-
-    Returns
-    -------
-    box : ((float, float), (float, float)) or None
-        ``((x0, x1), (y0, y1))``, m: their bounding box with :data:`ZOOM_MARGIN` around, squared, at least
-        :data:`ZOOM_MIN_SIDE` a side.
-    """
+    """``((x0, x1), (y0, y1))``, m: a square around ``mask``'s detections (margin, smallest side); None without any."""
     if not mask.any():
         return None
     centre = np.array([(x[mask].min() + x[mask].max()) / 2, (y[mask].min() + y[mask].max()) / 2])

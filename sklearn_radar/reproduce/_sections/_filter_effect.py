@@ -26,12 +26,7 @@ def markdown(results: RunResults) -> list[str]:
 
 
 def time_saving_text(effect):
-    """The clustering time that the filter saves, when the timing rounds tell it from their noise, or that they cannot.
-
-    The rule is the findings' (:func:`~._comparison.paired_verdict`) on the
-    per-round savings: measured when their mean is more than 2 standard
-    errors from 0.
-    """
+    """The clustering time the filter saves, when the rounds tell it from the noise (the findings' rule)."""
     filtered, unfiltered, paper = effect.filtered, effect.unfiltered, effect.paper.time_saving_percent
     times = (
         f"clustering the test sequences one by one (stage 0 not counted) takes {filtered.clustering_s:.3f} s "

@@ -58,11 +58,7 @@ def markdown(results: RunResults) -> list[str]:
 
 
 def verdict(ours, theirs, name):
-    """What the paired PQ differences (repeat k against repeat k, same split) say, by the report's one rule.
-
-    :func:`~._comparison.paired_verdict`: one run cannot tell (its difference is quoted, no verdict drawn); with
-    repeats the difference counts only beyond two standard errors of the paired differences.
-    """
+    """What the paired PQ differences (repeat k against repeat k) say, by :func:`~._comparison.paired_verdict`."""
     n = min(len(ours), len(theirs))
     differences = np.asarray(ours[:n], dtype=np.float64) - np.asarray(theirs[:n], dtype=np.float64)
     said, mean, se = paired_verdict(differences)
@@ -109,11 +105,7 @@ def glance_line(results: RunResults):
 
 
 def _best_baselines(results: RunResults):
-    """(name, result) of the offline and of the causal baseline with the highest cross-validated score, or None each.
-
-    The score is the kept setting's cross-validated score of the run's objective on the training half, never a
-    test score.
-    """
+    """``(name, result)`` of the offline and of the causal baseline with the best cross-validated score, or Nones."""
     scored = {name: result for name, result in (results.baselines or {}).items() if result.instance_test is not None}
     best = {}
     for causal in (False, True):
