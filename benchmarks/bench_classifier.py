@@ -125,17 +125,17 @@ def accuracy(args):
     from sklearn.metrics import f1_score
 
     from sklearn_radar import instance_target
-    from sklearn_radar.classification._features import frame_index, segment_features
+    from sklearn_radar.classification._features import segment_features, window_index
     from sklearn_radar.classification._targets import segment_targets
 
     def segments(seed):
         X, y, stage1 = prepared(seed, args.n_sequences, args.duration)
         labels = stage1.fit_predict(X)
         c = {name: X[name].to_numpy(dtype=np.float64) if name in X.columns else None for name in COLUMNS}
-        frame = frame_index(c["t"], c["sequence"], 0.5)
-        table, rows = segment_features(c, labels, frame)
+        windows = window_index(c["t"], c["sequence"], 0.5)
+        table, rows = segment_features(c, labels, windows)
         instances = instance_target(X["track_id"], X["sequence"])
-        targets = segment_targets(y, instances, c["sequence"], frame, rows, len(table))
+        targets = segment_targets(y, instances, c["sequence"], windows, rows, len(table))
         return table.iloc[:, 3:], targets, rows, y
 
     settings = {
@@ -187,7 +187,7 @@ def signatures(args):
                              difficulty=difficulty)  # fmt: skip
         X = FrameTransform().fit_transform(scenes.data)
         y = road_user_class(scenes.data["label_id"])
-        table, rows = cluster_features(X, scenes.target, frame_length=0.5, return_rows=True)
+        table, rows = cluster_features(X, scenes.target, window=0.5, return_rows=True)
         classes = np.full(len(table), -9)
         classes[rows[rows >= 0]] = y[rows >= 0]
         return table.iloc[:, 3:], classes

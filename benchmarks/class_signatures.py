@@ -52,7 +52,7 @@ def object_table(scenes):
     per_object = objects.groupby("object").agg(
         label=("label", "first"), rcs_mean=("rcs", "mean"), rcs_within=("rcs", "std"), life=("sensor", "nunique")
     )
-    frames = cluster_features(X, target, frame_length=0.5)
+    frames = cluster_features(X, target, window=0.5)
     frames = frames[frames["n_detections"] >= 2]
     per_frame = frames.groupby("cluster").agg(
         along=("extent_along", "median"),

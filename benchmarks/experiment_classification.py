@@ -252,7 +252,7 @@ def perfect_clusters(preset, options):
             _, test = sequence_train_test_split(scenes.groups, test_size=0.5, random_state=seed)
             train = make_scenes(n, options.duration, difficulty=preset, random_state=seed + 100)
             train_table, test_table = _object_segments(train), _object_segments(scenes, test)
-            names = [c for c in train_table.columns if c not in ("sequence", "cluster", "frame", "class")]
+            names = [c for c in train_table.columns if c not in ("sequence", "cluster", "window", "class")]
             learner = default_classifier().fit(train_table[names], train_table["class"])
             predicted = learner.predict(test_table[names])
             f1.append(f1_score(test_table["class"], predicted, labels=list(CLASS_NAMES), average=None))
@@ -282,7 +282,7 @@ def _object_segments(scenes, rows=None):
     target = np.asarray(scenes.target)
     classes = road_user_class(scenes.data["label_id"])
     labels = target if rows is None else np.where(np.isin(np.arange(len(X)), rows), target, -1)
-    table = cluster_features(X, labels, frame_length=0.5)
+    table = cluster_features(X, labels, window=0.5)
     class_of = pd.Series(classes[target >= 0], index=target[target >= 0]).groupby(level=0).first()
     return table.assign(**{"class": class_of.reindex(table["cluster"].to_numpy()).to_numpy()})
 

@@ -203,7 +203,7 @@ plt.show()
 # micro-Doppler of limbs and wheels), so on perfectly clustered road users the
 # classes separate well; the errors above come mostly from the clustering.
 Xtrain = model[:-1].transform(train.data)
-truth, rows = cluster_features(Xtrain, train.target, frame_length=0.5, return_rows=True)
+truth, rows = cluster_features(Xtrain, train.target, window=0.5, return_rows=True)
 truth["class"] = (
     pd.Series(y_train[rows >= 0], index=rows[rows >= 0]).groupby(level=0).first()
 )

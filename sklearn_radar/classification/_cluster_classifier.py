@@ -16,7 +16,7 @@ from .._schema import CLUSTER_FEATURE_READS, instance_target
 from .._validation import validated_input
 from ..cluster import RadarDBSCAN
 from ._classes import BACKGROUND, IGNORED
-from ._features import _check_labels, frame_index, segment_features
+from ._features import _check_labels, segment_features, window_index
 from ._reading import columns_at, time_columns
 from ._targets import segment_targets
 from ._wrapped import check_class_target, class_proba, fit_classifier, instance_column_of, macro_f1_score
@@ -30,7 +30,7 @@ class ClusterClassifier(BaseEstimator):
     classification chain of Scheiner et al. 2018).  ``clusterer`` (for
     example a :class:`~sklearn_radar.RadarDBSCAN` or a
     :class:`~sklearn_radar.ClusterMerger`) clusters the detections; each
-    cluster is cut into *segments*, one per time frame of ``frame_length``
+    cluster is cut into *segments*, one per time window of ``window``
     seconds (or one per cluster and sequence), and every segment is
     described by the features of
     :func:`~sklearn_radar.classification.cluster_features` and classified
@@ -48,12 +48,12 @@ class ClusterClassifier(BaseEstimator):
     ``label_id``); the ground-truth instances are the ``instance_column`` of
     X (RadarScenes ``track_id``, per ``sequence``, as
     :func:`~sklearn_radar.instance_target` numbers them).  A segment's
-    target is the class of the instance whose detections in the same frame
+    target is the class of the instance whose detections in the same window
     have an intersection over union > 0.5 with the segment's detections
     (at most one can), and background (-1) when no instance does.  Segments
     matched to an ignored instance (-2: RadarScenes ANIMAL and OTHER) are
     left out of training.  A cluster that is one part of a long track is
-    therefore a positive example wherever it covers the object in a frame,
+    therefore a positive example wherever it covers the object in a window,
     and the clusters of static structure (most clusters of V-measure-tuned
     settings: the paper's V-measure does not count them) are the background
     examples.
@@ -101,17 +101,17 @@ class ClusterClassifier(BaseEstimator):
         :ref:`User Guide <classification-cost>`).  A classifier that
         cannot take NaN needs an imputer in front
         (``make_pipeline(SimpleImputer(), ...)``).
-    frame_length : float or None, default=0.5
-        Length of the time frames a cluster is cut into, s, > 0; frames
+    window : float or None, default=0.5
+        Length of the time windows a cluster is cut into, s, > 0; windows
         start at each sequence's first detection.  The default, 500 ms, is
-        the frame of the object-level scores
+        the window of the object-level scores
         (:func:`~sklearn_radar.metrics.instance_scores`, Scheiner et al.
         2021).  None: one segment per cluster and sequence, classified as a
         whole (and matched over the whole sequence).
     instance_column : str or None, default="track_id"
         Column of X holding each detection's ground-truth instance (strings
         or integers; ``""`` or -1 for none), read in :meth:`fit` only.  None:
-        no instance ids; the detections of one class in one frame of one
+        no instance ids; the detections of one class in one window of one
         sequence are one instance (panoptic segmentation's rule for "stuff"
         classes), which is what a plain array needs.
 
@@ -183,14 +183,14 @@ class ClusterClassifier(BaseEstimator):
     _parameter_constraints: ClassVar[dict] = {
         "clusterer": [HasMethods(["fit_predict"]), None],
         "classifier": [HasMethods(["fit", "predict_proba"]), None],
-        "frame_length": [Interval(Real, 0, None, closed="neither"), None],
+        "window": [Interval(Real, 0, None, closed="neither"), None],
         "instance_column": [str, None],
     }
 
-    def __init__(self, clusterer=None, classifier=None, *, frame_length=0.5, instance_column="track_id"):
+    def __init__(self, clusterer=None, classifier=None, *, window=0.5, instance_column="track_id"):
         self.clusterer = clusterer
         self.classifier = classifier
-        self.frame_length = frame_length
+        self.window = window
         self.instance_column = instance_column
 
     @_fit_context(prefer_skip_nested_validation=False)
@@ -216,8 +216,8 @@ class ClusterClassifier(BaseEstimator):
         X, time, table, rows = self._read_segments(X, reset=True)
         classes = check_class_target(y, len(rows), type(self).__name__)
         instances = self._instances(X, time["sequence"], classes)
-        frame = frame_index(time["t"], time["sequence"], self.frame_length)
-        targets = segment_targets(classes, instances, time["sequence"], frame, rows, len(table))
+        windows = window_index(time["t"], time["sequence"], self.window)
+        targets = segment_targets(classes, instances, time["sequence"], windows, rows, len(table))
         learn = targets != IGNORED
         self.feature_names_ = np.asarray(table.columns[3:], dtype=object)
         self.classifier_ = fit_classifier(
@@ -338,7 +338,7 @@ class ClusterClassifier(BaseEstimator):
             * ``instance`` (int64): the road user, -1 where the class is -1:
               the detection's cluster, numbered 0, 1, ... in order of first
               row, unique across sequences (one cluster is one instance in
-              every frame it is not background, whatever class each frame
+              every window it is not background, whatever class each window
               is given);
             * ``confidence`` (float64): the probability the classifier gives
               the predicted class for the segment, in [0, 1] (1 for noise),
@@ -363,7 +363,7 @@ class ClusterClassifier(BaseEstimator):
         classes[clustered] = self.classes_[best][rows[clustered]]
         confidence = np.ones(len(rows))
         confidence[clustered] = segment_proba[np.arange(len(best)), best][rows[clustered]]
-        # The table is sorted by (sequence, cluster, frame): a cluster's segments are consecutive rows.
+        # The table is sorted by (sequence, cluster, window): a cluster's segments are consecutive rows.
         sequence, cluster = table["sequence"].to_numpy(), table["cluster"].to_numpy()
         new_cluster = np.ones(len(table), dtype=bool)
         new_cluster[1:] = (sequence[1:] != sequence[:-1]) | (cluster[1:] != cluster[:-1])
@@ -400,7 +400,7 @@ class ClusterClassifier(BaseEstimator):
     def _describe(self, X, labels):
         """The segments of a validated X with cluster ``labels``: ``(time columns, feature table, table rows)``.
 
-        Only ``t`` and ``sequence`` are read for every row (the frames start at
+        Only ``t`` and ``sequence`` are read for every row (the windows start at
         each sequence's first detection); the other columns only for the
         clustered detections (:mod:`._reading`).
         """
@@ -410,8 +410,8 @@ class ClusterClassifier(BaseEstimator):
         c = columns_at(self, X, CLUSTER_FEATURE_READS, clustered, skip=("t", "sequence"))
         c["t"] = time["t"][clustered]
         c["sequence"] = None if time["sequence"] is None else time["sequence"][clustered]
-        frame = frame_index(time["t"], time["sequence"], self.frame_length, clustered)
-        table, local_rows = segment_features(c, labels[clustered], frame)
+        windows = window_index(time["t"], time["sequence"], self.window, clustered)
+        table, local_rows = segment_features(c, labels[clustered], windows)
         rows = np.full(n, -1, dtype=np.int64)
         rows[clustered] = local_rows
         return time, table, rows

@@ -1,4 +1,4 @@
-"""Cluster features: one row per cluster (and time frame) of clustered radar detections.
+"""Cluster features: one row per cluster (and time window) of clustered radar detections.
 
 The features are the established ones of feature-based radar road-user
 classification (Scheiner et al., "Radar-based feature design and multiclass
@@ -6,10 +6,10 @@ classification for road user recognition", IV 2018; Schumann et al.,
 "Comparison of random forest and long short-term memory network performances
 in classification tasks using radar", SDF 2017), computed from the
 detections of one *segment*: one cluster of one sequence, or its part inside
-one time frame (:data:`CLUSTER_FEATURES` lists them with their units).
+one time window (:data:`CLUSTER_FEATURES` lists them with their units).
 
 Implementation: the clustered rows are sorted once by segment (sequence,
-cluster, frame); sums are ``np.add.reduceat``, extremes
+cluster, window); sums are ``np.add.reduceat``, extremes
 ``np.maximum.reduceat`` / ``np.minimum.reduceat`` over the sorted rows, the
 sensor count a (segment, sensor) presence table, and the velocity of Eq. 6
 is the batched estimate of :mod:`sklearn_radar.cluster._velocity` (one
@@ -63,25 +63,25 @@ CLUSTER_FEATURES = {
 }
 
 #: The columns of the feature table that say which segment a row describes.
-KEY_COLUMNS = ("sequence", "cluster", "frame")
+KEY_COLUMNS = ("sequence", "cluster", "window")
 
 
 @validate_params(
     {
         "X": [pd.DataFrame],
         "labels": ["array-like"],
-        "frame_length": [Interval(Real, 0, None, closed="neither"), None],
+        "window": [Interval(Real, 0, None, closed="neither"), None],
         "return_rows": ["boolean"],
     },
     prefer_skip_nested_validation=True,
 )
-def cluster_features(X, labels, *, frame_length=None, return_rows=False):
-    """One row of features per cluster of each sequence, or per time frame of each cluster.
+def cluster_features(X, labels, *, window=None, return_rows=False):
+    """One row of features per cluster of each sequence, or per time window of each cluster.
 
     A *segment* is the set of detections of one cluster (``labels``, -1 =
-    noise, which belongs to none) in one sequence; with ``frame_length`` it
-    is cut into time frames, detection ``i`` of sequence ``s`` lying in frame
-    ``floor((t[i] - min(t of s)) / frame_length)`` (the frames of
+    noise, which belongs to none) in one sequence; with ``window`` it
+    is cut into time windows, detection ``i`` of sequence ``s`` lying in window
+    ``floor((t[i] - min(t of s)) / window)`` (the windows of
     :func:`~sklearn_radar.metrics.instance_scores`).  The features of a
     segment, with their units (:data:`CLUSTER_FEATURES`):
 
@@ -136,8 +136,8 @@ def cluster_features(X, labels, *, frame_length=None, return_rows=False):
     labels : array-like of int, shape (n_detections,)
         Cluster of each detection, -1 for noise (e.g. ``RadarDBSCAN().fit(X).labels_``).
         Equal labels in different sequences are different segments.
-    frame_length : float or None, default=None
-        Length of a time frame, s, > 0.  None: one segment per cluster and
+    window : float or None, default=None
+        Length of a time window, s, > 0.  None: one segment per cluster and
         sequence.
     return_rows : bool, default=False
         Also return the row of the feature table of each detection.
@@ -145,7 +145,7 @@ def cluster_features(X, labels, *, frame_length=None, return_rows=False):
     Returns
     -------
     features : DataFrame of shape (n_segments, 3 + n_features)
-        ``sequence``, ``cluster`` and ``frame`` (0 when ``frame_length`` is
+        ``sequence``, ``cluster`` and ``window`` (0 when ``window`` is
         None) of each segment, sorted by them, then the features in the order
         of the table above.
     rows : ndarray of int64, shape (n_detections,)
@@ -169,13 +169,13 @@ def cluster_features(X, labels, *, frame_length=None, return_rows=False):
     >>> table[["n_detections", "vr_mean", "vr_range"]].to_dict("records")
     [{'n_detections': 3, 'vr_mean': 2.0, 'vr_range': 2.0}]
     """
-    columns = _frame_columns(X, CLUSTER_FEATURE_READS, "cluster_features")
+    columns = _data_columns(X, CLUSTER_FEATURE_READS, "cluster_features")
     labels = _check_labels(labels, len(X), "cluster_features")
-    table, rows = segment_features(columns, labels, frame_index(columns["t"], columns["sequence"], frame_length))
+    table, rows = segment_features(columns, labels, window_index(columns["t"], columns["sequence"], window))
     return (table, rows) if return_rows else table
 
 
-def _frame_columns(X, reads, where):
+def _data_columns(X, reads, where):
     """The columns of ``reads`` of a DataFrame as float64 arrays (None when an optional one is absent)."""
     missing = [name for name in reads.required if name not in X.columns]
     if missing:
@@ -197,8 +197,8 @@ def _check_labels(labels, n, where):
     return labels.astype(np.int64, copy=False)
 
 
-def frame_index(t, sequence, frame_length, rows=None):
-    """Frame of each detection, ``floor((t - min(t of its sequence)) / frame_length)``; 0 when frame_length is None.
+def window_index(t, sequence, window, rows=None):
+    """Window of each detection, ``floor((t - min(t of its sequence)) / window)``; 0 when window is None.
 
     Parameters
     ----------
@@ -206,18 +206,18 @@ def frame_index(t, sequence, frame_length, rows=None):
         Time, s.
     sequence : ndarray or None
         Sequence of each detection; None: one sequence.
-    frame_length : float or None
+    window : float or None
         s.
     rows : ndarray of int, default=None
-        The detections whose frames are wanted (the starts are those of all
+        The detections whose windows are wanted (the starts are those of all
         detections); None: all.
 
     Returns
     -------
-    frame : ndarray of int64, shape (n,) or (len(rows),)
+    windows : ndarray of int64, shape (n,) or (len(rows),)
     """
     n = len(t) if rows is None else len(rows)
-    if frame_length is None or len(t) == 0:
+    if window is None or len(t) == 0:
         return np.zeros(n, dtype=np.int64)
     if sequence is None:
         start = t.min()
@@ -226,7 +226,7 @@ def frame_index(t, sequence, frame_length, rows=None):
         first = np.full(n_codes, np.inf)
         np.minimum.at(first, codes, t)
         start = first[codes if rows is None else codes[rows]]
-    return np.floor(((t if rows is None else t[rows]) - start) / frame_length).astype(np.int64)
+    return np.floor(((t if rows is None else t[rows]) - start) / window).astype(np.int64)
 
 
 def sequence_codes(sequence):
@@ -243,7 +243,7 @@ def sequence_codes(sequence):
     return codes.astype(np.int64, copy=False), len(uniques)
 
 
-def segment_keys(sequence, labels, frame):
+def segment_keys(sequence, labels, windows):
     """Sort the clustered rows by segment: ``(order, starts, keys)``.
 
     Parameters
@@ -252,32 +252,32 @@ def segment_keys(sequence, labels, frame):
         Sequence of each row (all rows), None: one sequence.
     labels : ndarray of int64, shape (n,)
         Cluster of each row, -1 for noise.
-    frame : ndarray of int64, shape (n,)
+    windows : ndarray of int64, shape (n,)
         Frame of each row.
 
     Returns
     -------
     order : ndarray of int64, shape (m,)
-        The clustered rows (label >= 0), sorted by (sequence, label, frame), ties by row.
+        The clustered rows (label >= 0), sorted by (sequence, label, window), ties by row.
     starts : ndarray of int64, shape (n_segments,)
         Position in ``order`` of each segment's first row.
     keys : tuple of three ndarrays, shape (n_segments,)
-        Sequence (float64, 0 when None), cluster and frame of each segment.
+        Sequence (float64, 0 when None), cluster and window of each segment.
     """
     clustered = np.flatnonzero(labels >= 0)
     seq = np.zeros(len(clustered)) if sequence is None else sequence[clustered]
-    lab, frm = labels[clustered], frame[clustered]
-    by = np.lexsort((frm, lab, seq))
+    lab, win = labels[clustered], windows[clustered]
+    by = np.lexsort((win, lab, seq))
     order = clustered[by]
-    seq, lab, frm = seq[by], lab[by], frm[by]
+    seq, lab, win = seq[by], lab[by], win[by]
     new = np.ones(len(order), dtype=bool)
     if len(order):
-        new[1:] = (seq[1:] != seq[:-1]) | (lab[1:] != lab[:-1]) | (frm[1:] != frm[:-1])
+        new[1:] = (seq[1:] != seq[:-1]) | (lab[1:] != lab[:-1]) | (win[1:] != win[:-1])
     starts = np.flatnonzero(new)
-    return order, starts, (seq[starts], lab[starts], frm[starts])
+    return order, starts, (seq[starts], lab[starts], win[starts])
 
 
-def segment_features(c, labels, frame):
+def segment_features(c, labels, windows):
     """The feature table and the table row of each detection, from columns read by name (float64 or None).
 
     Parameters
@@ -286,8 +286,8 @@ def segment_features(c, labels, frame):
         The columns of :data:`~sklearn_radar._schema.CLUSTER_FEATURE_READS`.
     labels : ndarray of int64, shape (n,)
         Cluster per row, -1 for noise.
-    frame : ndarray of int64, shape (n,)
-        Frame of each row (:func:`frame_index`).
+    windows : ndarray of int64, shape (n,)
+        Window of each row (:func:`window_index`).
 
     Returns
     -------
@@ -297,7 +297,7 @@ def segment_features(c, labels, frame):
         Row of ``features`` of each detection, -1 for noise.
     """
     n = len(labels)
-    order, starts, (seq, lab, frm) = segment_keys(c["sequence"], labels, frame)
+    order, starts, (seq, lab, win) = segment_keys(c["sequence"], labels, windows)
     n_segments = len(starts)
     counts = np.diff(np.append(starts, len(order)))
     segment = np.repeat(np.arange(n_segments), counts)  # segment of each sorted row
@@ -307,7 +307,7 @@ def segment_features(c, labels, frame):
     table = {
         "sequence": seq.astype(np.int64) if np.all(seq == np.round(seq)) else seq,
         "cluster": lab,
-        "frame": frm,
+        "window": win,
     }
     used = ("x", "y", "v_r", "t", "rcs", "range_sc", "azimuth_sc", "sensor_yaw", "heading", "sensor_id")
     values = {name: None if c[name] is None else c[name][order] for name in used}

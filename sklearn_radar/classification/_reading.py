@@ -3,7 +3,7 @@
 :func:`~sklearn_radar._validation.read_columns` converts and checks every
 row of every column an estimator reads.  ClusterClassifier's features depend
 on the clustered detections only (a tenth to a fifth of a filtered table),
-and on the time and sequence of all detections (the frames start at each
+and on the time and sequence of all detections (the windows start at each
 sequence's first detection).  Converting and checking all rows of its twelve
 columns would cost a large share of its prediction time
 (:ref:`classification-cost`), so it validates X as

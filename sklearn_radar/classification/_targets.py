@@ -1,8 +1,8 @@
 """The training target of a cluster: the class of the ground-truth instance it matches (IoU > 0.5), else background.
 
-A predicted segment (one cluster's detections in one time frame of one
+A predicted segment (one cluster's detections in one time window of one
 sequence, :mod:`._features`) matches a ground-truth segment (one instance's
-detections in the same frame and sequence) when their intersection over
+detections in the same window and sequence) when their intersection over
 union exceeds 0.5, ``2 |g ∩ p| > |g ∪ p|`` in integers; at that threshold a
 segment has at most one match (the rule of panoptic quality,
 :func:`~sklearn_radar.metrics.panoptic_quality`).  The target of a matched
@@ -61,7 +61,7 @@ def instance_classes(instances, classes):
     return result
 
 
-def segment_targets(classes, instances, sequence, frame, rows, n_segments):
+def segment_targets(classes, instances, sequence, windows, rows, n_segments):
     """Target class of every predicted segment under the IoU > 0.5 rule.
 
     Parameters
@@ -73,7 +73,7 @@ def segment_targets(classes, instances, sequence, frame, rows, n_segments):
         different sequences are different instances.
     sequence : ndarray or None
         Sequence of each detection, None: one sequence.
-    frame : ndarray of int64, shape (n,)
+    windows : ndarray of int64, shape (n,)
         Frame of each detection.
     rows : ndarray of int64, shape (n,)
         Predicted segment of each detection, -1 for noise.
@@ -92,8 +92,8 @@ def segment_targets(classes, instances, sequence, frame, rows, n_segments):
     seq_code = np.zeros(len(objects), dtype=np.int64) if sequence is None else _codes(sequence[objects])[0]
     inst_code, _ = _pair_codes(seq_code, _codes(instances[objects])[0], len(objects) + 1)
     class_of_instance = instance_classes(inst_code, classes[objects])
-    frame_code, n_frames = _codes(frame[objects])
-    truth, n_truth = _pair_codes(inst_code, frame_code, n_frames)  # ground-truth segment of each object detection
+    window_code, n_windows = _codes(windows[objects])
+    truth, n_truth = _pair_codes(inst_code, window_code, n_windows)  # ground-truth segment of each object detection
     truth_instance = np.zeros(n_truth, dtype=np.int64)
     truth_instance[truth] = inst_code
     truth_size = np.bincount(truth, minlength=n_truth)

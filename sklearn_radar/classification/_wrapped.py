@@ -72,7 +72,7 @@ def instance_column_of(X, name, where):
     if not isinstance(X, pd.DataFrame):
         raise ValueError(
             f"{where}: instance_column={name!r} needs X as a DataFrame with that column; a plain array holds no "
-            "instance ids (set instance_column=None to take the class segments of each frame as the instances)"
+            "instance ids (set instance_column=None to take the class segments of each window as the instances)"
         )
     if name not in X.columns:
         raise ValueError(f"{where}: X has no instance column {name!r} (the ground-truth instance of each detection)")
@@ -91,7 +91,7 @@ def fit_classifier(classifier, features, targets, feature_names, owner):
     a :class:`~sklearn.dummy.DummyClassifier` predicts the one class (background
     when there is no row), with a UserWarning.
     """
-    frame = pd.DataFrame(features, columns=feature_names)
+    table = pd.DataFrame(features, columns=feature_names)
     present = np.unique(targets)
     if present.size < 2:
         constant = int(present[0]) if present.size else BACKGROUND
@@ -102,9 +102,9 @@ def fit_classifier(classifier, features, targets, feature_names, owner):
             stacklevel=3,
         )
         if not len(targets):
-            frame, targets = pd.DataFrame(np.zeros((1, len(feature_names))), columns=feature_names), [BACKGROUND]
-        return DummyClassifier(strategy="constant", constant=constant).fit(frame, targets)
-    return (default_classifier() if classifier is None else clone(classifier)).fit(frame, targets)
+            table, targets = pd.DataFrame(np.zeros((1, len(feature_names))), columns=feature_names), [BACKGROUND]
+        return DummyClassifier(strategy="constant", constant=constant).fit(table, targets)
+    return (default_classifier() if classifier is None else clone(classifier)).fit(table, targets)
 
 
 def class_proba(classifier, features, feature_names, classes):

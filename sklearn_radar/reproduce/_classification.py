@@ -177,7 +177,7 @@ def classifier_model(pipeline):
     steps = [(name, clone(step)) for name, step in pipeline.steps[:-1]]
     clusterer = clone(pipeline.steps[-1][1])
     model = clone(pipeline)
-    model.steps = [*steps, ("classify", ClusterClassifier(clusterer, frame_length=SCORE_WINDOW_S))]
+    model.steps = [*steps, ("classify", ClusterClassifier(clusterer, window=SCORE_WINDOW_S))]
     return model
 
 

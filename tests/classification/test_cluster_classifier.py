@@ -60,7 +60,7 @@ class AllCars(Recording):
 
 
 def _detections():
-    """Two sequences by hand: a car (3 detections, then 2 in the next 0.5 s frame), a pedestrian, background."""
+    """Two sequences by hand: a car (3 detections, then 2 in the next 0.5 s window), a pedestrian, background."""
     return pd.DataFrame(
         {
             "x": [0.0, 0.5, 1.0, 0.2, 0.7, 20.0, 20.3, 40.0, 41.0, 0.0, 0.4, 9.0],
@@ -75,30 +75,30 @@ def _detections():
     )
 
 
-#: Clusters of _detections(): the car's first frame (0), its second frame with a wall detection (1), the
+#: Clusters of _detections(): the car's first window (0), its second window with a wall detection (1), the
 #: pedestrian of sequence 1 (2), a wall (3), the pedestrian of sequence 2 (4) and noise.
 LABELS = np.array([0, 0, 0, 1, 1, 2, 2, 3, 3, 4, 4, -1])
 
 
 def test_fitted_on_the_features_and_the_iou_targets_of_the_segments():
     X = _detections()
-    model = ClusterClassifier(Given(LABELS), Recording(), frame_length=0.5).fit(X, road_user_class(X["label_id"]))
-    expected = cluster_features(X, LABELS, frame_length=0.5)
+    model = ClusterClassifier(Given(LABELS), Recording(), window=0.5).fit(X, road_user_class(X["label_id"]))
+    expected = cluster_features(X, LABELS, window=0.5)
     recorded = model.classifier_
     np.testing.assert_array_equal(recorded.X_.to_numpy(), expected.iloc[:, 3:].to_numpy(dtype=float))
     assert list(recorded.X_.columns) == list(expected.columns[3:]) == list(model.feature_names_)
-    # Segments in (sequence, cluster, frame) order: car frame 0, car frame 1, pedestrian, wall, pedestrian.
-    assert expected[["sequence", "cluster", "frame"]].to_numpy().tolist() == [
+    # Segments in (sequence, cluster, window) order: car window 0, car window 1, pedestrian, wall, pedestrian.
+    assert expected[["sequence", "cluster", "window"]].to_numpy().tolist() == [
         [1, 0, 0], [1, 1, 1], [1, 2, 0], [1, 3, 0], [2, 4, 0]
     ]  # fmt: skip
     assert recorded.y_.tolist() == [0, 0, 3, -1, 3]
     assert model.classes_.tolist() == [-1, 0]
 
 
-def test_whole_clusters_without_frames():
-    # frame_length=None: the car's two clusters each hold part of the car (3 and 2 of 5): only the first matches.
+def test_whole_clusters_without_windows():
+    # window=None: the car's two clusters each hold part of the car (3 and 2 of 5): only the first matches.
     X = _detections()
-    model = ClusterClassifier(Given(LABELS), Recording(), frame_length=None).fit(X, road_user_class(X["label_id"]))
+    model = ClusterClassifier(Given(LABELS), Recording(), window=None).fit(X, road_user_class(X["label_id"]))
     assert model.classifier_.y_.tolist() == [0, -1, 3, -1, 3]
 
 
@@ -109,7 +109,7 @@ def test_ignored_instances_are_left_out_of_training():
 
 
 def test_without_instance_ids_the_class_segments_are_the_instances():
-    # One object per class and frame here, so the "stuff" rule gives the same targets as the track ids.
+    # One object per class and window here, so the "stuff" rule gives the same targets as the track ids.
     X = _detections()
     y = road_user_class(X["label_id"])
     by_track = ClusterClassifier(Given(LABELS), Recording()).fit(X, y)
@@ -121,7 +121,7 @@ def test_every_detection_gets_its_segments_class_instance_and_confidence():
     X = _detections()
     model = ClusterClassifier(Given(LABELS), Recording()).fit(X, road_user_class(X["label_id"]))
     result = model.predict_instances(X)
-    # Segments of >= 3 detections are cars (0.8): the car's first frame only; the rest background (0.9), noise 1.
+    # Segments of >= 3 detections are cars (0.8): the car's first window only; the rest background (0.9), noise 1.
     assert result["class"].tolist() == [0, 0, 0] + [-1] * 9
     assert result["instance"].tolist() == [0, 0, 0] + [-1] * 9
     np.testing.assert_allclose(result["confidence"], [0.8] * 3 + [0.9] * 8 + [1.0])
@@ -132,7 +132,7 @@ def test_every_detection_gets_its_segments_class_instance_and_confidence():
     assert result.index.equals(X.index)
 
 
-def test_one_cluster_is_one_instance_over_its_frames_and_instances_do_not_span_sequences():
+def test_one_cluster_is_one_instance_over_its_windows_and_instances_do_not_span_sequences():
     X = _detections()
     labels = np.array([0, 0, 0, 0, 0, 2, 2, 3, 3, 2, 2, -1])  # label 2 in both sequences; the car one cluster
     model = ClusterClassifier(Given(labels), AllCars()).fit(X, road_user_class(X["label_id"]))
@@ -148,9 +148,9 @@ def test_given_labels_are_classified_without_running_the_clusterer():
     assert result["class"].tolist() == [0, 0, 0] + [-1] * 9
     assert result["instance"].tolist() == [0, 0, 0] + [-1] * 9
     np.testing.assert_allclose(result["confidence"], [0.8] * 3 + [0.9] * 8 + [1.0])
-    # The car one cluster over two frames (3 and 2 detections), the pedestrian and the wall one cluster.
+    # The car one cluster over two windows (3 and 2 detections), the pedestrian and the wall one cluster.
     joined = model.predict_instances_of(X, np.array([0, 0, 0, 0, 0, 2, 2, 2, 2, -1, -1, -1]))
-    # Segments: car frame 0 (3, car), car frame 1 (2, background), pedestrian + wall in sequence 1 (4, car).
+    # Segments: car window 0 (3, car), car window 1 (2, background), pedestrian + wall in sequence 1 (4, car).
     assert joined["class"].tolist() == [0, 0, 0, -1, -1, 0, 0, 0, 0, -1, -1, -1]
     assert joined["instance"].tolist() == [0, 0, 0, -1, -1, 1, 1, 1, 1, -1, -1, -1]
 

@@ -20,26 +20,26 @@ def _table(**columns):
     return pd.DataFrame({**base, **{name: np.asarray(values, dtype=float) for name, values in columns.items()}})
 
 
-def _reference(X, labels, frame_length):
+def _reference(X, labels, window):
     """The feature table computed segment by segment with plain numpy and the per-cluster velocity estimate."""
     labels = np.asarray(labels)
     X = X.select_dtypes("number").astype(np.float64)  # the float32 columns of the table, in double precision
     sequence = X["sequence"].to_numpy() if "sequence" in X else np.zeros(len(X))
     t = X["t"].to_numpy()
-    frame = np.zeros(len(X), dtype=np.int64)
-    if frame_length is not None:
+    index = np.zeros(len(X), dtype=np.int64)
+    if window is not None:
         for s in np.unique(sequence):
             mine = sequence == s
-            frame[mine] = np.floor((t[mine] - t[mine].min()) / frame_length)
+            index[mine] = np.floor((t[mine] - t[mine].min()) / window)
     segments = {}
     for row in range(len(X)):
         if labels[row] >= 0:
-            segments.setdefault((sequence[row], labels[row], frame[row]), []).append(row)
+            segments.setdefault((sequence[row], labels[row], index[row]), []).append(row)
     records = []
     for key in sorted(segments):
         rows = np.array(segments[key])
         d = X.iloc[rows]
-        record = dict(zip(("sequence", "cluster", "frame"), key, strict=True))
+        record = dict(zip(("sequence", "cluster", "window"), key, strict=True))
         position = d[["x", "y"]].to_numpy()
         _, vectors = np.linalg.eigh(np.cov(position.T, bias=True).reshape(2, 2))
         centred = position - position.mean(axis=0)
@@ -95,11 +95,11 @@ def simulated():
     return X, labels
 
 
-@pytest.mark.parametrize("frame_length", [None, 0.5, 0.15])
-def test_equals_the_per_segment_loop_on_simulated_data(simulated, frame_length):
+@pytest.mark.parametrize("window", [None, 0.5, 0.15])
+def test_equals_the_per_segment_loop_on_simulated_data(simulated, window):
     X, labels = simulated
-    table = cluster_features(X, labels, frame_length=frame_length)
-    _assert_same(table, _reference(X, labels, frame_length))
+    table = cluster_features(X, labels, window=window)
+    _assert_same(table, _reference(X, labels, window))
     assert list(table.columns[3:]) == list(CLUSTER_FEATURES)  # a full detection table gives every feature
     assert table["speed"].notna().any() and table["speed"].isna().any()  # known and unknown velocities occur
 
@@ -109,9 +109,9 @@ def test_equals_the_per_segment_loop_on_simulated_data(simulated, frame_length):
     n=st.integers(1, 40),
     n_labels=st.integers(1, 5),
     seed=st.integers(0, 2**31 - 1),
-    frame_length=st.sampled_from([None, 0.3, 1.0]),
+    window=st.sampled_from([None, 0.3, 1.0]),
 )
-def test_equals_the_per_segment_loop_on_random_tables(n, n_labels, seed, frame_length):
+def test_equals_the_per_segment_loop_on_random_tables(n, n_labels, seed, window):
     rng = np.random.default_rng(seed)
     X = _table(
         x=rng.normal(0, 3, n),
@@ -126,7 +126,7 @@ def test_equals_the_per_segment_loop_on_random_tables(n, n_labels, seed, frame_l
         sensor_id=rng.integers(1, 5, n),
     )
     labels = rng.integers(-1, n_labels, n)
-    _assert_same(cluster_features(X, labels, frame_length=frame_length), _reference(X, labels, frame_length))
+    _assert_same(cluster_features(X, labels, window=window), _reference(X, labels, window))
 
 
 @settings(max_examples=40, deadline=None)
@@ -135,16 +135,16 @@ def test_row_order_and_a_rigid_motion_do_not_change_the_features(n, seed, angle)
     rng = np.random.default_rng(seed)
     X = _table(x=rng.normal(0, 3, n), y=rng.normal(0, 3, n), v_r=rng.normal(0, 1, n), t=rng.uniform(0, 1, n))
     labels = rng.integers(-1, 3, n)
-    table, rows = cluster_features(X, labels, frame_length=0.5, return_rows=True)
+    table, rows = cluster_features(X, labels, window=0.5, return_rows=True)
     # Rows permuted: the same table, and each detection still points at its segment.
     order = rng.permutation(n)
-    permuted, permuted_rows = cluster_features(X.iloc[order], labels[order], frame_length=0.5, return_rows=True)
+    permuted, permuted_rows = cluster_features(X.iloc[order], labels[order], window=0.5, return_rows=True)
     _assert_same(permuted, table)
     np.testing.assert_array_equal(permuted_rows, rows[order])
     # Rotated and shifted positions: the same extents (they are measured along the principal axes).
     c, s = np.cos(angle), np.sin(angle)
     moved = X.assign(x=100.0 + c * X["x"] - s * X["y"], y=-50.0 + s * X["x"] + c * X["y"])
-    _assert_same(cluster_features(moved, labels, frame_length=0.5), table)
+    _assert_same(cluster_features(moved, labels, window=0.5), table)
 
 
 def test_principal_extents_of_a_rotated_rectangle():
@@ -154,15 +154,15 @@ def test_principal_extents_of_a_rotated_rectangle():
     turned = corners @ np.array([[np.cos(a), np.sin(a)], [-np.sin(a), np.cos(a)]])
     table = cluster_features(_table(x=turned[:, 0] + 7.0, y=turned[:, 1] - 3.0), [4] * 5)
     np.testing.assert_allclose(table[["extent_along", "extent_across"]].to_numpy()[0], [4.0, 2.0], atol=1e-12)
-    assert table[["sequence", "cluster", "frame", "n_detections"]].to_numpy().tolist() == [[0, 4, 0, 5]]
+    assert table[["sequence", "cluster", "window", "n_detections"]].to_numpy().tolist() == [[0, 4, 0, 5]]
 
 
-def test_frames_start_at_each_sequences_first_detection_noise_included():
+def test_windows_start_at_each_sequences_first_detection_noise_included():
     # Sequence 1 starts at 0.0 s with a noise detection; sequence 2 at 10.2 s.  Frames of 0.5 s.
     X = _table(t=[0.0, 0.3, 0.6, 1.1, 10.2, 10.9], sequence=[1, 1, 1, 1, 2, 2])
     labels = [-1, 0, 0, 0, 0, 0]
-    table, rows = cluster_features(X, labels, frame_length=0.5, return_rows=True)
-    assert table[["sequence", "cluster", "frame", "n_detections"]].to_numpy().tolist() == [
+    table, rows = cluster_features(X, labels, window=0.5, return_rows=True)
+    assert table[["sequence", "cluster", "window", "n_detections"]].to_numpy().tolist() == [
         [1, 0, 0, 1],  # 0.3 s
         [1, 0, 1, 1],  # 0.6 s
         [1, 0, 2, 1],  # 1.1 s
@@ -216,8 +216,8 @@ def test_a_feature_without_its_columns_is_left_out():
 
 def test_no_cluster_gives_an_empty_table_with_every_column():
     X = _table(x=[0.0, 1.0], rcs=[1.0, 2.0], sensor_id=[1, 2])
-    table, rows = cluster_features(X, [-1, -1], frame_length=0.5, return_rows=True)
-    assert len(table) == 0 and list(table.columns) == ["sequence", "cluster", "frame", *WORKING, "rcs_mean",
+    table, rows = cluster_features(X, [-1, -1], window=0.5, return_rows=True)
+    assert len(table) == 0 and list(table.columns) == ["sequence", "cluster", "window", *WORKING, "rcs_mean",
                                                        "rcs_std", "rcs_max", "n_sensors"]  # fmt: skip
     assert rows.tolist() == [-1, -1]
 

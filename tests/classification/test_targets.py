@@ -8,34 +8,34 @@ from hypothesis import strategies as st
 from sklearn_radar.classification._targets import instance_classes, segment_targets
 
 
-def _targets(classes, instances, predicted, sequence=None, frame=None):
-    """segment_targets of detection-level labels: the segments are the (sequence, frame, predicted) groups."""
+def _targets(classes, instances, predicted, sequence=None, windows=None):
+    """segment_targets of detection-level labels: the segments are the (sequence, window, predicted) groups."""
     predicted = np.asarray(predicted)
     n = len(predicted)
     sequence = None if sequence is None else np.asarray(sequence, dtype=float)
-    frame = np.zeros(n, dtype=np.int64) if frame is None else np.asarray(frame, dtype=np.int64)
+    windows = np.zeros(n, dtype=np.int64) if windows is None else np.asarray(windows, dtype=np.int64)
     keys = sorted(
-        {(0 if sequence is None else sequence[i], frame[i], predicted[i]) for i in range(n) if predicted[i] >= 0}
+        {(0 if sequence is None else sequence[i], windows[i], predicted[i]) for i in range(n) if predicted[i] >= 0}
     )
     rows = np.array(
-        [keys.index((0 if sequence is None else sequence[i], frame[i], predicted[i])) if predicted[i] >= 0 else -1
+        [keys.index((0 if sequence is None else sequence[i], windows[i], predicted[i])) if predicted[i] >= 0 else -1
          for i in range(n)]
     )  # fmt: skip
-    targets = segment_targets(np.asarray(classes), np.asarray(instances), sequence, frame, rows, len(keys))
+    targets = segment_targets(np.asarray(classes), np.asarray(instances), sequence, windows, rows, len(keys))
     return dict(zip(keys, targets.tolist(), strict=True))
 
 
-def _reference(classes, instances, predicted, sequence, frame):
+def _reference(classes, instances, predicted, sequence, windows):
     """The rule, segment by segment: the class (most frequent, ties: smallest) of an instance with IoU > 0.5."""
     classes, instances, predicted = map(np.asarray, (classes, instances, predicted))
     n = len(predicted)
     result = {}
-    for key in {(sequence[i], frame[i], predicted[i]) for i in range(n) if predicted[i] >= 0}:
-        p = {i for i in range(n) if (sequence[i], frame[i], predicted[i]) == key}
+    for key in {(sequence[i], windows[i], predicted[i]) for i in range(n) if predicted[i] >= 0}:
+        p = {i for i in range(n) if (sequence[i], windows[i], predicted[i]) == key}
         result[key] = -1
         for g_id in {instances[i] for i in range(n) if instances[i] >= 0 and sequence[i] == key[0]}:
             whole = [i for i in range(n) if instances[i] == g_id and sequence[i] == key[0]]
-            g = {i for i in whole if frame[i] == key[1]}
+            g = {i for i in whole if windows[i] == key[1]}
             if g and len(p & g) / len(p | g) > 0.5:
                 values, counts = np.unique(classes[whole], return_counts=True)
                 result[key] = int(values[np.argmax(counts)])  # np.unique sorts: the first maximum is the smallest
@@ -59,13 +59,13 @@ def test_background_clusters_and_ignored_instances():
     assert got == {(0, 0, 7): -1, (0, 0, 8): -2}
 
 
-def test_matching_is_per_frame():
-    # One object over two frames, one cluster over both: within each frame the cluster is the object (IoU 1),
-    # although over the whole sequence a second cluster holds half of the object's frame-1 detections.
+def test_matching_is_per_window():
+    # One object over two windows, one cluster over both: within each window the cluster is the object (IoU 1),
+    # although over the whole sequence a second cluster holds half of the object's windows-1 detections.
     classes, instances = [0] * 6, [0] * 6
-    predicted, frame = [1, 1, 1, 1, 2, 2], [0, 0, 1, 1, 1, 1]
-    got = _targets(classes, instances, predicted, frame=frame)
-    assert got == {(0, 0, 1): 0, (0, 1, 1): -1, (0, 1, 2): -1}  # frame 1: 2 of 4 each, IoU 1/2
+    predicted, windows = [1, 1, 1, 1, 2, 2], [0, 0, 1, 1, 1, 1]
+    got = _targets(classes, instances, predicted, windows=windows)
+    assert got == {(0, 0, 1): 0, (0, 1, 1): -1, (0, 1, 2): -1}  # windows 1: 2 of 4 each, IoU 1/2
 
 
 def test_equal_ids_in_two_sequences_are_different_instances():
@@ -88,12 +88,12 @@ def test_the_class_of_an_instance_is_its_most_frequent_one():
 def test_equals_the_segment_by_segment_rule(n, seed, n_instances, n_clusters):
     rng = np.random.default_rng(seed)
     sequence = rng.integers(1, 3, n).astype(float)
-    frame = rng.integers(0, 2, n)
+    windows = rng.integers(0, 2, n)
     instances = rng.integers(-1, n_instances, n)
     classes = np.where(instances >= 0, rng.integers(-2, 5, n), -1)
     predicted = rng.integers(-1, n_clusters, n)
-    got = _targets(classes, instances, predicted, sequence=sequence, frame=frame)
-    assert got == _reference(classes, instances, predicted, sequence, frame)
+    got = _targets(classes, instances, predicted, sequence=sequence, windows=windows)
+    assert got == _reference(classes, instances, predicted, sequence, windows)
 
 
 @pytest.mark.parametrize("n_segments", [0, 3])

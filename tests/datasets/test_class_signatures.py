@@ -121,7 +121,7 @@ def test_objects_of_a_class_differ_in_mean_rcs_by_a_few_db():
 def _median_frame_doppler_spread(scenes, label):
     X = FrameTransform().fit_transform(scenes.data)
     labels = np.where(scenes.data["label_id"].to_numpy() == label, scenes.target, -1)
-    frames = cluster_features(X, labels, frame_length=0.5)
+    frames = cluster_features(X, labels, window=0.5)
     return frames.loc[frames["n_detections"] >= 3, "vr_std"].median()
 
 
