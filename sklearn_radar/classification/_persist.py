@@ -223,6 +223,13 @@ def load_model(path, finals, noun):
     except Exception as error:  # a pickle can raise anything: each becomes one message naming the file
         raise ValueError(f"{path}: cannot unpickle the {noun}: {type(error).__name__}: {error}") from None
     _checked_model(model, str(path), finals)
+    try:  # an estimator pickled before a parameter was renamed lacks the new attribute
+        model.get_params(deep=True)
+    except AttributeError as error:
+        raise ValueError(
+            f"{path}: the {noun} was saved with other parameters than this sklearn-radar's ({error}); a parameter "
+            "was renamed since (see the changelog): fit and save it again"
+        ) from None
     return model
 
 

@@ -1,5 +1,6 @@
 """save_classifier / load_classifier: round trip, versions, refusals naming the file, no foreign file replaced."""
 
+import copy
 import hashlib
 import io
 import json
@@ -144,6 +145,18 @@ def test_a_valid_file_of_something_else_is_refused_after_loading(tmp_path):
     payload = _pickled(RadarDBSCAN())
     path = _file(tmp_path / "dbscan.joblib", _header(payload), payload)
     with pytest.raises(ValueError, match=r"dbscan\.joblib: must hold a fitted ClusterClassifier.*got RadarDBSCAN"):
+        load_classifier(path)
+
+
+def test_a_classifier_saved_before_a_parameter_rename_is_refused(fitted, tmp_path):
+    # As a file written before frame_length became window: the pickled estimator has the old attribute only.
+    old = copy.deepcopy(fitted)
+    classifier = old.steps[-1][1]
+    classifier.frame_length = classifier.window
+    del classifier.window
+    payload = _pickled(old)
+    path = _file(tmp_path / "old.joblib", _header(payload), payload)
+    with pytest.raises(ValueError, match=r"old\.joblib: the classifier was saved with other parameters.*window"):
         load_classifier(path)
 
 
