@@ -154,9 +154,8 @@ def summary(directory):
         print(f"learned - max(objects, baseline):  {_mean_2se(pq.learned - best)} (mean ± 2 SE)")
         columns = ["pq", "recall", "precision", "n_true", "matched", "missed", *MISSED_CAUSES]
         columns += ["n_pred", "false", *FALSE_CAUSES, "median_size_missed", "fit_s", "predict_ms_per_scan"]
-        sums = part.groupby("method")[columns].agg(
-            {c: ("mean" if c in ("pq", "recall", "precision", "fit_s", "predict_ms_per_scan") else "sum") for c in columns}
-        )
+        means = ("pq", "recall", "precision", "fit_s", "predict_ms_per_scan")
+        sums = part.groupby("method")[columns].agg({c: "mean" if c in means else "sum" for c in columns})
         sums["median_size_missed"] = part.groupby("method")["median_size_missed"].median()
         print("error anatomy on the test halves (counts summed over seeds; PQ, times: means):")
         print(sums.loc[list(METHODS)].round(3).T.to_string())
