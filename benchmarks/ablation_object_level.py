@@ -313,7 +313,12 @@ def _test_scores(searched, test_sequences):
 
 
 def run_one(preset, seed, chosen, options):
-    """Tune and test every chosen variant on one simulated data set; returns {variant: record}."""
+    """Tune and test every chosen variant on one simulated data set; returns {variant: record}.
+
+    With ``options.keep_labels`` each record also holds ``test_labels`` (the tuned setting's labels of the test
+    sequences, fitted per sequence on the output of the variant's stage 0, concatenated in sequence order) and
+    ``predict_s`` (their seconds, stage 0 excluded); otherwise both are None.
+    """
     difficulty, knobs = DATA_SETS[preset]
     scenes = make_scenes(
         n_sequences=options.n_sequences,
@@ -354,6 +359,11 @@ def run_one(preset, seed, chosen, options):
         fitted = clone(searched).set_params(**result.best_params)
         test = [(clone(variant.stage0).fit_transform(Xs), ys) for Xs, ys in test_raw]
         scores = _test_scores(fitted, test)
+        labels, predict_s = None, None
+        if getattr(options, "keep_labels", False):  # the test labels again, for an error anatomy
+            predict_start = time.perf_counter()
+            labels = np.concatenate([np.asarray(clone(fitted).fit_predict(Xs)) for Xs, _ in test])
+            predict_s = time.perf_counter() - predict_start
         found[variant.name] = {
             "params": result.best_params,
             "cv_pq": result.best_score,
@@ -361,6 +371,8 @@ def run_one(preset, seed, chosen, options):
             "v1": scores["v1"],
             "bounds": bounds_reached(result.best_params, variant.space),
             "seconds": time.perf_counter() - start,
+            "test_labels": labels,
+            "predict_s": predict_s,
         }
         record = found[variant.name]
         print(

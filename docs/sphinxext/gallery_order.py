@@ -17,6 +17,7 @@ ORDER = (
     "plot_sequence_search.py",
     "plot_streaming.py",
     "plot_classification.py",
+    "plot_learned_grouping.py",
     "plot_radarscenes_io.py",
 )
 

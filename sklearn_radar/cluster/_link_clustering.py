@@ -107,6 +107,8 @@ class LinkClustering(ClusterMixin, BaseEstimator):
     and rows with ``keep = False`` (see :class:`DopplerDensityFilter`) are
     noise and take no part.
 
+    Read more in the :ref:`User Guide <user-guide-learned>`.
+
     Parameters
     ----------
     link_threshold : "auto" or float in [0, 1], default="auto"
