@@ -189,7 +189,7 @@ class OnlinePipeline:
         self._ids = ObjectIds()
 
     @classmethod
-    def from_params(cls, path, experiment=None):
+    def from_params(cls, path, experiment=None, tracker=None):
         """The online form of the pipeline saved in a reproduce run's ``params.json``.
 
         Parameters
@@ -199,6 +199,8 @@ class OnlinePipeline:
         experiment : int or "objects", default=None
             Which saved experiment; None: the one ``sklearn-radar
             reproduce`` marked as the run's best.
+        tracker : Tracker or None, default=None
+            The tracking stage, as for :class:`OnlinePipeline`.
 
         Returns
         -------
@@ -207,7 +209,7 @@ class OnlinePipeline:
             number when ``experiment`` is None).
         """
         setting = load_params(path, experiment)
-        online = cls(setting_pipeline(setting, path))
+        online = cls(setting_pipeline(setting, path), tracker=tracker)
         online.experiment = setting["experiment"]
         return online
 

@@ -11,7 +11,7 @@ from sklearn_radar import ClusterMerger, DopplerDensityFilter, FrameTransform, R
 from sklearn_radar.datasets import make_scenes
 from sklearn_radar.experiments import experiment_pipeline, paper_params
 from sklearn_radar.experiments._saved import load_params
-from sklearn_radar.online import OnlinePipeline
+from sklearn_radar.online import OnlinePipeline, Tracker
 
 
 def scans_in_time_order(data):
@@ -240,6 +240,9 @@ def test_from_params_records_the_experiment_it_took(tmp_path):
     assert OnlinePipeline.from_params(path, experiment=13).experiment == 13
     assert OnlinePipeline.from_params(path).experiment == load_params(path)["experiment"]  # the run's choice
     assert OnlinePipeline(experiment_pipeline(8)).experiment is None
+    assert OnlinePipeline.from_params(path).tracker is None
+    tracked = OnlinePipeline.from_params(path, experiment=8, tracker=Tracker(min_hits=2))
+    assert tracked.tracker.min_hits == 2 and tracked.experiment == 8
 
 
 def target_scan(t_s, x_centre, speed=5.0, y=10.0):
