@@ -101,6 +101,15 @@ def test_report_section(learned_run):
     assert f"| learned grouping | {errors['n_true']} | {errors['missed']} | {errors['noise']} |" in report
 
 
+def test_at_a_glance_names_the_learned_grouping(learned_run):
+    report = (learned_run / "report.md").read_text()
+    glance = report.split("## At a glance", 1)[1].split("\n## ", 1)[0]
+    learned = json.loads((learned_run / "results.json").read_text())["learned"]
+    assert "- the learned grouping (fitted on the training half's labels, offline only): test PQ " in glance
+    assert f"test PQ {learned['instance_test']['pq']:.3f}" in glance
+    assert f"missed ground-truth segments {learned['errors']['learned grouping']['missed']}" in glance
+
+
 def test_cluster_applies_the_saved_model_to_the_run_s_test_labels(learned_run, tiny_folder, tmp_path):
     results = json.loads((learned_run / "results.json").read_text())
     model = _direct_model(tiny_folder, results)

@@ -75,6 +75,33 @@ def markdown(results: RunResults) -> list[str]:
     return lines
 
 
+def glance_line(results: RunResults):
+    """The learned grouping's test PQ and missed segments beside those it is compared with, for "At a glance"."""
+    learned = results.learned
+    if learned is None:
+        return None
+    others = {name: errors for name, errors in learned.errors.items() if name != "learned grouping"}
+    scores = {"object experiment": results.objects.kept.instance_test.pq} if results.objects is not None else {}
+    for name, baseline in (results.baselines or {}).items():
+        if name in others and baseline.instance_test is not None:
+            scores[name] = baseline.instance_test.pq
+    against = " and ".join(
+        f"{pq:.3f} for the {name}" if name == "object experiment" else f"{pq:.3f} for {name}"
+        for name, pq in scores.items()
+    )
+    pq = learned.instance_test.pq
+    line = f"the learned grouping (fitted on the training half's labels, offline only): test PQ {pq:.3f}"
+    if against:
+        line += f" against {against}"
+    line += " (one fit, one seed: no verdict)"
+    own = learned.errors.get("learned grouping")
+    if own is not None:
+        line += f"; missed ground-truth segments {own.missed}"
+        if others:
+            line += " against " + " and ".join(str(errors.missed) for errors in others.values()) + " in that order"
+    return line + "; its section has the details."
+
+
 def _row(name, scores, v1, repeat=None):
     first = " (first repeat)" if repeat else ""
     return (

@@ -10,6 +10,7 @@ from .._experiment_records import repeated_scores
 from .._results import RunResults
 from ._base import OVERFIT_GAP, SETTING_PAPER, Section, objective_name, score_cell, setting_source, test_score
 from ._comparison import CANNOT_TELL, DOES_NOT_HOLD, HOLDS, N_STANDARD_ERRORS, _chosen_rows, checked
+from ._learned import glance_line as learned_glance_line
 from ._objects import glance_line
 
 
@@ -33,9 +34,9 @@ def markdown(results: RunResults) -> list[str]:
     checks = checked(results)
     if checks:
         lines.append(f"- {findings_line(checks, results.meta.repeats)}")
-    objects = glance_line(results)
-    if objects:
-        lines.append(f"- {objects}")
+    for line in (glance_line(results), learned_glance_line(results)):
+        if line:
+            lines.append(f"- {line}")
     named = [(f"#{n}", e) for n, e in sorted(experiments.items())] + list((results.baselines or {}).items())
     over = [
         name for name, r in named if r.search is not None and r.search.cv_best - test_score(r, results) > OVERFIT_GAP
