@@ -90,6 +90,26 @@ def hota_scores(labels_true, labels_pred, *, times, groups=None, window=0.5):
     return totals.scores()
 
 
+def hota_counts(labels_true, labels_pred, times, window=0.5):
+    """One sequence's HOTA counts (TP, FN, FP and the TP-weighted sums, per threshold): a part that adds up.
+
+    :func:`combine_hota_counts` of the parts of several sequences equals :func:`hota_scores` with ``groups``.
+    """
+    labels_true, labels_pred, times, groups = _tracking_inputs(labels_true, labels_pred, times, None)
+    if len(times) == 0:
+        return _Totals().counts
+    cell, _ = _window_cells(times, groups, window)
+    return _sequence_counts(cell, labels_true.astype(np.int64), labels_pred.astype(np.int64))
+
+
+def combine_hota_counts(parts):
+    """The scores of :func:`hota_scores` from the :func:`hota_counts` of sequences."""
+    totals = _Totals()
+    for counts in parts:
+        totals.add(counts)
+    return totals.scores()
+
+
 def _ids(labels):
     """Per detection: the 0-based id of its label (-1 for noise); and the number of ids."""
     out = np.full(len(labels), -1, dtype=np.int64)

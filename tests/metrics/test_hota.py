@@ -113,3 +113,24 @@ def test_equals_trackeval_on_a_two_sequence_case():
 def test_equals_trackeval_on_random_tables(rows):
     truth, pred, tenth, groups = (np.array(column) for column in zip(*rows, strict=True))
     assert_like_trackeval(truth, pred, tenth * 0.2, groups)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.lists(
+        st.tuples(st.integers(-1, 3), st.integers(-1, 4), st.integers(0, 7), st.integers(0, 2)),
+        min_size=1,
+        max_size=60,
+    )
+)
+def test_per_sequence_counts_combine_to_the_scores_with_groups(rows):
+    """hota_counts of each sequence, combined: hota_scores of all of them with groups (what the runner sums)."""
+    from sklearn_radar.metrics._hota import combine_hota_counts, hota_counts
+
+    truth, pred, tenth, groups = (np.array(column) for column in zip(*rows, strict=True))
+    times = tenth * 0.2
+    parts = [hota_counts(truth[groups == g], pred[groups == g], times[groups == g]) for g in np.unique(groups)]
+    combined = combine_hota_counts(parts)
+    expected = hota_scores(truth, pred, times=times, groups=groups)
+    for name in ("hota", "deta", "assa", "loca"):
+        assert combined[name] == pytest.approx(expected[name], abs=1e-12)
