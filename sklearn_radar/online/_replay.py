@@ -20,13 +20,15 @@ def replay(online, data, objects=False):
         ``labels`` (stage 1), ``reported`` (the object ids as given at each scan), ``confirmed`` (as given at
         each scan), ``object_ids`` (final: every alias resolved to its surviving id, and with stage 2's
         ``min_cluster_size`` the causal confirmation rule applied to them, as the causal pipeline does), ``keep``,
-        ``latency`` and ``cpu`` (wall and thread CPU time per scan, s), ``aliases`` and ``objects`` (a
-        DataFrame, or None).
+        ``latency`` and ``cpu`` (wall and thread CPU time per scan, s), ``aliases``, ``objects`` (a
+        DataFrame, or None) and ``track_id`` (the tracker's id of each detection as given at its scan; None
+        without a tracker).
     """
     columns = {name: data[name].to_numpy() for name in data.columns if name not in ("uuid", "track_id")}
     n = len(data)
     labels, reported, keep = np.full(n, -1), np.full(n, -1), np.zeros(n, dtype=bool)
     confirmed = np.zeros(n, dtype=bool)
+    track_id = None if online.tracker is None else np.full(n, -1, dtype=np.int64)
     latency, cpu, aliases, scan_objects = [], [], [], []
     for rows in scan_order(data):
         scan = {name: values[rows] for name, values in columns.items()}
@@ -36,6 +38,8 @@ def replay(online, data, objects=False):
         cpu.append(time.thread_time() - start_cpu)
         labels[rows], reported[rows], keep[rows] = result.labels, result.object_ids, result.keep
         confirmed[rows] = result.confirmed
+        if track_id is not None:
+            track_id[rows] = result.track_id
         aliases += result.aliases
         if objects and len(result.objects):
             listed = result.objects.to_frame()
@@ -56,6 +60,7 @@ def replay(online, data, objects=False):
         "cpu": np.array(cpu),
         "aliases": aliases,
         "objects": table,
+        "track_id": track_id,
     }
 
 
