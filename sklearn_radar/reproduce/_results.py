@@ -19,7 +19,7 @@ from ._classification import ClassificationResult
 from ._experiment_records import BaselineResult, ExperimentResult, LearnedResult, ObjectExperimentResult
 from ._filter_records import FilterEffectResult, FilterResult
 from ._records import ABSENT_AT_DEFAULT, NOT_WRITTEN, WRITTEN_FLAT, JsonRecord, record, to_json
-from ._tracking import TrackingResult
+from ._tracking import TrackingStep
 
 
 @record
@@ -136,9 +136,9 @@ class RunResults(JsonRecord):
         By clusterer name.
     objects : ObjectExperimentResult or None, default=None
         The object experiment, when it ran.
-    tracking : dict of int to TrackingResult or None, default=None
-        The online pipeline's object ids scored over time, by experiment number; None when it did not run
-        (and in results of older versions).
+    tracking : TrackingStep or None, default=None
+        The settings streamed online, their object and track ids scored over time, the tuned Tracker and the
+        baseline tracker; None when it did not run (and in results of older versions).
     classification : ClassificationResult or None, default=None
         The classifier of clusters on the test half, when it ran.
     learned : LearnedResult or None, default=None
@@ -154,7 +154,7 @@ class RunResults(JsonRecord):
     filter_effect: FilterEffectResult | None = None
     baselines: dict[str, BaselineResult] | None = None
     objects: ObjectExperimentResult | None = None
-    tracking: dict[int, TrackingResult] | None = None
+    tracking: TrackingStep | None = None
     classification: ClassificationResult | None = None
     learned: LearnedResult | None = None
     figures: FigureRecord = field(default_factory=FigureRecord, metadata=NOT_WRITTEN)
@@ -211,7 +211,10 @@ class RunResults(JsonRecord):
             ``cv_<objective>`` (its thresholds are tuned inside its fit, on other folds than the run's searches, so
             it is not ranked).  An experiment whose clusters the classification step classified has
             ``"classifier"``: the file of its saved classifier in the run's folder (``sklearn-radar cluster
-            --classifier``).
+            --classifier``).  ``"tracker"``, when the tracking step tuned one: the
+            :class:`~sklearn_radar.online.Tracker`'s parameters (``params``), the setting whose ids it was tuned
+            on (``tuned_on``), ``criterion`` and its ``train_score`` on the training half (``sklearn-radar stream
+            --track``).
         """
         objective = self.meta.objective
         cv_key = f"cv_{objective}"
@@ -250,7 +253,11 @@ class RunResults(JsonRecord):
         if not experiments:
             return None
         best, reason = _best_setting(experiments, cv_key, objective)
-        return {"best": best, "best_reason": reason, "objective": objective, "experiments": experiments}
+        document = {"best": best, "best_reason": reason, "objective": objective, "experiments": experiments}
+        tracker = None if self.tracking is None else self.tracking.tracker
+        if tracker is not None:
+            document["tracker"] = to_json(tracker)
+        return document
 
 
 def _best_setting(experiments, cv_key, objective):

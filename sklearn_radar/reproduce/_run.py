@@ -433,6 +433,8 @@ def _run_step(run, env, keys, context, found, position, key, ahead):
     _store(run.results, key, outcome.result)
     if outcome.labels is not None:
         context.labels[int(key)] = outcome.labels
+    if outcome.tracks is not None:
+        context.tracks.update(outcome.tracks)
     for name, model in (outcome.models or {}).items():
         (save_learned if name == LEARNED_FILE else save_classifier)(model, run.out / name)
     if outcome.summary:
@@ -568,7 +570,7 @@ def _title(key):
         BASELINES: "scikit-learn baselines (DBSCAN, HDBSCAN per 0.25 s window and per sequence; DBSCAN over a "
         "sliding past window)",
         OBJECTS: "the object experiment (the framework's stages tuned for PQ)",
-        TRACKING: "object tracking online (IDF1, ID switches, MOTA of the streamed ids)",
+        TRACKING: "object tracking online (MOTA, IDF1, HOTA of the streamed and tracked ids, a baseline tracker)",
         CLASSIFICATION: "the classifier of clusters (class PQ, mAP@0.5, macro-F1, mCov)",
         LEARNED: "the learned grouping (fitted on the training half's instances, scored offline)",
     }[key]

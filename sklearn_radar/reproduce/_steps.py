@@ -85,7 +85,7 @@ from ._learned import run_learned
 from ._progress import SCORING
 from ._results import DataStatistics
 from ._sections._base import values_cell
-from ._tracking import combine_tracking, streamable, track_sequence, tracked_setting
+from ._tracking import run_tracking
 from ._tuning import native_params, search_seed, tune, with_cluster_gate
 
 #: The object-level scores kept per experiment (:class:`InstanceScores`).
@@ -543,27 +543,6 @@ class _ObjectRepeat:
         return _ObjectSearched(record, stage1_search, search)
 
 
-# ----------------------------------------------------------------------------- object tracking online
-
-
-def run_tracking(env, key, needed):
-    """The settings of :data:`TRACKED` streamed online on the test half; their ids' IDF1, ID switches and MOTA."""
-    found, lines = {}, []
-    for number in TRACKED:
-        pipeline, params, source = tracked_setting(number, needed.get(str(number)))
-        refused = streamable(pipeline)
-        if refused is not None:
-            lines.append(f"    #{number} ({source}) does not stream: {refused}")
-            continue
-        parts = env.sequences.map(track_sequence, env.test, pipeline, executor=env.executor)
-        found[number] = combine_tracking(number, params, source, parts)
-        final = found[number].final
-        lines.append(
-            f"    #{number} ({source}): IDF1 {final.idf1:.3f}, ID switches {final.id_switches}, MOTA {final.mota:.3f}"
-        )
-    return Outcome(found, "\n".join(lines))
-
-
 # ----------------------------------------------------------------------------- scoring and searching
 
 
@@ -617,7 +596,8 @@ def _experiment_step(number):
 
 #: Every step by key, in run order: its function, the steps whose results it reads, its kind of work.
 #: #10 and #11 (#8's setting transferred), stage 2 (#12, #13: merging #8's clusters) and the filter's effect (at
-#: #8's setting) need #8; the tracking step the settings it streams (#1, #8, #12, #13); every other step needs
+#: #8's setting) need #8; the tracking step the settings it streams (objects, #1, #8, #12, #13) and the baselines
+#: (whose SlidingDBSCAN setting it reuses when tuned for PQ); every other step needs
 #: none (the object experiment tunes its own stage 1); the classification step the settings whose clusters it
 #: classifies (#1, #3, #8, #13) and the baselines (the strongest one's clusters); the learned grouping the object
 #: experiment and the baselines (whose kept settings' errors it sets beside its own).
@@ -627,7 +607,7 @@ STEPS = {
     OBJECTS: Step(run_objects, kind="stage 2"),
     FILTER_EFFECT: Step(run_filter_effect, (str(BEST_STAGE1),), kind=FILTER_EFFECT),
     BASELINES: Step(run_baselines, kind=BASELINES),
-    TRACKING: Step(run_tracking, tuple(str(number) for number in TRACKED), kind=TRACKING),
+    TRACKING: Step(run_tracking, (*TRACKED, BASELINES), kind=TRACKING),
     CLASSIFICATION: Step(run_classification, (*(str(number) for number in CLASSIFIED), BASELINES), kind=CLASSIFICATION),
     LEARNED: Step(run_learned, (OBJECTS, BASELINES), kind=LEARNED),
 }
@@ -640,6 +620,8 @@ def units(key, budget, repeats):
         return len(SKLEARN_BASELINES) * repeats * (budget.n_iter + 2)
     if key == OBJECTS:  # two searches, two scorings of the test half
         return repeats * (2 * budget.n_iter + 2)
+    if key == TRACKING:  # the baseline clusterer's search, the trackers' tuning, the test half
+        return budget.n_iter + 2
     if experiment is not None and experiment.tuned:
         return repeats * (budget.n_iter + 2)
     if experiment is not None and experiment.derived_from is not None:

@@ -382,6 +382,62 @@ def scene_figure(results: RunResults, context: RunContext):
     return fig
 
 
+#: The time step of the tracks figure's paths, s: each path joins an id's centroids per step.
+PATH_STEP_S = 0.1
+#: The margin of the tracks figure's view around the detections of any id, m.
+TRACKS_MARGIN_M = 10.0
+
+
+def tracks_figure(context: RunContext, ours: str):
+    """The drawn test sequence's paths, x-y: the moving road users (left) and our tracks (``ours``, right)."""
+    import matplotlib.pyplot as plt
+
+    sequence = context.sequences.fetch(context.drawn_sequence)
+    data = sequence.scenes.data
+    work = FrameTransform(frame="frame").fit_transform(data)
+    x, y = work["x"].to_numpy(), work["y"].to_numpy()
+    t = data["timestamp"].to_numpy(dtype=np.float64) * 1e-6
+    panels = (
+        ("ground truth: annotated moving road users", np.asarray(context.tracks["truth"]), "objects"),
+        (f"ours: {ours}", np.asarray(context.tracks["ours"]), "track ids"),
+    )
+    # The view: every id's detections, with a margin (the clutter far from the road users left out).
+    shown_rows = (panels[0][1] >= 0) | (panels[1][1] >= 0)
+    if not shown_rows.any():
+        shown_rows = np.ones(len(x), dtype=bool)
+    low = np.array([x[shown_rows].min(), y[shown_rows].min()]) - TRACKS_MARGIN_M
+    high = np.array([x[shown_rows].max(), y[shown_rows].max()]) + TRACKS_MARGIN_M
+    width, height = scene_size(np.r_[low[0], high[0]], np.r_[low[1], high[1]], width=13.0, extra_height=0.8, panels=2)
+    fig, axes = plt.subplots(1, 2, figsize=(width, height + 0.6), sharex=True, sharey=True, layout="constrained")
+    inside = (x >= low[0]) & (x <= high[0]) & (y >= low[1]) & (y <= high[1])
+    for ax, (title, ids, noun) in zip(axes, panels, strict=True):
+        grey = inside & (ids < 0)
+        ax.scatter(x[grey], y[grey], s=0.3, c="0.85", zorder=1, rasterized=True)
+        shown = np.unique(ids[ids >= 0])
+        for colour, label in zip(distinct_colours(len(shown)), shown.tolist(), strict=True):
+            px, py = _path(x, y, t, ids == label)
+            ax.plot(px, py, "-", color=colour, lw=1.2, zorder=2)
+            ax.plot(px[:1], py[:1], "o", color=colour, ms=3, zorder=3)
+        ax.set(title=f"{title} ({len(shown)} {noun})", aspect="equal", xlabel="x (m, sequence frame)")
+        ax.set(xlim=(low[0], high[0]), ylim=(low[1], high[1]))
+    axes[0].set_ylabel("y (m, sequence frame)")
+    fig.suptitle(
+        f"test sequence {sequence.id}: paths of ids over time (one colour per id, a dot where it first appears; "
+        f"centroids per {PATH_STEP_S:g} s)\nlight grey: every other detection (static background, noise, "
+        "unconfirmed clusters)"
+    )
+    return fig
+
+
+def _path(x, y, t, rows):
+    """The centroids of the detections ``rows`` per :data:`PATH_STEP_S`, in time order."""
+    step = np.floor(t[rows] / PATH_STEP_S).astype(np.int64)
+    _, code = np.unique(step, return_inverse=True)
+    code = code.ravel()
+    count = np.bincount(code)
+    return np.bincount(code, x[rows]) / count, np.bincount(code, y[rows]) / count
+
+
 #: The colour of background-only clusters in the scene figure: darker than noise, duller than any cluster colour.
 BACKGROUND_COLOUR = "0.5"
 

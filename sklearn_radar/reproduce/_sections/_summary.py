@@ -12,6 +12,7 @@ from ._base import OVERFIT_GAP, SETTING_PAPER, Section, objective_name, score_ce
 from ._comparison import CANNOT_TELL, DOES_NOT_HOLD, HOLDS, N_STANDARD_ERRORS, _chosen_rows, checked
 from ._learned import glance_line as learned_glance_line
 from ._objects import glance_line
+from ._tracking import glance_line as tracking_glance_line
 
 
 def markdown(results: RunResults) -> list[str]:
@@ -34,7 +35,7 @@ def markdown(results: RunResults) -> list[str]:
     checks = checked(results)
     if checks:
         lines.append(f"- {findings_line(checks, results.meta.repeats)}")
-    for line in (glance_line(results), learned_glance_line(results)):
+    for line in (glance_line(results), learned_glance_line(results), tracking_glance_line(results)):
         if line:
             lines.append(f"- {line}")
     named = [(f"#{n}", e) for n, e in sorted(experiments.items())] + list((results.baselines or {}).items())
@@ -99,6 +100,7 @@ FIGURE_NAMES = {
     "v1_bars": "V1 ours vs the paper's",
     "scene": "Fig. 6 analogue",
     "convergence": "convergence of the searches",
+    "tracks": "tracks over one test sequence",
 }
 
 
