@@ -248,6 +248,12 @@ def _parser():
     ):
         stream.add_argument(flag, required=required, help=text, metavar="FILE" if flag == "--classifier" else None)
     _add_checked(stream, "--experiment", _saved_experiment, help=_SAVED_EXPERIMENT_HELP)
+    stream.add_argument(
+        "--track",
+        action="store_true",
+        help="run the Tracker that reproduce tuned and saved in --params (its key 'tracker') and write each "
+        "detection's track id, as given at its scan, instead of its final object id (not with --classifier)",
+    )
     return parser
 
 
@@ -305,6 +311,10 @@ def _check_setting_options(args):
 def _check_stream_options(args):
     """``stream``: as :func:`_check_setting_options`, and a setting with an online version."""
     _check_setting_options(args)
+    if args.track and args.classifier is not None:
+        raise ValueError("--track does not go with --classifier: the classifiers label the final object ids")
+    if args.track and args.params is None:
+        raise ValueError("--track runs the Tracker saved in --params: give --params")
     if args.experiment == _LEARNED:
         raise ValueError(
             f"--experiment {_LEARNED}: the learned grouping has no online (causal) version yet; apply it offline with "
@@ -555,8 +565,11 @@ def _stream(args) -> int:
         objects=args.objects,
         experiment=args.experiment,
         classifier=args.classifier,
+        track=args.track,
     )
     _print_applied("streamed", summary, args)
+    if "tracker" in summary:
+        print(f"tracked with the saved Tracker ({_setting(summary['tracker'])}): {summary['n_tracks']} tracks")
     print(
         f"{summary['n_detections']} detections in {summary['n_scans']} scans, {summary['n_objects']} objects "
         f"({summary['n_aliases']} merges made aliases)"

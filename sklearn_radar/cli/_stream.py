@@ -11,8 +11,8 @@ from .._files import atomic_write
 from ..classification import DEVKIT_CLASS_NAMES
 from ..datasets import load_radarscenes
 from ..experiments._learned import LEARNED_EXPERIMENT
-from ..experiments._saved import NO_ONLINE_LEARNED, _read_params, params_setting
-from ..online import OnlinePipeline
+from ..experiments._saved import NO_ONLINE_LEARNED, _read_params, params_setting, saved_tracker
+from ..online import OnlinePipeline, Tracker
 from ..online._objects import ObjectList
 from ..online._replay import replay
 from ._classifier_setting import classifier_setting
@@ -53,7 +53,7 @@ def recording_seconds(data):
     return float((span["max"] - span["min"]).sum()) * 1e-6
 
 
-def stream_radarscenes(data, params, out, objects=None, experiment=None, classifier=None):
+def stream_radarscenes(data, params, out, objects=None, experiment=None, classifier=None, track=False):
     """Replay a RadarScenes folder through the online pipeline of a saved setting; write devkit predictions.
 
     The scans of all sequences are fed in timestamp order (the sensors of a
@@ -62,6 +62,12 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None, classif
     resolved to the surviving id), as ``sklearn-radar cluster`` writes
     cluster ids.  Nothing is written before every argument is checked, and
     no file that this package did not write is replaced.
+
+    With ``track``, the pipeline runs the :class:`~sklearn_radar.online.Tracker`
+    that the reproduce run tuned and saved in ``params`` (its key ``tracker``)
+    and the predictions file holds each detection's track id as given at its
+    scan (-1, noise, for a detection of no confirmed track): the ids a car
+    would use, causal and lasting (:ref:`online-tracking`).
 
     With ``classifier``, the final objects are classified after the replay
     (:meth:`~sklearn_radar.classification.ClusterClassifier.predict_instances_of`
@@ -91,6 +97,8 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None, classif
         with the same rules as for ``sklearn-radar cluster``
         (:func:`~sklearn_radar.reproduce.cluster_radarscenes`).  Loading
         runs pickle: only use files you trust.
+    track : bool, default=False
+        Run the saved Tracker and write its track ids (not with ``classifier``).
 
     Returns
     -------
@@ -99,7 +107,8 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None, classif
         ``experiment`` is None; else None), ``n_detections``, ``n_scans``, ``n_objects``,
         ``n_aliases``, ``latency`` and ``cpu`` (wall and thread CPU time per scan, s), ``recording`` (s),
         ``out`` and ``objects``; with ``classifier`` also ``classes`` (detections per devkit class name) and
-        ``n_road_users`` (objects classified as a road user in some window).
+        ``n_road_users`` (objects classified as a road user in some window); with ``track`` also
+        ``tracker`` (its parameters as saved) and ``n_tracks`` (confirmed tracks).
     """
     if experiment == LEARNED_EXPERIMENT:
         raise ValueError(NO_ONLINE_LEARNED)
@@ -110,7 +119,8 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None, classif
     if classifier is not None:
         model = classifier_setting(classifier, setting, params, pipeline)
         pipeline = model.clustering
-    online = OnlinePipeline(pipeline)
+    tracker, tracker_params = _saved_tracker(params, classifier) if track else (None, None)
+    online = OnlinePipeline(pipeline, tracker=tracker)
     check_predictions_file(out)
     if objects is not None:
         if Path(objects).resolve() == Path(out).resolve():
@@ -120,7 +130,13 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None, classif
     replayed = replay(online, scenes.data, objects=objects is not None)
     final = replayed["object_ids"]
     summary = {}
-    if model is None:
+    if tracker is not None:
+        tracks = replayed["track_id"]
+        write_predictions(scenes.data["uuid"].to_numpy(), tracks, out)
+        # Track ids are unique within a sequence: a track is a (sequence, id) pair.
+        pairs = np.unique(np.c_[scenes.data["sequence"].to_numpy()[tracks >= 0], tracks[tracks >= 0]], axis=0)
+        summary.update(tracker=tracker_params, n_tracks=len(pairs))
+    elif model is None:
         write_predictions(scenes.data["uuid"].to_numpy(), final, out)
     else:
         classes, instances = classify_objects(model, scenes.data, final)
@@ -151,6 +167,24 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None, classif
         "objects": None if objects is None else str(objects),
         **summary,
     }
+
+
+def _saved_tracker(params, classifier):
+    """The Tracker saved in ``params`` and its saved parameters; ValueError naming the file when it has none."""
+    if classifier is not None:
+        raise ValueError("--track does not go with --classifier: the classifiers label the final object ids")
+    if params is None:
+        raise ValueError("--track runs the Tracker saved in --params: give --params")
+    found = saved_tracker(params)
+    if found is None:
+        raise ValueError(
+            f"{params}: saves no tuned tracker (the key 'tracker'); a reproduce run with the objects and tracking "
+            "steps (the default run) saves one"
+        )
+    try:
+        return Tracker(**found), found
+    except (TypeError, ValueError) as error:
+        raise ValueError(f"{params}: the key 'tracker' holds parameters the Tracker does not take: {error}") from None
 
 
 def _refuse_learned_best(params):

@@ -228,6 +228,34 @@ def learned_model(setting, path):
     return model
 
 
+def saved_tracker(path):
+    """The tracker's parameters that a reproduce run's ``params.json`` saves under ``"tracker"``, or None.
+
+    The tracking step tunes :class:`~sklearn_radar.online.Tracker`'s parameters on the training half and saves
+    them there (``sklearn-radar stream --track``).
+
+    Raises
+    ------
+    FileNotFoundError, OSError
+        Naming the file, if it cannot be read.
+    ValueError
+        Naming the file and the key, if it is not JSON or its ``"tracker"`` is not an object with an object
+        ``"params"``.
+    """
+    path = Path(path)
+    saved = _read_params(path)
+    tracker = saved.get("tracker") if isinstance(saved, dict) else None
+    if tracker is None:
+        return None
+    params = tracker.get("params") if isinstance(tracker, dict) else None
+    if not isinstance(params, dict):
+        raise ValueError(
+            f"{path}: the key 'tracker' must be an object with the object 'params' (not a parameter file written by "
+            f"'sklearn-radar reproduce'), got {_json_type(params if isinstance(tracker, dict) else tracker)}"
+        )
+    return params
+
+
 def params_setting(params, experiment, classifier):
     """``(setting, pipeline, chosen)`` of the ``params.json`` at ``params`` (all None without it).
 
