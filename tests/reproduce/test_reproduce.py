@@ -38,6 +38,7 @@ def test_reproduce_writes_report_results_params_and_figures(tiny_report):
         "v1_ours_vs_paper.png",
         "fig6_scene.png",
         "convergence.png",
+        "tracks.png",
     } <= names
     assert not [n for n in names if n.endswith(".tmp")]
     results = json.loads((tiny_report / "results.json").read_text())
@@ -230,6 +231,7 @@ def _typed(report_folder):
     names = {
         "table1_heatmap": "table1_heatmap.png",
         "filter_scene": "filter_scene.png",
+        "tracks": "tracks.png",
         "v1_bars": "v1_ours_vs_paper.png",
         "scene": "fig6_scene.png",
         "convergence": "convergence.png",
@@ -270,6 +272,7 @@ def test_results_json_round_trips_through_the_typed_results_byte_for_byte(tiny_r
     assert document["figures"] == {
         "table1_heatmap": "table1_heatmap.png",
         "filter_scene": "filter_scene.png",
+        "tracks": "tracks.png",
         "v1_bars": "v1_ours_vs_paper.png",
         "scene": "fig6_scene.png",
         "convergence": "convergence.png",
@@ -521,7 +524,7 @@ def test_the_report_shows_every_figure_it_drew_with_a_caption(tiny_report):
     report = (tiny_report / "report.md").read_text()
     shown = re.findall(r"!\[[^\]]*\]\(([^)]+)\)", report)
     drawn = sorted(p.name for p in tiny_report.glob("*.png"))
-    assert sorted(shown) == drawn and len(drawn) == 5
+    assert sorted(shown) == drawn and len(drawn) == 6
     for match in re.finditer(r"!\[[^\]]*\]\(([^)]+)\)", report):  # a caption (a paragraph) right above each
         caption = report[: match.start()].rstrip().rsplit("\n\n", 1)[-1]
         assert len(caption) > 40 and not caption.startswith(("|", "!", "#")), match.group(1)
