@@ -24,7 +24,7 @@ EXPECTED_S_PER_UNIT = {
     "stage 2": 0.6,
     "filter-effect": 2.1,
     "baselines": 1.8,
-    "tracking": 5.3,
+    "tracking": 4.0,
     "classification": 40.0,
     "learned": 35.0,
 }
