@@ -8,6 +8,7 @@ from typing import ClassVar
 import numpy as np
 import pandas as pd
 from sklearn.base import BaseEstimator, _fit_context, clone
+from sklearn.frozen import FrozenEstimator
 from sklearn.utils._param_validation import HasMethods, Interval
 from sklearn.utils.validation import check_is_fitted
 
@@ -89,9 +90,13 @@ class ClusterClassifier(BaseEstimator):
 
     Parameters
     ----------
-    clusterer : estimator with ``fit_predict``, default=None
+    clusterer : estimator with ``fit_predict``, FrozenEstimator or None, default=None
         The clusterer, fitted on the data it labels (cloned each time);
-        None means ``RadarDBSCAN()``.  Its labels must be integers, -1 for
+        None means ``RadarDBSCAN()``.  A clusterer fitted beforehand on
+        other data (a :class:`~sklearn_radar.cluster.LinkClustering` fitted
+        on labelled sequences) is given wrapped in a
+        :class:`~sklearn.frozen.FrozenEstimator`: its ``predict`` labels the
+        data, and it is never refitted.  Its labels must be integers, -1 for
         noise.
     classifier : classifier with ``fit`` and ``predict_proba``, default=None
         Classifies the segments' feature rows (cloned).  None means a
@@ -181,7 +186,7 @@ class ClusterClassifier(BaseEstimator):
     """
 
     _parameter_constraints: ClassVar[dict] = {
-        "clusterer": [HasMethods(["fit_predict"]), None],
+        "clusterer": [HasMethods(["fit_predict"]), FrozenEstimator, None],
         "classifier": [HasMethods(["fit", "predict_proba"]), None],
         "window": [Interval(Real, 0, None, closed="neither"), None],
         "instance_column": [str, None],
@@ -417,7 +422,12 @@ class ClusterClassifier(BaseEstimator):
         return time, table, rows
 
     def _cluster(self, X, n):
-        """The clusterer's labels of X (a fresh clone), checked."""
+        """The clusterer's labels of X (a fresh clone, or a frozen fitted one's ``predict``), checked."""
+        if isinstance(self.clusterer, FrozenEstimator):
+            names = getattr(self.clusterer, "feature_names_in_", None)
+            if names is not None and isinstance(X, pd.DataFrame):  # it was fitted without the ground truth's column
+                X = X[[name for name in names if name in X.columns]]
+            return _check_labels(self.clusterer.predict(X), n, "ClusterClassifier: the frozen clusterer's")
         clusterer = RadarDBSCAN() if self.clusterer is None else clone(self.clusterer)
         return _check_labels(clusterer.fit_predict(X), n, "ClusterClassifier: the clusterer's")
 
