@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from .._classification import ClassifiedSetting
-from .._experiment_records import repeated_scores
+from .._constants import LEARNED, OBJECTS
 from .._results import RunResults
 from ._base import Section, format_params, format_score, objective_name
 from ._comparison import DOES_NOT_HOLD, HOLDS, N_STANDARD_ERRORS, paired_verdict
@@ -90,26 +90,26 @@ def markdown(results: RunResults) -> list[str]:
 
 
 def clustering_scores(results: RunResults, name):
-    """(test V1, test PQ) of the clustering ``name`` (``"#8"`` or a baseline), means over the repeats; or Nones."""
-    result = _clustering(results, name)
-    if result is None:
+    """(test V1, test PQ) of the clustering ``name`` (``"#8"``, ``"objects"``, a baseline), means over the repeats."""
+    records = _test_records(results, name)
+    if records is None:
         return None, None
-    pq = repeated_scores(result, "pq")
-    return float(np.mean(repeated_scores(result, "v1"))), float(np.mean(pq)) if pq else None
+    pq = [float(r.instance_test.pq) for r in records if r.instance_test is not None]
+    return float(np.mean([r.v1_test for r in records])), float(np.mean(pq)) if pq else None
 
 
 def background_before(results: RunResults, name, row: ClassifiedSetting):
     """The clustering's background-only segment share: its own ``instance_test``'s, else the step's; None point-wise."""
     if row.background_share_before is None:
         return None
-    result = _clustering(results, name)
-    if result is not None and result.instance_test is not None:
-        return result.instance_test.background_segment_share
+    records = _test_records(results, name)
+    if records is not None and records[0].instance_test is not None:
+        return records[0].instance_test.background_segment_share
     return row.background_share_before
 
 
 def cv_score(results: RunResults, name):
-    """The mean cross-validated score over the repeats of clustering ``name``; None when it was not searched."""
+    """The mean cross-validated score over the repeats of a paper's or baseline clustering ``name``; else None."""
     result = _clustering(results, name)
     if result is None:
         return None
@@ -118,16 +118,28 @@ def cv_score(results: RunResults, name):
 
 
 def _clustering(results: RunResults, name):
-    """The experiment or baseline result of the clustering ``name``; None when it did not run."""
+    """The experiment or baseline result of the clustering ``name``; None when it did not run (or is neither)."""
     if name.startswith("#") and name[1:].isdigit():
         return results.experiments.get(int(name[1:]))
     return (results.baselines or {}).get(name)
 
 
+def _test_records(results: RunResults, name):
+    """The records with the test scores of each repeat of clustering ``name``; None when it did not run."""
+    if name == OBJECTS:
+        return None if results.objects is None else results.objects.repeats or [results.objects.kept]
+    if name == LEARNED:
+        return None if results.learned is None else [results.learned]
+    result = _clustering(results, name)
+    return None if result is None else result.repeats or [result]
+
+
 def answer_lines(results: RunResults) -> list[str]:
     """Whether the clustering with the best CV score of those classified gives the best classifier, with its noise."""
     rows = {
-        name: row for name, row in results.classification.settings.items() if row.background_share_before is not None
+        name: row
+        for name, row in results.classification.settings.items()
+        if row.background_share_before is not None and name not in (OBJECTS, LEARNED)
     }
     label = objective_name(results)
     scored = {name: cv_score(results, name) for name in rows}
