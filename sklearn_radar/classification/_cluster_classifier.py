@@ -9,7 +9,7 @@ import numpy as np
 import pandas as pd
 from sklearn.base import BaseEstimator, _fit_context, clone
 from sklearn.frozen import FrozenEstimator
-from sklearn.utils._param_validation import HasMethods, Interval
+from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
 
 from .._labels import consecutive_labels
@@ -18,6 +18,7 @@ from .._validation import validated_input
 from ..cluster import RadarDBSCAN
 from ._classes import BACKGROUND, IGNORED
 from ._features import _check_labels, segment_features, window_index
+from ._history import HISTORY_OPTIONS, cluster_starts, running_mean, with_history
 from ._reading import columns_at, time_columns
 from ._targets import segment_targets
 from ._wrapped import check_class_target, class_proba, fit_classifier, instance_column_of, macro_f1_score
@@ -119,6 +120,24 @@ class ClusterClassifier(BaseEstimator):
         no instance ids; the detections of one class in one window of one
         sequence are one instance (panoptic segmentation's rule for "stuff"
         classes), which is what a plain array needs.
+    history : {"mean_proba", "features"} or None, default=None
+        Classify a cluster that spans several windows from its past as well
+        (a cluster id seen in several windows is one road user: the clusters
+        of the object setting, the object ids of
+        :class:`~sklearn_radar.online.OnlinePipeline` given to
+        :meth:`predict_instances_of`).  Causal: a segment reads only the
+        segments of its cluster at or before its own window.  None: each
+        window is classified alone.  ``"mean_proba"``: the class
+        probabilities of a segment are the mean of its own and those of the
+        cluster's earlier segments (the classifier is trained on single
+        windows).  ``"features"``: the classifier sees, besides the window's
+        features, ``history_windows`` (windows seen, this one included),
+        ``history_age`` (s since the cluster's first window), the running
+        mean ``mean_<feature>`` of every feature over the windows seen, and
+        the running maximum ``max_<feature>`` of ``n_detections``, the
+        extents, ``vr_range``, ``rcs_max`` and ``speed`` (units those of the
+        feature); it is trained on them.  Measured in the
+        :ref:`User Guide <classification-history>`.
 
     Attributes
     ----------
@@ -190,13 +209,15 @@ class ClusterClassifier(BaseEstimator):
         "classifier": [HasMethods(["fit", "predict_proba"]), None],
         "window": [Interval(Real, 0, None, closed="neither"), None],
         "instance_column": [str, None],
+        "history": [StrOptions(set(HISTORY_OPTIONS)), None],
     }
 
-    def __init__(self, clusterer=None, classifier=None, *, window=0.5, instance_column="track_id"):
+    def __init__(self, clusterer=None, classifier=None, *, window=0.5, instance_column="track_id", history=None):
         self.clusterer = clusterer
         self.classifier = classifier
         self.window = window
         self.instance_column = instance_column
+        self.history = history
 
     @_fit_context(prefer_skip_nested_validation=False)
     def fit(self, X, y):
@@ -394,7 +415,10 @@ class ClusterClassifier(BaseEstimator):
         if missing:
             raise ValueError(f"ClusterClassifier: X lacks the columns of the feature(s) {missing} it was fitted with")
         features = table[list(self.feature_names_)].to_numpy(dtype=np.float64)
-        return table, rows, class_proba(self.classifier_, features, self.feature_names_, self.classes_)
+        proba = class_proba(self.classifier_, features, self.feature_names_, self.classes_)
+        if self.history == "mean_proba":
+            proba = running_mean(proba, cluster_starts(table))
+        return table, rows, proba
 
     def _read_segments(self, X, *, reset):
         """Validate, cluster and describe X: ``(X, time columns, feature table, table row of each detection)``."""
@@ -417,6 +441,8 @@ class ClusterClassifier(BaseEstimator):
         c["sequence"] = None if time["sequence"] is None else time["sequence"][clustered]
         windows = window_index(time["t"], time["sequence"], self.window, clustered)
         table, local_rows = segment_features(c, labels[clustered], windows)
+        if self.history == "features":
+            table = with_history(table, self.window)
         rows = np.full(n, -1, dtype=np.int64)
         rows[clustered] = local_rows
         return time, table, rows
