@@ -70,6 +70,9 @@ class SemanticScores(JsonRecord):
         Mean coverage of the annotated instances' segments, class-agnostic.
     per_class : dict of str to dict of str to float
         By class name: ``{"pq", "ap", "f1"}``.
+    precision_at_recall : dict of str to list of float or None, default=None
+        By class name (those present in the truth): the interpolated precision at recall 0, 0.01, ..., 1, the
+        precision-recall curve whose mean is the class's AP (3 decimals); None in results of older versions.
     """
 
     window_s: float
@@ -80,6 +83,7 @@ class SemanticScores(JsonRecord):
     macro_f1: float
     mcov: float
     per_class: dict[str, dict[str, float]]
+    precision_at_recall: dict[str, list[float]] | None = None
 
 
 @record
@@ -344,10 +348,16 @@ def _scores(arrays, groups):
         for code, figures in found["per_class"].items()
         if int(code) in ROAD_USER_CLASSES
     }
+    curves = {
+        ROAD_USER_CLASSES[int(code)]: [round(float(p), 3) for p in precision]
+        for code, precision in found["precision_at_recall"].items()
+        if int(code) in ROAD_USER_CLASSES
+    }
     return SemanticScores(
         window_s=SCORE_WINDOW_S,
         **{k: float(found[k]) for k in ("pq", "sq", "rq", "map", "macro_f1", "mcov")},
         per_class=per_class,
+        precision_at_recall=curves,
     )
 
 

@@ -405,3 +405,18 @@ def test_the_settings_meant_for_objects_are_classified_and_their_classifiers_sav
         assert code == 0, name
         document = json.loads(out.read_text())
         assert document["new_label_names"]["5"] == "STATIC"
+
+
+def test_the_precision_recall_curves_are_saved_drawn_and_shown(classified_objects):
+    """Per class, the curve whose mean is the AP (to the 3 decimals kept); the figure in the section."""
+    results = RunResults.read(classified_objects / "results.json")
+    for name, row in results.classification.settings.items():
+        curves = row.scores.precision_at_recall
+        assert curves and set(curves) <= set(row.scores.per_class), name
+        for cls, precision in curves.items():
+            assert len(precision) == 101 and all(0.0 <= p <= 1.0 for p in precision)
+            assert np.all(np.diff(precision) <= 1e-12)  # interpolated: never rising with recall
+            assert np.mean(precision) == pytest.approx(row.scores.per_class[cls]["ap"], abs=1e-3), (name, cls)
+    assert (classified_objects / "classification_precision_recall.png").stat().st_size > 0
+    report = "\n".join(_section((classified_objects / "report.md").read_text(), "classifying the clusters"))
+    assert "![precision-recall per class](classification_precision_recall.png)" in report
