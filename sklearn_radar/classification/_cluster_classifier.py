@@ -204,6 +204,9 @@ class ClusterClassifier(BaseEstimator):
     True
     """
 
+    #: The default of a classifier pickled before ``history`` existed (its file then loads and classifies as saved).
+    history = None
+
     _parameter_constraints: ClassVar[dict] = {
         "clusterer": [HasMethods(["fit_predict"]), FrozenEstimator, None],
         "classifier": [HasMethods(["fit", "predict_proba"]), None],

@@ -53,7 +53,7 @@ def recording_seconds(data):
     return float((span["max"] - span["min"]).sum()) * 1e-6
 
 
-def stream_radarscenes(data, params, out, objects=None, experiment=None, classifier=None):
+def stream_radarscenes(data, params, out, objects=None, experiment=None, classifier=None, history=None):
     """Replay a RadarScenes folder through the online pipeline of a saved setting; write devkit predictions.
 
     The scans of all sequences are fed in timestamp order (the sensors of a
@@ -65,8 +65,9 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None, classif
 
     With ``classifier``, the final objects are classified after the replay
     (:meth:`~sklearn_radar.classification.ClusterClassifier.predict_instances_of`
-    on the final object ids, per time window as in training: not causal,
-    a window's class uses the whole window): the class is the devkit's
+    on the final object ids, per time window as in training: a window's
+    class uses the whole window, and with the classifier's ``history`` the
+    object's earlier windows too, never later ones): the class is the devkit's
     ``ClassificationLabel`` index (STATIC 5 for noise and for objects
     classified as background), the instance the final object id where
     the class is a road user, -1 where it is STATIC.
@@ -91,6 +92,11 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None, classif
         with the same rules as for ``sklearn-radar cluster``
         (:func:`~sklearn_radar.reproduce.cluster_radarscenes`).  Loading
         runs pickle: only use files you trust.
+    history : {"none", "mean_proba"} or None, default=None
+        With ``classifier``: how each object's window is classified, in place of the classifier's own ``history``
+        (:class:`~sklearn_radar.classification.ClusterClassifier`): ``"mean_proba"`` from the object's windows so
+        far, ``"none"`` from that window alone; None: as the classifier was saved.  A classifier trained with
+        ``history="features"`` reads them: it cannot be changed (ValueError).
 
     Returns
     -------
@@ -110,6 +116,8 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None, classif
     if classifier is not None:
         model = classifier_setting(classifier, setting, params, pipeline)
         pipeline = model.clustering
+        if history is not None:
+            with_history(model.classifier, None if history == "none" else history, classifier)
     online = OnlinePipeline(pipeline)
     check_predictions_file(out)
     if objects is not None:
@@ -151,6 +159,16 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None, classif
         "objects": None if objects is None else str(objects),
         **summary,
     }
+
+
+def with_history(classifier, history, path):
+    """Set the ``history`` of a loaded ClusterClassifier; ValueError (naming ``path``) for one trained on features."""
+    if "features" in (classifier.history, history) and classifier.history != history:
+        raise ValueError(
+            f"--history: the classifier of {path} was trained with history={classifier.history!r}; its history "
+            "features cannot be switched on or off at prediction (mean_proba and none can)"
+        )
+    classifier.set_params(history=history)
 
 
 def _refuse_learned_best(params):
