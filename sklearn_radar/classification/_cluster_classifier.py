@@ -18,7 +18,7 @@ from .._validation import validated_input
 from ..cluster import RadarDBSCAN
 from ._classes import BACKGROUND, IGNORED
 from ._features import _check_labels, segment_features, window_index
-from ._history import HISTORY_OPTIONS, cluster_starts, running_mean, with_history
+from ._history import HISTORY_OPTIONS, cluster_starts, running_weighted_mean, with_history
 from ._reading import columns_at, time_columns
 from ._targets import segment_targets
 from ._wrapped import check_class_target, class_proba, fit_classifier, instance_column_of, macro_f1_score
@@ -129,9 +129,10 @@ class ClusterClassifier(BaseEstimator):
         segments of its cluster at or before its own window.  None: each
         window is classified alone.  ``"mean_proba"``: the class
         probabilities of a segment are the mean of its own and those of the
-        cluster's earlier segments (the classifier is trained on single
-        windows).  ``"features"``: the classifier sees, besides the window's
-        features, ``history_windows`` (windows seen, this one included),
+        cluster's earlier segments, each weighted by its number of
+        detections (the classifier is trained on single windows).
+        ``"features"``: the classifier sees, besides the window's features,
+        ``history_windows`` (windows seen, this one included),
         ``history_age`` (s since the cluster's first window), the running
         mean ``mean_<feature>`` of every feature over the windows seen, and
         the running maximum ``max_<feature>`` of ``n_detections``, the
@@ -419,8 +420,9 @@ class ClusterClassifier(BaseEstimator):
             raise ValueError(f"ClusterClassifier: X lacks the columns of the feature(s) {missing} it was fitted with")
         features = table[list(self.feature_names_)].to_numpy(dtype=np.float64)
         proba = class_proba(self.classifier_, features, self.feature_names_, self.classes_)
-        if self.history == "mean_proba":
-            proba = running_mean(proba, cluster_starts(table))
+        if self.history == "mean_proba":  # the windows seen so far, each weighted by its detections
+            weights = table["n_detections"].to_numpy(dtype=np.float64)
+            proba = running_weighted_mean(proba, weights, cluster_starts(table))
         return table, rows, proba
 
     def _read_segments(self, X, *, reset):

@@ -56,6 +56,24 @@ def running_mean(values, first):
         return np.where(counts > 0, sums / np.maximum(counts, 1.0), np.nan)
 
 
+def running_weighted_mean(values, weights, first):
+    """The mean of each row's cluster's rows up to it, weighted (``values`` without NaN, ``weights`` > 0).
+
+    Parameters
+    ----------
+    values : ndarray of float64, shape (n_segments, k)
+    weights : ndarray of float64, shape (n_segments,)
+    first : ndarray of bool, shape (n_segments,)
+        Whether a row starts its cluster.
+
+    Returns
+    -------
+    means : ndarray of float64, shape (n_segments, k)
+    """
+    weights = weights[:, None]
+    return _running_sum(values * weights, first) / _running_sum(weights, first)
+
+
 def _running_sum(values, first):
     """Cumulative sum of each cluster's rows, restarted at each cluster's first row."""
     total = np.cumsum(values, axis=0)

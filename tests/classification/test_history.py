@@ -35,7 +35,7 @@ def fitted():
 
 
 def _brute_force_running_mean(X, labels, proba):
-    """Per detection: the mean of its cluster's segment probabilities over the windows at or before its own."""
+    """Per detection: its cluster's segment probabilities over the windows up to its own, weighted by detections."""
     table, rows = cluster_features(X[["x", "y", "v_r", "t", "sequence"]], labels, window=0.5, return_rows=True)
     per_segment = np.zeros((len(table), proba.shape[1]))
     per_segment[rows[rows >= 0]] = proba[rows >= 0]
@@ -47,7 +47,8 @@ def _brute_force_running_mean(X, labels, proba):
             & (table["cluster"] == segment["cluster"])
             & (table["window"] <= segment["window"])
         ).to_numpy()
-        expected[i] = per_segment[past].mean(axis=0)
+        weights = table.loc[past, "n_detections"].to_numpy(dtype=float)
+        expected[i] = (per_segment[past] * weights[:, None]).sum(axis=0) / weights.sum()
     return expected
 
 
