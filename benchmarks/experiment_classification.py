@@ -37,6 +37,16 @@ and seed at 10 iterations)::
     OMP_NUM_THREADS=1 nice -n 19 python benchmarks/experiment_classification.py --seeds 0 1 2 \\
         --data realistic easy --tuned-dir /tmp/tuned --extra-training 6
 
+``--history`` trains, instead of the three models, the clusters' classifier with each ``history`` option of
+``ClusterClassifier`` (None: the single window; ``"mean_proba"``; ``"features"``) and with an isotonic
+``CalibratedClassifierCV`` learner (cv=3 over the training segments), and reports class PQ, mAP@0.5 and the
+per-object macro-F1 (the test segments matched to an annotated road user, by the windows their cluster has been
+seen in: 1, 2-3, 4-7, 8+), with the paired differences to the single window (mean +- 2 SE over seeds); the user
+guide's history tables::
+
+    OMP_NUM_THREADS=1 nice -n 19 python benchmarks/experiment_classification.py --history --seeds 0 1 2 3 4 \\
+        --data realistic easy --tuned-dir /tmp/tuned [--extra-training 6]
+
 ``--tuned-dir`` keeps each tuned setting in a JSON file (``tuned_<preset>_<seed>.json``) and reuses it, so a
 second run (for example before and after a change to the classifier) scores the same clusters.
 """
