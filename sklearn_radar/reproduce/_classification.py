@@ -1,7 +1,8 @@
 """The classification step (the paper's next stage) and its records: a classifier trained on each setting's clusters.
 
-For each setting of :data:`~._constants.CLASSIFIED` (the run's tuned one where its experiment ran, the paper's
-otherwise) and the strongest offline scikit-learn baseline, a
+For each setting of :data:`~._constants.CLASSIFIED` (a paper's experiment: the run's tuned one where it ran, the
+paper's otherwise; the object experiment and the learned grouping where the run has them) and the strongest offline
+scikit-learn baseline, a
 :class:`~sklearn_radar.classification.ClusterClassifier` is trained on the clusters of the training half (in this
 process: it needs all its examples at once) and scored on each test sequence where it lives with
 :func:`~sklearn_radar.metrics.semantic_scores`; beside them the
