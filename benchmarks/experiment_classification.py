@@ -37,6 +37,17 @@ and seed at 10 iterations)::
     OMP_NUM_THREADS=1 nice -n 19 python benchmarks/experiment_classification.py --seeds 0 1 2 \\
         --data realistic easy --tuned-dir /tmp/tuned --extra-training 6
 
+``--history`` trains, instead of the three models, the clusters' classifier with each ``history`` option of
+``ClusterClassifier`` (None: the single window; ``"mean_proba"``; ``"features"``) and with an isotonic
+``CalibratedClassifierCV`` learner (cv=3 over the training segments), and reports class PQ, mAP@0.5 and the
+per-object macro-F1 (the test segments matched to an annotated road user, by the windows their cluster has been
+seen in: 1, 2-3, 4-7, 8+), with the paired differences to the single window (mean +- 2 SE over seeds); with
+``--online`` the test half's clusters are the final object ids of ``OnlinePipeline``'s causal replay (aliases
+resolved, what ``stream --classifier`` classifies) instead of the offline ones.  The user guide's history tables::
+
+    OMP_NUM_THREADS=1 nice -n 19 python benchmarks/experiment_classification.py --history --seeds 0 1 2 3 4 \\
+        --data realistic easy --tuned-dir /tmp/tuned [--extra-training 6] [--online]
+
 ``--tuned-dir`` keeps each tuned setting in a JSON file (``tuned_<preset>_<seed>.json``) and reuses it, so a
 second run (for example before and after a change to the classifier) scores the same clusters.
 """
@@ -53,6 +64,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 from sklearn.base import clone
+from sklearn.calibration import CalibratedClassifierCV
 from sklearn.ensemble import HistGradientBoostingClassifier
 from sklearn.metrics import f1_score
 from sklearn.pipeline import Pipeline
@@ -66,14 +78,50 @@ from sklearn_radar.classification import (
     predict_instances,
     road_user_class,
 )
+from sklearn_radar.classification._features import window_index
+from sklearn_radar.classification._history import cluster_starts
+from sklearn_radar.classification._targets import segment_targets
 from sklearn_radar.classification._wrapped import DEFAULT_CLASSIFIER_PARAMS, default_classifier
 from sklearn_radar.datasets import make_scenes
 from sklearn_radar.experiments import object_pipeline
-from sklearn_radar.metrics import class_errors, class_panoptic_quality, panoptic_quality
+from sklearn_radar.metrics import class_errors, class_panoptic_quality, panoptic_quality, semantic_scores
 from sklearn_radar.model_selection import sequence_train_test_split
+from sklearn_radar.online import OnlinePipeline
+from sklearn_radar.online._replay import replay
 
 CLASS_NAMES = {0: "car", 1: "large vehicle", 2: "two-wheeler", 3: "pedestrian", 4: "pedestrian group"}
 ERROR_KEYS = ("n_true", "tp", "misclassified", "missed", "n_pred", "wrong_class", "false")
+#: The single-window classifier's row of ``--history``, the one the history options are paired against.
+SINGLE = "single window"
+#: Bins of the number of windows a cluster has been seen in (this one included): ``(label, low, high)``.
+SEEN_BINS = (("1", 1, 1), ("2-3", 2, 3), ("4-7", 4, 7), ("8+", 8, np.inf))
+
+
+def object_f1(Xt, labels, truth, classes_pred):
+    """Per-object macro-F1 over the road-user classes, overall and by the windows the cluster has been seen in.
+
+    The objects are the test segments (one cluster in one 0.5 s window) matched to an annotated road user (IoU >
+    0.5, the training target's rule); a segment's prediction is its class (background counts as wrong).  The
+    windows seen are the segment's rank in its cluster's windows (the history a causal classifier has).
+    Returns ``{"all": (f1, n), label: (f1, n), ...}``.
+    """
+    classes, instances = truth
+    sequence = Xt["sequence"].to_numpy()
+    windows = window_index(Xt["t"].to_numpy(dtype=np.float64), sequence, 0.5)
+    table, rows = cluster_features(Xt[["x", "y", "v_r", "t", "sequence"]], labels, window=0.5, return_rows=True)
+    target = segment_targets(classes, instances, sequence, windows, rows, len(table))
+    predicted = np.full(len(table), -1, dtype=np.int64)
+    clustered = rows >= 0
+    predicted[rows[clustered]] = classes_pred[clustered]
+    first = cluster_starts(table)
+    seen = np.arange(len(table)) - np.flatnonzero(first)[np.cumsum(first) - 1] + 1
+    found = {}
+    for label, low, high in (("all", 1, np.inf), *SEEN_BINS):
+        mine = (target >= 0) & (seen >= low) & (seen <= high)
+        present = sorted(np.unique(target[mine]).tolist())  # a class absent from the bin is not scored
+        score = f1_score(target[mine], predicted[mine], labels=present, average="macro", zero_division=0)
+        found[label] = (float(score), int(mine.sum()))
+    return found
 
 
 def tuned_setting(preset, seed, options):
@@ -98,13 +146,30 @@ def tuned_setting(preset, seed, options):
 
 
 def models(setting, options):
-    """The three classified pipelines, each on the tuned setting's frame transform and filter."""
+    """The classified pipelines, each on the tuned setting's frame transform and filter.
+
+    The three of the module's docstring; with ``--history``, the clusters' classifier with each history option
+    instead (and calibrated, for the confidences of mAP).
+    """
     stage1, stage2 = setting
     pipeline = object_pipeline(2, stage1_params=stage1, params=stage2)
     front = pipeline.steps[:-1]
     learner = None
     if options.class_weight:
         learner = HistGradientBoostingClassifier(**DEFAULT_CLASSIFIER_PARAMS, class_weight=options.class_weight)
+    if options.history:
+        calibrated = CalibratedClassifierCV(default_classifier(), method="isotonic", cv=3)
+        variants = {
+            SINGLE: {},
+            "history: mean proba": {"history": "mean_proba"},
+            "history: features": {"history": "features"},
+            "single, calibrated": {"classifier": calibrated},
+            "mean proba, calibrated": {"history": "mean_proba", "classifier": calibrated},
+        }
+        return {
+            name: Pipeline([*clone(Pipeline(front)).steps, ("classify", ClusterClassifier(pipeline[-1], **params))])
+            for name, params in variants.items()
+        }
     point = dict(classifier=learner, eps_xy=1.0, eps_t=0.25)
     return {
         "clusters": Pipeline(
@@ -142,13 +207,18 @@ def run_one(preset, seed, options):
         X_train = pd.concat([X_train, extra], ignore_index=True)
         y_train = np.concatenate([y_train, road_user_class(extra["label_id"])])
     records = {}
+    online = None
+    if options.online:  # the final object ids of the causal replay, aliases resolved (what stream classifies)
+        stage1, stage2 = setting
+        pipeline = object_pipeline(2, stage1_params=stage1, params=stage2)
+        online = np.asarray(replay(OnlinePipeline(pipeline), X.iloc[test])["object_ids"], dtype=np.int64)
     for name, model in models(setting, options).items():
         start = time.perf_counter()
         model.fit(X_train, y_train)
         Xt = model[:-1].transform(X.iloc[test])
         classifier = model[-1]
-        if name == "clusters":
-            labels = clone(classifier.clusterer).fit_predict(Xt)
+        if isinstance(classifier, ClusterClassifier):
+            labels = clone(classifier.clusterer).fit_predict(Xt) if online is None else online
             found = classifier.predict_instances_of(Xt, labels)
         else:
             found = predict_instances(classifier, Xt)
@@ -163,7 +233,13 @@ def run_one(preset, seed, options):
             *truth, predicted[0], labels, times=times, groups=sequence, confidence=found["confidence"].to_numpy()
         )
         clustering = panoptic_quality(agnostic_true, labels, times=times, groups=sequence).pq
+        semantic = semantic_scores(
+            *truth, *predicted, found["confidence"].to_numpy(), times=times, groups=sequence, window=0.5
+        )
         records[name] = {
+            "map": semantic["map"],
+            "ap": {code: semantic["per_class"].get(code, {}).get("ap", 0.0) for code in CLASS_NAMES},
+            "objects": object_f1(Xt, labels, truth, predicted[0]),
             "pq": scores.pq,
             "clustering_pq": clustering,
             "per_class": {code: scores.per_class[code].pq if code in scores.per_class else 0.0 for code in CLASS_NAMES},
@@ -232,6 +308,46 @@ def report(preset, runs):
     ).T
     lines.append("clusters: where each class's PQ goes (segments, summed over seeds)")
     lines.append(places.to_string())
+    return "\n".join(lines)
+
+
+def _fmt2(values, signed=False):
+    """Mean +- 2 standard errors over seeds."""
+    mean, se = _mean_se(values)
+    text = f"{mean:+.3f}" if signed else f"{mean:.3f}"
+    return text if math.isnan(se) else f"{text} ± {2 * se:.3f}"
+
+
+def history_report(preset, runs):
+    """``--history``: each option's scores, its paired differences to the single window, F1 by windows seen."""
+    names = list(runs[0])
+    bins = ["all", *(label for label, _, _ in SEEN_BINS)]
+    lines = [f"\n{preset}: {len(runs)} seed(s), test half; mean ± 2 SE over seeds"]
+    rows = []
+    for name in names:
+        cells = [name, _fmt2([r[name]["pq"] for r in runs]), _fmt2([r[name]["map"] for r in runs])]
+        cells += [_fmt2([r[name]["objects"][b][0] for r in runs]) for b in bins]
+        rows.append(cells)
+    header = ["classifier", "class PQ", "mAP@0.5", *(f"object F1 {b}" for b in bins)]
+    lines.append(pd.DataFrame(rows, columns=header).to_string(index=False))
+    counts = {b: int(np.mean([r[SINGLE]["objects"][b][1] for r in runs])) for b in bins}
+    lines.append(f"matched test segments per seed by windows seen (mean): {counts}")
+    lines.append(f"paired differences to '{SINGLE}' (mean ± 2 SE over seeds):")
+    rows = []
+    for name in names[1:]:
+        cells = [name]
+        for key in ("pq", "map"):
+            cells.append(_fmt2([r[name][key] - r[SINGLE][key] for r in runs], signed=True))
+        for b in bins:
+            cells.append(_fmt2([r[name]["objects"][b][0] - r[SINGLE]["objects"][b][0] for r in runs], signed=True))
+        rows.append(cells)
+    lines.append(pd.DataFrame(rows, columns=header).to_string(index=False))
+    rows = [[name, *(_fmt2([r[name]["per_class"][c] for r in runs]) for c in CLASS_NAMES)] for name in names]
+    lines.append("class PQ per class")
+    lines.append(pd.DataFrame(rows, columns=["classifier", *CLASS_NAMES.values()]).to_string(index=False))
+    rows = [[name, *(_fmt2([r[name]["ap"][c] for r in runs]) for c in CLASS_NAMES)] for name in names]
+    lines.append("AP@0.5 per class")
+    lines.append(pd.DataFrame(rows, columns=["classifier", *CLASS_NAMES.values()]).to_string(index=False))
     return "\n".join(lines)
 
 
@@ -312,6 +428,17 @@ def main(argv=None):
     )
     parser.add_argument("--training-sizes", type=int, nargs="+", default=[2, 4, 8])
     parser.add_argument("--tuned-dir", help="folder to keep and reuse the tuned settings in")
+    parser.add_argument(
+        "--online",
+        action="store_true",
+        help="classify the final object ids of OnlinePipeline's causal replay of the test half, not the offline "
+        "clusters (the classifiers are trained on the offline clusters, as reproduce trains them)",
+    )
+    parser.add_argument(
+        "--history",
+        action="store_true",
+        help="the clusters' classifier with each history option (and calibrated) instead of the three models",
+    )
     options = parser.parse_args(argv)
     with threadpool_limits(1):
         for preset in options.data:
@@ -319,7 +446,7 @@ def main(argv=None):
                 print(perfect_clusters(preset, options), flush=True)
                 continue
             runs = [run_one(preset, seed, options) for seed in options.seeds]
-            print(report(preset, runs), flush=True)
+            print((history_report if options.history else report)(preset, runs), flush=True)
     return 0
 
 

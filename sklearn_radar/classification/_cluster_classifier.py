@@ -8,7 +8,8 @@ from typing import ClassVar
 import numpy as np
 import pandas as pd
 from sklearn.base import BaseEstimator, _fit_context, clone
-from sklearn.utils._param_validation import HasMethods, Interval
+from sklearn.frozen import FrozenEstimator
+from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
 
 from .._labels import consecutive_labels
@@ -17,6 +18,7 @@ from .._validation import validated_input
 from ..cluster import RadarDBSCAN
 from ._classes import BACKGROUND, IGNORED
 from ._features import _check_labels, segment_features, window_index
+from ._history import HISTORY_OPTIONS, cluster_starts, running_weighted_mean, with_history
 from ._reading import columns_at, time_columns
 from ._targets import segment_targets
 from ._wrapped import check_class_target, class_proba, fit_classifier, instance_column_of, macro_f1_score
@@ -89,9 +91,13 @@ class ClusterClassifier(BaseEstimator):
 
     Parameters
     ----------
-    clusterer : estimator with ``fit_predict``, default=None
+    clusterer : estimator with ``fit_predict``, FrozenEstimator or None, default=None
         The clusterer, fitted on the data it labels (cloned each time);
-        None means ``RadarDBSCAN()``.  Its labels must be integers, -1 for
+        None means ``RadarDBSCAN()``.  A clusterer fitted beforehand on
+        other data (a :class:`~sklearn_radar.cluster.LinkClustering` fitted
+        on labelled sequences) is given wrapped in a
+        :class:`~sklearn.frozen.FrozenEstimator`: its ``predict`` labels the
+        data, and it is never refitted.  Its labels must be integers, -1 for
         noise.
     classifier : classifier with ``fit`` and ``predict_proba``, default=None
         Classifies the segments' feature rows (cloned).  None means a
@@ -114,6 +120,25 @@ class ClusterClassifier(BaseEstimator):
         no instance ids; the detections of one class in one window of one
         sequence are one instance (panoptic segmentation's rule for "stuff"
         classes), which is what a plain array needs.
+    history : {"mean_proba", "features"} or None, default=None
+        Classify a cluster that spans several windows from its past as well
+        (a cluster id seen in several windows is one road user: the clusters
+        of the object setting, the object ids of
+        :class:`~sklearn_radar.online.OnlinePipeline` given to
+        :meth:`predict_instances_of`).  Causal: a segment reads only the
+        segments of its cluster at or before its own window.  None: each
+        window is classified alone.  ``"mean_proba"``: the class
+        probabilities of a segment are the mean of its own and those of the
+        cluster's earlier segments, each weighted by its number of
+        detections (the classifier is trained on single windows).
+        ``"features"``: the classifier sees, besides the window's features,
+        ``history_windows`` (windows seen, this one included),
+        ``history_age`` (s since the cluster's first window), the running
+        mean ``mean_<feature>`` of every feature over the windows seen, and
+        the running maximum ``max_<feature>`` of ``n_detections``, the
+        extents, ``vr_range``, ``rcs_max`` and ``speed`` (units those of the
+        feature); it is trained on them.  Measured in the
+        :ref:`User Guide <classification-history>`.
 
     Attributes
     ----------
@@ -180,18 +205,23 @@ class ClusterClassifier(BaseEstimator):
     True
     """
 
+    #: The default of a classifier pickled before ``history`` existed (its file then loads and classifies as saved).
+    history = None
+
     _parameter_constraints: ClassVar[dict] = {
-        "clusterer": [HasMethods(["fit_predict"]), None],
+        "clusterer": [HasMethods(["fit_predict"]), FrozenEstimator, None],
         "classifier": [HasMethods(["fit", "predict_proba"]), None],
         "window": [Interval(Real, 0, None, closed="neither"), None],
         "instance_column": [str, None],
+        "history": [StrOptions(set(HISTORY_OPTIONS)), None],
     }
 
-    def __init__(self, clusterer=None, classifier=None, *, window=0.5, instance_column="track_id"):
+    def __init__(self, clusterer=None, classifier=None, *, window=0.5, instance_column="track_id", history=None):
         self.clusterer = clusterer
         self.classifier = classifier
         self.window = window
         self.instance_column = instance_column
+        self.history = history
 
     @_fit_context(prefer_skip_nested_validation=False)
     def fit(self, X, y):
@@ -389,7 +419,11 @@ class ClusterClassifier(BaseEstimator):
         if missing:
             raise ValueError(f"ClusterClassifier: X lacks the columns of the feature(s) {missing} it was fitted with")
         features = table[list(self.feature_names_)].to_numpy(dtype=np.float64)
-        return table, rows, class_proba(self.classifier_, features, self.feature_names_, self.classes_)
+        proba = class_proba(self.classifier_, features, self.feature_names_, self.classes_)
+        if self.history == "mean_proba":  # the windows seen so far, each weighted by its detections
+            weights = table["n_detections"].to_numpy(dtype=np.float64)
+            proba = running_weighted_mean(proba, weights, cluster_starts(table))
+        return table, rows, proba
 
     def _read_segments(self, X, *, reset):
         """Validate, cluster and describe X: ``(X, time columns, feature table, table row of each detection)``."""
@@ -412,12 +446,19 @@ class ClusterClassifier(BaseEstimator):
         c["sequence"] = None if time["sequence"] is None else time["sequence"][clustered]
         windows = window_index(time["t"], time["sequence"], self.window, clustered)
         table, local_rows = segment_features(c, labels[clustered], windows)
+        if self.history == "features":
+            table = with_history(table, self.window)
         rows = np.full(n, -1, dtype=np.int64)
         rows[clustered] = local_rows
         return time, table, rows
 
     def _cluster(self, X, n):
-        """The clusterer's labels of X (a fresh clone), checked."""
+        """The clusterer's labels of X (a fresh clone, or a frozen fitted one's ``predict``), checked."""
+        if isinstance(self.clusterer, FrozenEstimator):
+            names = getattr(self.clusterer, "feature_names_in_", None)
+            if names is not None and isinstance(X, pd.DataFrame):  # it was fitted without the ground truth's column
+                X = X[[name for name in names if name in X.columns]]
+            return _check_labels(self.clusterer.predict(X), n, "ClusterClassifier: the frozen clusterer's")
         clusterer = RadarDBSCAN() if self.clusterer is None else clone(self.clusterer)
         return _check_labels(clusterer.fit_predict(X), n, "ClusterClassifier: the clusterer's")
 

@@ -234,8 +234,9 @@ def _parser():
         description="Label every radar scan of a RadarScenes folder as it would arrive on a car (timestamp order "
         "across sensors, each stage causal), with persistent object ids; write the devkit's per-point predictions "
         "JSON and print the per-scan latency and the real-time factor. With --classifier, the final objects are "
-        "classified after the replay (per 0.5 s time window, not causally) and each detection's class is the devkit's "
-        "ClassificationLabel index, as for 'cluster'.",
+        "classified after the replay (per 0.5 s time window, each from that window and, with --history mean_proba, "
+        "the object's earlier ones) and each detection's class is the devkit's ClassificationLabel index, as for "
+        "'cluster'.",
     )
     stream.set_defaults(run=_stream, parser=stream, together=_check_stream_options)
     replaced_only = "an existing file is replaced only if it is such"
@@ -253,6 +254,13 @@ def _parser():
         action="store_true",
         help="run the Tracker that reproduce tuned and saved in --params (its key 'tracker') and write each "
         "detection's track id, as given at its scan, instead of its final object id (not with --classifier)",
+    )
+    stream.add_argument(
+        "--history",
+        choices=["none", "mean_proba"],
+        help="with --classifier: classify each object's 0.5 s window from its windows so far (mean_proba: the mean "
+        "of their class probabilities; causal over the windows of the final object id) or from that window alone "
+        "(none); default: as the classifier was saved (a classifier trained with history features keeps them)",
     )
     return parser
 
@@ -315,6 +323,8 @@ def _check_stream_options(args):
         raise ValueError("--track does not go with --classifier: the classifiers label the final object ids")
     if args.track and args.params is None:
         raise ValueError("--track runs the Tracker saved in --params: give --params")
+    if args.history is not None and args.classifier is None:
+        raise ValueError("--history chooses how --classifier classifies the objects: give --classifier with it")
     if args.experiment == _LEARNED:
         raise ValueError(
             f"--experiment {_LEARNED}: the learned grouping has no online (causal) version yet; apply it offline with "
@@ -566,6 +576,7 @@ def _stream(args) -> int:
         experiment=args.experiment,
         classifier=args.classifier,
         track=args.track,
+        history=args.history,
     )
     _print_applied("streamed", summary, args)
     if "tracker" in summary:

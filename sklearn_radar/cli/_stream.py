@@ -53,7 +53,9 @@ def recording_seconds(data):
     return float((span["max"] - span["min"]).sum()) * 1e-6
 
 
-def stream_radarscenes(data, params, out, objects=None, experiment=None, classifier=None, track=False):
+def stream_radarscenes(
+    data, params, out, objects=None, experiment=None, classifier=None, track=False, history=None
+):
     """Replay a RadarScenes folder through the online pipeline of a saved setting; write devkit predictions.
 
     The scans of all sequences are fed in timestamp order (the sensors of a
@@ -71,8 +73,9 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None, classif
 
     With ``classifier``, the final objects are classified after the replay
     (:meth:`~sklearn_radar.classification.ClusterClassifier.predict_instances_of`
-    on the final object ids, per time window as in training: not causal,
-    a window's class uses the whole window): the class is the devkit's
+    on the final object ids, per time window as in training: a window's
+    class uses the whole window, and with the classifier's ``history`` the
+    object's earlier windows too, never later ones): the class is the devkit's
     ``ClassificationLabel`` index (STATIC 5 for noise and for objects
     classified as background), the instance the final object id where
     the class is a road user, -1 where it is STATIC.
@@ -99,6 +102,11 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None, classif
         runs pickle: only use files you trust.
     track : bool, default=False
         Run the saved Tracker and write its track ids (not with ``classifier``).
+    history : {"none", "mean_proba"} or None, default=None
+        With ``classifier``: how each object's window is classified, in place of the classifier's own ``history``
+        (:class:`~sklearn_radar.classification.ClusterClassifier`): ``"mean_proba"`` from the object's windows so
+        far, ``"none"`` from that window alone; None: as the classifier was saved.  A classifier trained with
+        ``history="features"`` reads them: it cannot be changed (ValueError).
 
     Returns
     -------
@@ -119,6 +127,8 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None, classif
     if classifier is not None:
         model = classifier_setting(classifier, setting, params, pipeline)
         pipeline = model.clustering
+        if history is not None:
+            with_history(model.classifier, None if history == "none" else history, classifier)
     tracker, tracker_params = _saved_tracker(params, classifier) if track else (None, None)
     online = OnlinePipeline(pipeline, tracker=tracker)
     check_predictions_file(out)
@@ -169,6 +179,14 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None, classif
     }
 
 
+def with_history(classifier, history, path):
+    """Set the ``history`` of a loaded ClusterClassifier; ValueError (naming ``path``) for one trained on features."""
+    if "features" in (classifier.history, history) and classifier.history != history:
+        raise ValueError(
+            f"--history: the classifier of {path} was trained with history={classifier.history!r}; its history "
+            "features cannot be switched on or off at prediction (mean_proba and none can)"
+        )
+    classifier.set_params(history=history)
 def _saved_tracker(params, classifier):
     """The Tracker saved in ``params`` and its saved parameters; ValueError naming the file when it has none."""
     if classifier is not None:

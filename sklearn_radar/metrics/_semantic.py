@@ -240,10 +240,13 @@ def _panoptic_of_layout(layout):
     )
 
 
-def _interpolated_ap(scores, hits, n_true):
-    """COCO's 101-point interpolated average precision of ranked predictions; tied scores form one point."""
+def _interpolated_precision(scores, hits, n_true):
+    """COCO's interpolated precision of ranked predictions at its 101 recall points: their mean is the AP.
+
+    0 beyond the highest recall reached; tied scores form one point.
+    """
     if not len(scores):
-        return 0.0
+        return np.zeros(len(_RECALL_POINTS))
     order = np.argsort(-scores, kind="stable")
     scores, hits = scores[order], hits[order]
     last_of_tie = np.r_[scores[1:] != scores[:-1], True]
@@ -253,19 +256,20 @@ def _interpolated_ap(scores, hits, n_true):
     precision = np.maximum.accumulate((tp / (tp + fp))[::-1])[::-1]  # best precision at this recall or more
     point = np.searchsorted(recall, _RECALL_POINTS, side="left")
     reached = point < len(recall)
-    return float(np.where(reached, precision[np.minimum(point, len(recall) - 1)], 0.0).mean())
+    return np.where(reached, precision[np.minimum(point, len(recall) - 1)], 0.0)
 
 
 def _average_precision_of_layout(layout, iou_threshold):
     """``map`` and ``per_class`` (AP of each class present in the truth) of a layout with scores."""
     hit = np.zeros(len(layout.pred_class), dtype=bool)
     hit[layout.pair_pred[_class_matches(layout, iou_threshold)]] = True
-    per_class = {}
+    per_class, curves = {}, {}
     for code in np.unique(layout.true_class):
         predicted = layout.pred_class == code
         n_true = int(np.count_nonzero(layout.true_class == code))
-        per_class[int(code)] = _interpolated_ap(layout.pred_score[predicted], hit[predicted], n_true)
-    return Bunch(map=_mean(list(per_class.values())), per_class=per_class)
+        curves[int(code)] = _interpolated_precision(layout.pred_score[predicted], hit[predicted], n_true)
+        per_class[int(code)] = float(curves[int(code)].mean())
+    return Bunch(map=_mean(list(per_class.values())), per_class=per_class, curves=curves)
 
 
 def _coverage_of_layout(layout):
@@ -478,7 +482,8 @@ def mean_average_precision(
     0.50495
     """
     arrays = _checked(classes_true, instances_true, classes_pred, instances_pred, confidence, times, groups)
-    return _average_precision_of_layout(_semantic_layout(arrays, window), iou_threshold)
+    found = _average_precision_of_layout(_semantic_layout(arrays, window), iou_threshold)
+    return Bunch(map=found.map, per_class=found.per_class)
 
 
 @validate_params(
@@ -568,7 +573,11 @@ def semantic_scores(
         ``mcov`` (floats in [0, 1]) and ``per_class``:
         ``{code: Bunch(pq, ap, f1)}`` for every class any of them averages
         over; NaN where a class takes no part in that metric (``pq`` and
-        ``ap`` of background, ``ap`` of a class absent from the truth).
+        ``ap`` of background, ``ap`` of a class absent from the truth); and
+        ``precision_at_recall``: ``{code: ndarray of shape (101,)}`` for
+        each class present in the truth, the interpolated precision at
+        recall 0, 0.01, ..., 1 (0 beyond the highest recall reached), the
+        precision-recall curve whose mean is the class's ``ap``.
 
     Raises
     ------
@@ -610,6 +619,7 @@ def semantic_scores(
         macro_f1=_mean(list(f1.values())),
         mcov=_coverage_of_layout(layout),
         per_class=per_class,
+        precision_at_recall=precision.curves,
     )
 
 

@@ -1,7 +1,8 @@
 """The classification step (the paper's next stage) and its records: a classifier trained on each setting's clusters.
 
-For each setting of :data:`~._constants.CLASSIFIED` (the run's tuned one where its experiment ran, the paper's
-otherwise) and the strongest offline scikit-learn baseline, a
+For each setting of :data:`~._constants.CLASSIFIED` (a paper's experiment: the run's tuned one where it ran, the
+paper's otherwise; the object experiment and the learned grouping where the run has them) and the strongest offline
+scikit-learn baseline, a
 :class:`~sklearn_radar.classification.ClusterClassifier` is trained on the clusters of the training half (in this
 process: it needs all its examples at once) and scored on each test sequence where it lives with
 :func:`~sklearn_radar.metrics.semantic_scores`; beside them the
@@ -16,11 +17,20 @@ from typing import Any
 import numpy as np
 import pandas as pd
 from sklearn.base import clone
+from sklearn.frozen import FrozenEstimator
+from sklearn.pipeline import Pipeline
 
 from ..classification import ROAD_USER_CLASSES, ClusterClassifier, PointClassifier, road_user_class
-from ..experiments import BASELINE_INPUT, SKLEARN_BASELINES, SLIDING_BASELINE, baseline_pipeline, experiment_pipeline
+from ..experiments import (
+    BASELINE_INPUT,
+    SKLEARN_BASELINES,
+    SLIDING_BASELINE,
+    baseline_pipeline,
+    experiment_pipeline,
+    object_pipeline,
+)
 from ..metrics import background_share, semantic_scores
-from ._constants import BEST_STAGE1, CLASSIFIED, SCORE_WINDOW_S
+from ._constants import BASELINES, BEST_STAGE1, CLASSIFIED, LEARNED, OBJECTS, SCORE_WINDOW_S
 from ._context import Outcome
 from ._records import JsonRecord, record
 from ._tracking import run_setting_pipeline, tracked_setting
@@ -32,7 +42,7 @@ POINT_WISE = "point-wise (no clustering)"
 #: from raw detections, for ``sklearn-radar cluster --classifier``) of each classified experiment, and of the
 #: strongest baseline, in the run's folder.
 CLASSIFIER_FILES = {
-    **{f"#{number}": f"classifier_{number}.joblib" for number in CLASSIFIED},
+    **{f"#{key}" if isinstance(key, int) else key: f"classifier_{key}.joblib" for key in CLASSIFIED},
     "baseline": "classifier_baseline.joblib",
 }
 
@@ -61,6 +71,9 @@ class SemanticScores(JsonRecord):
         Mean coverage of the annotated instances' segments, class-agnostic.
     per_class : dict of str to dict of str to float
         By class name: ``{"pq", "ap", "f1"}``.
+    precision_at_recall : dict of str to list of float or None, default=None
+        By class name (those present in the truth): the interpolated precision at recall 0, 0.01, ..., 1, the
+        precision-recall curve whose mean is the class's AP (3 decimals); None in results of older versions.
     """
 
     window_s: float
@@ -71,6 +84,7 @@ class SemanticScores(JsonRecord):
     macro_f1: float
     mcov: float
     per_class: dict[str, dict[str, float]]
+    precision_at_recall: dict[str, list[float]] | None = None
 
 
 @record
@@ -134,18 +148,50 @@ class ClassificationResult(JsonRecord):
 
 
 def classified_settings(needed):
-    """``[(name, source, pipelines, params)]``: :data:`CLASSIFIED`, then the strongest baseline; a pipeline a repeat."""
-    found = []
-    for number in CLASSIFIED:
-        result = needed.get(str(number))
-        pipeline, params, source = tracked_setting(number, result)
-        found.append((f"#{number}", source, [pipeline, *_later_repeats(number, result, needed)], params))
-    best = strongest_offline_baseline(needed.get("baselines"))
+    """``[(name, source, pipelines, params)]``: :data:`CLASSIFIED`, then the strongest baseline; a pipeline a repeat.
+
+    A paper's experiment missing from the run takes the paper's setting; the object experiment and the learned
+    grouping, which have none, are left out where the run lacks them.
+    """
+    found = [setting for key in CLASSIFIED if (setting := _classified(key, needed)) is not None]
+    best = strongest_offline_baseline(needed.get(BASELINES))
     if best is not None:
         name, result = best
         pipelines = [baseline_pipeline(name).set_params(**r.params) for r in result.repeats or [result]]
         found.append((name, "tuned baseline", pipelines, result.params))
     return found
+
+
+def setting_name(key):
+    """The row name of a classified setting: ``"#8"`` for an experiment number, the step key otherwise."""
+    return f"#{key}" if isinstance(key, int) else key
+
+
+def _classified(key, needed):
+    """``(name, source, pipelines, params)`` of one key of :data:`CLASSIFIED`; None when the run lacks it."""
+    result = needed.get(str(key))
+    if isinstance(key, int):
+        pipeline, params, source = tracked_setting(key, result)
+        return setting_name(key), source, [pipeline, *_later_repeats(key, result, needed)], params
+    if result is None:
+        return None
+    if key == OBJECTS:
+        pipelines = [
+            object_pipeline(2, stage1_params=r.stage1_params, params=r.params) for r in result.repeats or [result.kept]
+        ]
+        return (
+            setting_name(key),
+            "PQ-tuned object experiment",
+            pipelines,
+            {**result.kept.stage1_params, **result.kept.params},
+        )
+    if key == LEARNED:
+        if result.model is None:  # read back from a results.json: the fitted model is not there
+            return None
+        model = result.model
+        frozen = Pipeline([*model.steps[:-1], (model.steps[-1][0], FrozenEstimator(model.steps[-1][1]))])
+        return setting_name(key), "learned grouping (fitted on the training half)", [frozen], result.params
+    raise ValueError(f"the classification step does not know the setting {key!r}")
 
 
 def _later_repeats(number, result, needed):
@@ -206,7 +252,7 @@ def classified_sequence(sequence, model):
     classifier = model[-1]
     clusters = None
     if isinstance(classifier, ClusterClassifier):
-        clusters = np.asarray(clone(classifier.clusterer).fit_predict(working))
+        clusters = classifier._cluster(working, len(working))  # as it clusters: a fresh clone, or a frozen model
         found = classifier.predict_instances_of(working, clusters)
     else:
         found = classifier.predict_instances(working)
@@ -303,10 +349,16 @@ def _scores(arrays, groups):
         for code, figures in found["per_class"].items()
         if int(code) in ROAD_USER_CLASSES
     }
+    curves = {
+        ROAD_USER_CLASSES[int(code)]: [round(float(p), 3) for p in precision]
+        for code, precision in found["precision_at_recall"].items()
+        if int(code) in ROAD_USER_CLASSES
+    }
     return SemanticScores(
         window_s=SCORE_WINDOW_S,
         **{k: float(found[k]) for k in ("pq", "sq", "rq", "map", "macro_f1", "mcov")},
         per_class=per_class,
+        precision_at_recall=curves,
     )
 
 

@@ -5,7 +5,7 @@ from __future__ import annotations
 from dataclasses import field
 from typing import Any
 
-from ._records import WRITTEN_FLAT, JsonRecord, record
+from ._records import NOT_WRITTEN, WRITTEN_FLAT, JsonRecord, record
 
 
 @record
@@ -331,6 +331,8 @@ class LearnedResult(JsonRecord):
         strongest offline baseline's kept settings where they ran, by name.
     wall_time_s : float
         Fit, scoring and error anatomy, s.
+    model : Pipeline or None, default=None
+        The fitted pipeline itself, for the classification step of the same run (not written: the file holds it).
     """
 
     params: dict[str, Any]
@@ -346,3 +348,4 @@ class LearnedResult(JsonRecord):
     instance_test: InstanceScores
     errors: dict[str, InstanceErrors]
     wall_time_s: float
+    model: Any = field(default=None, compare=False, repr=False, metadata=NOT_WRITTEN)

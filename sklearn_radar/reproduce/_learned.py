@@ -72,6 +72,7 @@ def run_learned(env, key, needed):
         instance_test=InstanceScores(window_s=SCORE_WINDOW_S, **{k: float(scores[k]) for k in _SCORES}),
         errors=errors,
         wall_time_s=time.perf_counter() - start,
+        model=model,
     )
     summary = (
         f"    learned: test PQ {result.instance_test.pq:.3f} offline (fitted in {fit_s:.1f} s; no causal version), "

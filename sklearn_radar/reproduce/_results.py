@@ -250,6 +250,10 @@ class RunResults(JsonRecord):
                 "stage1_params": None,
                 "model": self.learned.model_file,
             }
+        for key in (OBJECT_EXPERIMENT, LEARNED_EXPERIMENT):
+            classified = (self.classification.settings if self.classification else {}).get(key)
+            if key in experiments and classified is not None and classified.classifier_file:
+                experiments[key]["classifier"] = classified.classifier_file
         if not experiments:
             return None
         best, reason = _best_setting(experiments, cv_key, objective)

@@ -599,8 +599,9 @@ def _experiment_step(number):
 #: #8's setting) need #8; the tracking step the settings it streams (objects, #1, #8, #12, #13) and the baselines
 #: (whose SlidingDBSCAN setting it reuses when tuned for PQ); every other step needs
 #: none (the object experiment tunes its own stage 1); the classification step the settings whose clusters it
-#: classifies (#1, #3, #8, #13) and the baselines (the strongest one's clusters); the learned grouping the object
-#: experiment and the baselines (whose kept settings' errors it sets beside its own).
+#: classifies (#1, #3, #8, #13, the object experiment and the learned grouping) and the baselines (the strongest
+#: one's clusters); the learned grouping the object experiment and the baselines (whose kept settings' errors it
+#: sets beside its own).
 STEPS = {
     FILTER: Step(run_filter, kind=FILTER),
     **{key: _experiment_step(int(key)) for key in ALL_EXPERIMENTS if key.isdigit()},
@@ -608,7 +609,7 @@ STEPS = {
     FILTER_EFFECT: Step(run_filter_effect, (str(BEST_STAGE1),), kind=FILTER_EFFECT),
     BASELINES: Step(run_baselines, kind=BASELINES),
     TRACKING: Step(run_tracking, (*TRACKED, BASELINES), kind=TRACKING),
-    CLASSIFICATION: Step(run_classification, (*(str(number) for number in CLASSIFIED), BASELINES), kind=CLASSIFICATION),
+    CLASSIFICATION: Step(run_classification, (*(str(key) for key in CLASSIFIED), BASELINES), kind=CLASSIFICATION),
     LEARNED: Step(run_learned, (OBJECTS, BASELINES), kind=LEARNED),
 }
 

@@ -160,6 +160,15 @@ def test_a_classifier_saved_before_a_parameter_rename_is_refused(fitted, tmp_pat
         load_classifier(path)
 
 
+def test_a_classifier_saved_before_history_existed_loads_and_classifies_each_window_alone(fitted, tmp_path):
+    # As a file written before the history parameter: the pickled estimator lacks the attribute.
+    old = copy.deepcopy(fitted)
+    del old.steps[-1][1].history
+    payload = _pickled(old)
+    loaded = load_classifier(_file(tmp_path / "before.joblib", _header(payload), payload))
+    assert loaded.steps[-1][1].get_params()["history"] is None
+
+
 def test_a_payload_that_cannot_be_unpickled_is_refused(tmp_path):
     payload = b"\x80\x05not a pickle"
     path = _file(tmp_path / "junk.joblib", _header(payload), payload)

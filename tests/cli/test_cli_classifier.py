@@ -269,6 +269,30 @@ def test_stream_classifies_the_final_object_ids(folder, files, tmp_path, capsys)
     assert len(_keys(out)) == len(set(_keys(out))) == len(data)
 
 
+def test_stream_history_classifies_each_objects_window_from_its_windows_so_far(folder, files, tmp_path, capsys):
+    """--history mean_proba: the classes of the saved classifier with that history, on the final object ids."""
+    import copy
+
+    out = tmp_path / "history.json"
+    options = ["--classifier", str(files.whole), "--history", "mean_proba"]
+    assert main(["stream", "--data", str(folder), "--out", str(out), *options]) == 0
+    data = load_radarscenes(folder).data
+    object_ids = replay(OnlinePipeline(experiment_pipeline(8, params=paper_params(8))), data)["object_ids"]
+    model = files.model
+    working = model[:-1].transform(data)
+    with_history = copy.deepcopy(model[-1]).set_params(history="mean_proba")
+    predicted = with_history.predict_instances_of(working, object_ids)["class"].to_numpy()
+    alone = model[-1].predict_instances_of(working, object_ids)["class"].to_numpy()
+    assert not np.array_equal(predicted, alone)  # the history changes some windows' classes here
+    instances = np.where(predicted >= 0, object_ids, -1)
+    expected = {u: [k, int(i)] for u, k, i in zip(data["uuid"], _devkit_index(predicted), instances, strict=True)}
+    assert out.read_bytes() == _devkit_file(expected, tmp_path / "devkit.json", ClassificationLabel.translation_dict())
+    # Without --classifier it has nothing to do: a one-line error, nothing written.
+    assert main(["stream", "--data", str(folder), "--out", str(tmp_path / "no.json"), "--params", str(files.params),
+                 "--history", "mean_proba"]) == 2  # fmt: skip
+    assert "--history" in capsys.readouterr().err and not (tmp_path / "no.json").exists()
+
+
 def test_a_classified_file_and_a_clusters_file_replace_each_other(folder, files, tmp_path):
     out = tmp_path / "p.json"
     assert _cluster(folder, out, "--classifier", str(files.whole)) == 0

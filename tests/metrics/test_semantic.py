@@ -589,3 +589,25 @@ def test_the_scorer_raises_on_set_up_mistakes_and_pickles(scenes):
     scorer = pickle.loads(pickle.dumps(make_semantic_scorer("map", window=None, instance_column=None)))
     assert repr(scorer) == "make_semantic_scorer(metric='map', window=None, instance_column=None)"
     assert scorer(_Nothing(), X.drop(columns="timestamp"), y) == 0.0
+
+
+def test_the_precision_recall_curve_is_cocos_interpolated_precision_and_its_mean_the_ap():
+    """Three ranked segments of class 0 against two true ones: hit, miss, hit (by hand: 1, 1/2, 2/3)."""
+    from sklearn_radar.metrics import semantic_scores
+
+    # Windows of 1 s: each detection pair one segment; true objects 0 and 1 of class 0 in windows 0 and 2.
+    times = [0.0, 0.1, 1.0, 1.1, 2.0, 2.1]
+    classes_true = [0, 0, -1, -1, 0, 0]
+    instances_true = [0, 0, -1, -1, 1, 1]
+    classes_pred = [0, 0, 0, 0, 0, 0]
+    instances_pred = [0, 0, 1, 1, 2, 2]
+    confidence = [0.9, 0.9, 0.8, 0.8, 0.7, 0.7]
+    found = semantic_scores(
+        classes_true, instances_true, classes_pred, instances_pred, confidence, times=times, window=1.0
+    )
+    curve = found["precision_at_recall"][0]
+    recall = np.linspace(0.0, 1.0, 101)
+    # Interpolated: the best precision at this recall or more; recall 1/2 at precision 1, recall 1 at 2/3.
+    expected = np.where(recall <= 0.5, 1.0, 2.0 / 3.0)
+    np.testing.assert_allclose(curve, expected)
+    assert found["per_class"][0]["ap"] == pytest.approx(curve.mean())

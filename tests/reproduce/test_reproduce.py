@@ -348,8 +348,8 @@ def test_experiment_numbers_come_from_the_papers_metadata():
         "filter-effect",
         "baselines",
         "tracking",
-        "classification",
         "learned",
+        "classification",
     )
 
 

@@ -352,3 +352,71 @@ def test_the_strongest_offline_baseline_is_chosen_by_its_cv_score_not_its_test_s
     dbscan, hdbscan = (name for name in SKLEARN_BASELINES if "per sequence" in name)
     baselines = {dbscan: baseline(cv=0.8, pq=0.3), hdbscan: baseline(cv=0.6, pq=0.5)}
     assert strongest_offline_baseline(baselines)[0] == dbscan
+
+
+@pytest.fixture(scope="module")
+def classified_objects(tiny_folder, tmp_path_factory):
+    """The object experiment, the learned grouping and the classification step (the paper's settings beside)."""
+    return _reproduced(
+        tiny_folder, tmp_path_factory.mktemp("classified_objects") / "out", "objects,learned,classification"
+    )
+
+
+def test_the_settings_meant_for_objects_are_classified_and_their_classifiers_saved(classified_objects, tiny_folder):
+    """The object experiment (PQ-tuned) and the learned grouping are rows, with a classifier `cluster` applies."""
+    from sklearn_radar.classification import load_classifier
+    from sklearn_radar.experiments._learned import load_learned
+
+    results = RunResults.read(classified_objects / "results.json")
+    settings = results.classification.settings
+    assert list(settings) == ["#1", "#3", "#8", "#13", "objects", "learned", POINT_WISE]
+    objects = settings["objects"]
+    assert objects.params == {**results.objects.kept.stage1_params, **results.objects.kept.params}
+    assert objects.classifier_file == "classifier_objects.joblib"
+    assert settings["learned"].classifier_file == "classifier_learned.joblib"
+    params = json.loads((classified_objects / "params.json").read_text())
+    assert params["experiments"]["objects"]["classifier"] == "classifier_objects.joblib"
+    assert params["experiments"]["learned"]["classifier"] == "classifier_learned.joblib"
+    # The learned row classifies the saved model's clusters: its clusterer labels as the saved pipeline does.
+    learned = load_learned(classified_objects / "learned.joblib")
+    classifier = load_classifier(classified_objects / "classifier_learned.joblib")
+    data = load_radarscenes(tiny_folder).data
+    working = classifier[:-1].transform(data[[c for c in data.columns if c not in ("uuid", "label_id")]])
+    expected = learned[-1].predict(working[list(learned[-1].feature_names_in_)])
+    np.testing.assert_array_equal(classifier[-1]._cluster(working, len(working)), expected)
+    report = "\n".join(_section((classified_objects / "report.md").read_text(), "classifying the clusters"))
+    for name in ("objects", "learned"):
+        row = next(line for line in report.splitlines() if line.startswith(f"| {name}, "))
+        assert "| - |" not in row.split("|", 3)[2], row  # the clustering's test V1 is shown
+    for name in ("objects", "learned"):
+        out = tiny_folder.parent / f"predictions_{name}.json"
+        with contextlib.redirect_stdout(io.StringIO()):
+            code = main(
+                [
+                    "cluster",
+                    "--data",
+                    str(tiny_folder),
+                    "--classifier",
+                    str(classified_objects / f"classifier_{name}.joblib"),
+                    "--out",
+                    str(out),
+                ]
+            )
+        assert code == 0, name
+        document = json.loads(out.read_text())
+        assert document["new_label_names"]["5"] == "STATIC"
+
+
+def test_the_precision_recall_curves_are_saved_drawn_and_shown(classified_objects):
+    """Per class, the curve whose mean is the AP (to the 3 decimals kept); the figure in the section."""
+    results = RunResults.read(classified_objects / "results.json")
+    for name, row in results.classification.settings.items():
+        curves = row.scores.precision_at_recall
+        assert curves and set(curves) <= set(row.scores.per_class), name
+        for cls, precision in curves.items():
+            assert len(precision) == 101 and all(0.0 <= p <= 1.0 for p in precision)
+            assert np.all(np.diff(precision) <= 1e-12)  # interpolated: never rising with recall
+            assert np.mean(precision) == pytest.approx(row.scores.per_class[cls]["ap"], abs=1e-3), (name, cls)
+    assert (classified_objects / "classification_precision_recall.png").stat().st_size > 0
+    report = "\n".join(_section((classified_objects / "report.md").read_text(), "classifying the clusters"))
+    assert "![precision-recall per class](classification_precision_recall.png)" in report

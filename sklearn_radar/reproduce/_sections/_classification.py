@@ -5,10 +5,11 @@ from __future__ import annotations
 import numpy as np
 
 from .._classification import ClassifiedSetting
-from .._experiment_records import repeated_scores
+from .._constants import LEARNED, OBJECTS
 from .._results import RunResults
-from ._base import Section, format_params, format_score, objective_name
+from ._base import Section, format_params, format_score, objective_name, save_figure
 from ._comparison import DOES_NOT_HOLD, HOLDS, N_STANDARD_ERRORS, paired_verdict
+from ._figures import curve_styles
 
 #: Published figures of radar instance segmentation on real RadarScenes data (learned models): (source, mAP@0.5,
 #: macro-F1, mCov), in percent, None where the source gives none (../shared/reference/published-results.md).
@@ -16,6 +17,9 @@ PUBLISHED = (
     ("Liu et al., T-IV 2022 (PointNet++ / gMLP, then clustering)", 86.97, None, 89.53),
     ("RadarGNN, TUMFTM (semantic-segmentation F1; its mAP 56.5 is bird's-eye-view boxes)", None, 77.1, None),
 )
+
+#: The precision-recall figure's file in the output folder.
+PRECISION_RECALL = "classification_precision_recall.png"
 
 #: Fewer test sequences than this make the paired per-sequence check weak (its standard error rests on few values).
 FEW_SEQUENCES = 5
@@ -51,7 +55,9 @@ def markdown(results: RunResults) -> list[str]:
         "clustering (before: the object-level table's 'bg segments') and of what the classifier keeps (after). "
         "Classes are the library's road-user classes (`sklearn_radar.classification`; the data section maps the "
         "RadarScenes labels onto them). With repeats, a cell gives the mean \u00b1 sd over the classifiers of each "
-        "repeat's setting (the other columns are the first repeat's).",
+        "repeat's setting (the other columns are the first repeat's). Where the run has them, the settings meant "
+        "for objects are classified too: the object experiment (tuned for PQ) and the learned grouping (its fitted "
+        "model's clusters); the question below is asked of the others, which the run's objective tuned.",
         "",
         "| classified clusters of | clustering's test V1 | clustering's test PQ | class PQ | mAP@0.5 | macro-F1 "
         "| mCov | background-only segments before / after | training examples |",
@@ -81,6 +87,17 @@ def markdown(results: RunResults) -> list[str]:
         + "; ".join(f"{name}: {_per_class(row, 'ap')}" for name, row in rows.items()),
         "",
     ]
+    if results.figures.drawn.get("precision_recall"):
+        lines += [
+            "Precision against recall per class (test half): each classified setting's segments ranked by the "
+            "classifier's confidence (its probability of the class it gives), a segment a hit when it has the class "
+            "and IoU > 0.5 with an annotated road user of it; the precision is COCO's interpolated one (the best at "
+            "this recall or more), whose mean over the 101 recall points is the AP in the legend. A curve that stays "
+            "high to the right ranks its correct segments first.",
+            "",
+            f"![precision-recall per class]({PRECISION_RECALL})",
+            "",
+        ]
     lines += answer_lines(results)
     lines += [
         "",
@@ -90,26 +107,26 @@ def markdown(results: RunResults) -> list[str]:
 
 
 def clustering_scores(results: RunResults, name):
-    """(test V1, test PQ) of the clustering ``name`` (``"#8"`` or a baseline), means over the repeats; or Nones."""
-    result = _clustering(results, name)
-    if result is None:
+    """(test V1, test PQ) of the clustering ``name`` (``"#8"``, ``"objects"``, a baseline), means over the repeats."""
+    records = _test_records(results, name)
+    if records is None:
         return None, None
-    pq = repeated_scores(result, "pq")
-    return float(np.mean(repeated_scores(result, "v1"))), float(np.mean(pq)) if pq else None
+    pq = [float(r.instance_test.pq) for r in records if r.instance_test is not None]
+    return float(np.mean([r.v1_test for r in records])), float(np.mean(pq)) if pq else None
 
 
 def background_before(results: RunResults, name, row: ClassifiedSetting):
     """The clustering's background-only segment share: its own ``instance_test``'s, else the step's; None point-wise."""
     if row.background_share_before is None:
         return None
-    result = _clustering(results, name)
-    if result is not None and result.instance_test is not None:
-        return result.instance_test.background_segment_share
+    records = _test_records(results, name)
+    if records is not None and records[0].instance_test is not None:
+        return records[0].instance_test.background_segment_share
     return row.background_share_before
 
 
 def cv_score(results: RunResults, name):
-    """The mean cross-validated score over the repeats of clustering ``name``; None when it was not searched."""
+    """The mean cross-validated score over the repeats of a paper's or baseline clustering ``name``; else None."""
     result = _clustering(results, name)
     if result is None:
         return None
@@ -118,16 +135,28 @@ def cv_score(results: RunResults, name):
 
 
 def _clustering(results: RunResults, name):
-    """The experiment or baseline result of the clustering ``name``; None when it did not run."""
+    """The experiment or baseline result of the clustering ``name``; None when it did not run (or is neither)."""
     if name.startswith("#") and name[1:].isdigit():
         return results.experiments.get(int(name[1:]))
     return (results.baselines or {}).get(name)
 
 
+def _test_records(results: RunResults, name):
+    """The records with the test scores of each repeat of clustering ``name``; None when it did not run."""
+    if name == OBJECTS:
+        return None if results.objects is None else results.objects.repeats or [results.objects.kept]
+    if name == LEARNED:
+        return None if results.learned is None else [results.learned]
+    result = _clustering(results, name)
+    return None if result is None else result.repeats or [result]
+
+
 def answer_lines(results: RunResults) -> list[str]:
     """Whether the clustering with the best CV score of those classified gives the best classifier, with its noise."""
     rows = {
-        name: row for name, row in results.classification.settings.items() if row.background_share_before is not None
+        name: row
+        for name, row in results.classification.settings.items()
+        if row.background_share_before is not None and name not in (OBJECTS, LEARNED)
     }
     label = objective_name(results)
     scored = {name: cv_score(results, name) for name in rows}
@@ -243,4 +272,45 @@ def _percent(value):
     return "-" if value is None else f"{value:.2f} %"
 
 
-SECTION = Section("classification", markdown)
+def figures(out, results: RunResults, context) -> dict[str, str]:
+    """The precision-recall curves per class of every classified setting, when the step ran (with curves)."""
+    found = results.classification
+    if found is None or not any(row.scores.precision_at_recall for row in found.settings.values()):
+        return {}
+    save_figure(precision_recall_figure(found), out / PRECISION_RECALL)
+    return {"precision_recall": PRECISION_RECALL}
+
+
+def precision_recall_figure(found):
+    """One panel per road-user class: each classified setting's interpolated precision against recall."""
+    import matplotlib.pyplot as plt
+
+    rows = {name: row for name, row in found.settings.items() if row.scores.precision_at_recall}
+    classes = list(dict.fromkeys(c for row in rows.values() for c in row.scores.precision_at_recall))
+    fig, axes = plt.subplots(1, len(classes), figsize=(3.2 * len(classes), 3.6), sharey=True, squeeze=False)
+    recall = np.linspace(0.0, 1.0, 101)
+    styles = curve_styles(len(rows))
+    for ax, name in zip(axes[0], classes, strict=True):
+        for (setting, row), (colour, line, _) in zip(rows.items(), styles, strict=True):
+            precision = row.scores.precision_at_recall.get(name)
+            if precision is not None:
+                ap = row.scores.per_class.get(name, {}).get("ap", float(np.mean(precision)))
+                ax.step(recall, precision, where="post", color=colour, linestyle=line, label=f"{setting} {ap:.0%}")
+        ax.set_title(name)
+        ax.set_xlabel("recall")
+        ax.set_xlim(0.0, 1.0)
+        ax.set_ylim(0.0, 1.02)
+        ax.legend(fontsize=6, title="AP@0.5", title_fontsize=6, loc="upper right")
+    axes[0][0].set_ylabel("precision (interpolated)")
+    fig.suptitle(
+        f"Precision-recall of the classified segments per class, test half ({_window(found)} s "
+        "windows, IoU > 0.5; ranked by the classifier's confidence)"
+    )
+    return fig
+
+
+def _window(found):
+    return f"{next(iter(found.settings.values())).scores.window_s:g}"
+
+
+SECTION = Section("classification", markdown, figures)
