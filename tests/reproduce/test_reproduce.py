@@ -347,8 +347,8 @@ def test_experiment_numbers_come_from_the_papers_metadata():
         "objects",
         "filter-effect",
         "baselines",
-        "tracking",
         "learned",
+        "tracking",
         "classification",
     )
 
