@@ -232,6 +232,7 @@ def _typed(report_folder):
         "table1_heatmap": "table1_heatmap.png",
         "filter_scene": "filter_scene.png",
         "tracks": "tracks.png",
+        "precision_recall": "classification_precision_recall.png",
         "v1_bars": "v1_ours_vs_paper.png",
         "scene": "fig6_scene.png",
         "convergence": "convergence.png",
@@ -273,6 +274,7 @@ def test_results_json_round_trips_through_the_typed_results_byte_for_byte(tiny_r
         "table1_heatmap": "table1_heatmap.png",
         "filter_scene": "filter_scene.png",
         "tracks": "tracks.png",
+        "precision_recall": "classification_precision_recall.png",
         "v1_bars": "v1_ours_vs_paper.png",
         "scene": "fig6_scene.png",
         "convergence": "convergence.png",
@@ -524,7 +526,7 @@ def test_the_report_shows_every_figure_it_drew_with_a_caption(tiny_report):
     report = (tiny_report / "report.md").read_text()
     shown = re.findall(r"!\[[^\]]*\]\(([^)]+)\)", report)
     drawn = sorted(p.name for p in tiny_report.glob("*.png"))
-    assert sorted(shown) == drawn and len(drawn) == 6
+    assert sorted(shown) == drawn and len(drawn) == 7
     for match in re.finditer(r"!\[[^\]]*\]\(([^)]+)\)", report):  # a caption (a paragraph) right above each
         caption = report[: match.start()].rstrip().rsplit("\n\n", 1)[-1]
         assert len(caption) > 40 and not caption.startswith(("|", "!", "#")), match.group(1)
