@@ -237,7 +237,7 @@ def _parser():
         "classified after the replay (per 0.5 s time window, not causally) and each detection's class is the devkit's "
         "ClassificationLabel index, as for 'cluster'.",
     )
-    stream.set_defaults(run=_stream, parser=stream, together=_check_stream_options)
+    stream.set_defaults(run=_stream, parser=stream, together=_check_setting_options)
     replaced_only = "an existing file is replaced only if it is such"
     for flag, required, text in (
         ("--data", True, "RadarScenes data folder (or its parent)"),
@@ -302,16 +302,6 @@ def _check_setting_options(args):
         raise ValueError(f"--objects and --out name the same file: {_shown(args.out)}")
 
 
-def _check_stream_options(args):
-    """``stream``: as :func:`_check_setting_options`, and a setting with an online version."""
-    _check_setting_options(args)
-    if args.experiment == _LEARNED:
-        raise ValueError(
-            f"--experiment {_LEARNED}: the learned grouping has no online (causal) version yet; apply it offline with "
-            f"'sklearn-radar cluster --experiment {_LEARNED}'"
-        )
-
-
 def _at_least(low):
     """The check of a whole number ``>= low`` (None stays None: the option's default applies)."""
 
@@ -355,8 +345,9 @@ _CLASSIFIER_HELP = (
 
 #: What ``--experiment`` of ``cluster`` and ``stream`` takes.
 _SAVED_EXPERIMENT_HELP = (
-    "which saved experiment: a number 1-13, 'objects' or 'learned' (the learned grouping's saved model; 'cluster' "
-    "only: it has no online version yet) (default: the run's best by cross-validated score on the training half)"
+    "which saved experiment: a number 1-13, 'objects' or 'learned' (the learned grouping's saved model: 'cluster' "
+    "applies the offline one, 'stream' the causal one) (default: the run's best by cross-validated score on the "
+    "training half)"
 )
 #: The learned experiment's key (the CLI imports no experiment module).
 _LEARNED = "learned"

@@ -11,7 +11,7 @@ from .._files import atomic_write
 from ..classification import DEVKIT_CLASS_NAMES
 from ..datasets import load_radarscenes
 from ..experiments._learned import LEARNED_EXPERIMENT
-from ..experiments._saved import NO_ONLINE_LEARNED, _read_params, params_setting
+from ..experiments._saved import learned_model, params_setting
 from ..online import OnlinePipeline
 from ..online._objects import ObjectList
 from ..online._replay import replay
@@ -85,7 +85,7 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None, classif
         Object-list CSV to write (one row per live object per scan); None: none.
     experiment : int or "objects", default=None
         Which saved experiment; None: the best (by the cross-validated training score).  The learned grouping
-        (``"learned"``) has no online version yet: it is refused (ValueError).
+        (``"learned"``) streams its causal model (the entry's ``causal_model``).
     classifier : str or path-like, default=None
         File written by :func:`~sklearn_radar.classification.save_classifier`,
         with the same rules as for ``sklearn-radar cluster``
@@ -101,11 +101,9 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None, classif
         ``out`` and ``objects``; with ``classifier`` also ``classes`` (detections per devkit class name) and
         ``n_road_users`` (objects classified as a road user in some window).
     """
-    if experiment == LEARNED_EXPERIMENT:
-        raise ValueError(NO_ONLINE_LEARNED)
-    if params is not None and experiment is None:
-        _refuse_learned_best(params)
     setting, pipeline, chosen = params_setting(params, experiment, classifier)
+    if setting is not None and setting["experiment"] == LEARNED_EXPERIMENT:  # the causal model runs online
+        pipeline = learned_model(setting, params, causal=True)
     model = None
     if classifier is not None:
         model = classifier_setting(classifier, setting, params, pipeline)
@@ -151,13 +149,6 @@ def stream_radarscenes(data, params, out, objects=None, experiment=None, classif
         "objects": None if objects is None else str(objects),
         **summary,
     }
-
-
-def _refuse_learned_best(params):
-    """A ValueError when the best setting of ``params`` is the learned grouping (before its model is loaded)."""
-    saved = _read_params(Path(params))
-    if isinstance(saved, dict) and saved.get("best") == LEARNED_EXPERIMENT:
-        raise ValueError(f"{params}: its best setting is {NO_ONLINE_LEARNED}")
 
 
 def classify_objects(model, data, object_ids):

@@ -54,7 +54,7 @@ from ._constants import (
 )
 from ._context import RunContext
 from ._io import RUN_TOOL, check_apart, check_run_folder, previous_run_files, run_marker
-from ._learned import LEARNED_FILE
+from ._learned import LEARNED_CAUSAL_FILE, LEARNED_FILE
 from ._progress import DATA, REPORT, RunProgress, duration, uncompiled_kernels
 from ._report import write_report
 from ._results import DataMeta, RunMeta, RunResults
@@ -81,6 +81,7 @@ RUN_FILES = (
     CONVERGENCE,
     *CLASSIFIER_FILES.values(),
     LEARNED_FILE,
+    LEARNED_CAUSAL_FILE,
 )
 #: Simulated data of at most this many sequence-seconds (the default run's 4 x 20 s) with one search at a time
 #: runs in this process although ``--workers`` asks for a local cluster (why: :ref:`contributing-runner`).
@@ -434,7 +435,7 @@ def _run_step(run, env, keys, context, found, position, key, ahead):
     if outcome.labels is not None:
         context.labels[int(key)] = outcome.labels
     for name, model in (outcome.models or {}).items():
-        (save_learned if name == LEARNED_FILE else save_classifier)(model, run.out / name)
+        (save_learned if name in (LEARNED_FILE, LEARNED_CAUSAL_FILE) else save_classifier)(model, run.out / name)
     if outcome.summary:
         run.say(outcome.summary)
     run.results.meta.completed.append(key)
