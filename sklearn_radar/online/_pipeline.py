@@ -142,6 +142,9 @@ class OnlinePipeline:
         The offline pipeline; read once, at construction.  Stage 1's
         ``eps_t`` must be set (the window) and ``cluster_vr_min`` of both
         stages None (the gate judges whole clusters): a ValueError otherwise.
+        Or a fitted pipeline ending in a :class:`~sklearn_radar.cluster.LinkClustering`
+        with ``causal=True`` (the learned grouping, in place of both stages:
+        :ref:`online-learned`).
     tracker : Tracker or None, default=None
         Tracks the objects from scan to scan (a fresh copy per sequence):
         :attr:`ScanResult.track_id` gives its track ids, from the object ids
@@ -205,8 +208,8 @@ class OnlinePipeline:
         ----------
         path : str or path-like
             ``params.json`` written by ``sklearn-radar reproduce``.
-        experiment : int or "objects", default=None
-            Which saved experiment; None: the one ``sklearn-radar
+        experiment : int, "objects" or "learned", default=None
+            Which saved experiment (``"learned"``: its causal model); None: the one ``sklearn-radar
             reproduce`` marked as the run's best.
         tracker : Tracker or None, default=None
             The tracking stage, as for :class:`OnlinePipeline`.
@@ -241,10 +244,13 @@ class OnlinePipeline:
     def causal_pipeline(self):
         """The offline pipeline whose labels this stream gives: every stage causal (stage 2: ``causal_min_size=True``).
 
+        With the learned grouping: a copy of the fitted pipeline with the filter causal, whose ``predict``
+        gives the labels (the stream's ids resolved through the aliases, where confirmed).
+
         Returns
         -------
         pipeline : sklearn.pipeline.Pipeline
-            An unfitted clone.
+            An unfitted clone (with the learned grouping: a fitted copy).
         """
         if self._learned is not None:  # the fitted model as it is, the filter causal
             causal = copy.deepcopy(self.pipeline)
