@@ -26,8 +26,10 @@ import numpy as np
 from ._link_features import (
     LOCAL_RADIUS,
     LOCAL_WINDOW,
+    MAX_IMPLIED_SPEED,
     NEAR_RADIUS,
     NEAR_WINDOW,
+    PAIR_FEATURES,
     RIDGE,
     V_MOVING,
     V_SIMILAR,
@@ -100,9 +102,10 @@ def _neighbourhoods(x, y, t, v, los, start):
             if j == k:
                 continue
             dt = tk - t[j]
-            if dt > LOCAL_WINDOW:
-                continue
-            distance = math.hypot(x[k] - x[j], y[k] - y[j])
+            dx, dy = x[k] - x[j], y[k] - y[j]
+            if dt > LOCAL_WINDOW or abs(dx) > LOCAL_RADIUS or abs(dy) > LOCAL_RADIUS:
+                continue  # (the box test is exact: a distance within the radius has both sides within it)
+            distance = math.hypot(dx, dy)
             if distance > LOCAL_RADIUS:
                 continue
             vj = v[j]
@@ -198,7 +201,9 @@ def _pairs(x, y, t, node, start, radius, window):
         if not node[j]:
             continue
         for i in range(lo, j):
-            if node[i] and math.hypot(x[i] - x[j], y[i] - y[j]) <= radius:
+            if not node[i] or abs(x[i] - x[j]) > radius or abs(y[i] - y[j]) > radius:
+                continue
+            if math.hypot(x[i] - x[j], y[i] - y[j]) <= radius:
                 if used == len(found_i):
                     found_i = np.concatenate((found_i, np.empty(used, dtype=np.int64)))
                     found_j = np.concatenate((found_j, np.empty(used, dtype=np.int64)))
@@ -206,3 +211,91 @@ def _pairs(x, y, t, node, start, radius, window):
                 found_j[used] = j
                 used += 1
     return found_i[:used].copy(), found_j[:used].copy()
+
+
+#: The columns of :func:`causal_pair_features`.
+N_PAIR_FEATURES = len(PAIR_FEATURES)
+
+
+def causal_pair_features(d: Detections, local: LocalMotion, objectness, i, j):
+    """:func:`~._link_features.pair_features` in one compiled loop (the causal estimator's and the stream's).
+
+    The same features by the same formulas; one loop over the pairs instead of some forty numpy calls over the
+    whole sequence, which is what a scan of a stream can afford.  Offline (``causal=True``) and online use this
+    one, so that both compute the same floating-point numbers.
+
+    Parameters
+    ----------
+    d : Detections
+        The detections (of a sequence, or a stream's window).
+    local : LocalMotion
+        Their local motion.
+    objectness : ndarray of float64
+        Their P(road user).
+    i, j : ndarray of int64
+        The pairs.
+
+    Returns
+    -------
+    features : ndarray of float64, shape (n_pairs, len(PAIR_FEATURES))
+    """
+    columns = (d.x, d.y, d.t, d.v, d.los, d.range, d.sensor, d.rcs, local.count, local.spread, objectness, local.vx)
+    return _pair_features(
+        *(np.ascontiguousarray(a, dtype=np.float64) for a in (*columns, local.vy)),
+        np.ascontiguousarray(i, dtype=np.int64),
+        np.ascontiguousarray(j, dtype=np.int64),
+    )
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _lo(a, b):
+    """numpy's minimum: NaN when either is."""
+    if a != a or b != b:
+        return np.nan
+    return a if a < b else b
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _hi(a, b):
+    if a != a or b != b:
+        return np.nan
+    return a if a > b else b
+
+
+@numba.njit(cache=True, nogil=True)
+def _pair_features(x, y, t, v, los, ranges, sensor, rcs, count, spread, objectness, vx, vy, i, j):
+    n = len(i)
+    out = np.empty((n, N_PAIR_FEATURES))
+    for e in range(n):
+        a, b = i[e], j[e]
+        dx, dy, dt = x[b] - x[a], y[b] - y[a], t[b] - t[a]
+        ca, sa, cb, sb = math.cos(los[a]), math.sin(los[a]), math.cos(los[b]), math.sin(los[b])
+        res_ab = abs(v[b] - (cb * vx[a] + sb * vy[a]))
+        res_ba = abs(v[a] - (ca * vx[b] + sa * vy[b]))
+        det = ca * sb - sa * cb
+        safe = det
+        if abs(det) < 1e-3:
+            safe = math.copysign(1e-3, det + 1e-12)
+        implied = math.hypot((v[a] * sb - v[b] * sa) / safe, (ca * v[b] - cb * v[a]) / safe)
+        if not implied <= MAX_IMPLIED_SPEED and implied == implied:
+            implied = MAX_IMPLIED_SPEED
+        out[e, 0] = math.hypot(dx, dy)
+        out[e, 1] = abs(dt)
+        out[e, 2] = abs(v[a] - v[b])
+        out[e, 3] = _lo(res_ab, res_ba)
+        out[e, 4] = _hi(res_ab, res_ba)
+        out[e, 5] = implied
+        out[e, 6] = abs(det)
+        out[e, 7] = math.hypot(vx[a] - vx[b], vy[a] - vy[b])
+        out[e, 8] = math.hypot(dx - (vx[a] + vx[b]) / 2 * dt, dy - (vy[a] + vy[b]) / 2 * dt)
+        out[e, 9] = (ranges[a] + ranges[b]) / 2
+        same = sensor[a] + sensor[b]
+        out[e, 10] = np.nan if same != same else (1.0 if sensor[a] == sensor[b] else 0.0)
+        k = 11
+        for values in (rcs, count, spread, objectness):
+            out[e, k] = _lo(values[a], values[b])
+            out[e, k + 1] = _hi(values[a], values[b])
+            k += 2
+        out[e, 19] = _lo(abs(v[a]), abs(v[b]))
+        out[e, 20] = _hi(abs(v[a]), abs(v[b]))
+    return out

@@ -17,7 +17,7 @@ from .._schema import CLASSIFIER_LAYOUT, CLUSTER_FEATURE_READS, ArrayLayout, Col
 from .._validation import read_columns, sequence_slices
 from ._agglomeration import mean_link_merges, roots_at
 from ._causal_agglomeration import confirmed_roots, sequence_merges
-from ._causal_link_features import causal_detection_features, causal_pairs
+from ._causal_link_features import causal_detection_features, causal_pair_features, causal_pairs
 from ._link_features import (
     DETECTION_FEATURES,
     PAIR_FEATURES,
@@ -372,7 +372,7 @@ class LinkClustering(ClusterMixin, BaseEstimator):
             i, j = self._pairs(s, p > floor)  # a positive pair: both detections of one instance
             truth = y[s.rows]
             pairs.append((i, j))
-            pair_x.append(pair_features(s.detections, s.local, p, i, j)[:, pair_columns])
+            pair_x.append(self._pair_features(s, p, i, j)[:, pair_columns])
             pair_y.append((truth[i] == truth[j]) & is_object[i])
         pair_folds = [fold[i] for fold, (i, _) in zip(folds, pairs, strict=True)]
         self.n_training_pairs_ = int(sum(len(i) for i, _ in pairs))
@@ -402,6 +402,11 @@ class LinkClustering(ClusterMixin, BaseEstimator):
             )
         )
 
+    def _pair_features(self, s, objectness, i, j):
+        """The pair features of the pairs (i, j) of sequence s (causal: the compiled loop a stream runs too)."""
+        features = causal_pair_features if self.causal else pair_features
+        return features(s.detections, s.local, objectness, i, j)
+
     def _pairs(self, s, subset):
         d = s.detections
         if self.causal:  # the same pairs, in the order the causal agglomeration takes them
@@ -419,9 +424,7 @@ class LinkClustering(ClusterMixin, BaseEstimator):
             objectness = positive_proba(self.objectness_classifier_, s.features[:, detection_columns])
             node = objectness > self.objectness_threshold_
             i, j = self._pairs(s, node)
-            links = positive_proba(
-                self.link_classifier_, pair_features(s.detections, s.local, objectness, i, j)[:, pair_columns]
-            )
+            links = positive_proba(self.link_classifier_, self._pair_features(s, objectness, i, j)[:, pair_columns])
             if self.causal:
                 final, sizes = sequence_merges(
                     s.detections.t, node, i, j, links, self.pair_window, self.link_threshold_

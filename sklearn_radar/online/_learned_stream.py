@@ -18,7 +18,7 @@ import numpy as np
 from sklearn.utils.validation import check_is_fitted
 
 from ..cluster._causal_agglomeration import new_state, step
-from ..cluster._causal_link_features import causal_detection_features, causal_pairs
+from ..cluster._causal_link_features import causal_detection_features, causal_pair_features, causal_pairs
 from ..cluster._link_clustering import _SORT_KEY
 from ..cluster._link_features import (
     DETECTION_FEATURES,
@@ -26,14 +26,17 @@ from ..cluster._link_features import (
     PAIR_FEATURES,
     Detections,
     LocalMotion,
-    pair_features,
 )
 from ..cluster._link_training import positive_proba
 from ..cluster._tree_walk import boosting_proba, compile_boosting
 from ._objects import empty_object_list, object_figures
 
-#: The buffered columns of each kept detection: the measurements, then what the pairs reuse.
-_BUFFER = (*Detections._fields, "vx", "vy", "count", "spread", "objectness", "node", "number", "cluster", "us")
+#: The buffered float columns of each kept detection (rows of one array): the measurements, then what the pairs
+#: reuse; and the integer ones (node: 1 when above the objectness threshold).
+_FLOATS = (*Detections._fields, "vx", "vy", "count", "spread", "objectness")
+_INTS = ("node", "number", "cluster", "us")
+_F = {name: k for k, name in enumerate(_FLOATS)}
+_I = {name: k for k, name in enumerate(_INTS)}
 #: The measurements that a model fitted without their columns does not see (NaN, as offline).
 _OPTIONAL = {"rcs": "rcs", "range": "range_sc", "sensor": "sensor_id", "ego": "ego_vx"}
 
@@ -54,14 +57,11 @@ def check_learned(model):
 
 
 class _Window:
-    """One sequence's recent kept detections (``_BUFFER`` columns), its agglomeration state and its ids."""
+    """One sequence's recent kept detections (a row per column, time order) and its agglomeration state."""
 
     def __init__(self):
-        self.columns = {name: np.zeros(0) for name in _BUFFER}
-        for name in ("node",):
-            self.columns[name] = np.zeros(0, dtype=bool)
-        for name in ("number", "cluster", "us"):
-            self.columns[name] = np.zeros(0, dtype=np.int64)
+        self.floats = np.zeros((len(_FLOATS), 0))
+        self.ints = np.zeros((len(_INTS), 0), dtype=np.int64)
         self.state = new_state()
         self.n_kept = 0  # kept detections so far: the next one's number
 
@@ -105,9 +105,9 @@ class LearnedStream:
         ----------
         sequence : int
             Its sequence.
-        columns : dict of ndarray
+        columns : dict
             The scan's working and raw columns: ``x``, ``y`` (m), ``t`` (s, one value), ``v_r`` (m/s), ``los``
-            (rad), ``rcs`` (dBsm), ``range_sc`` (m), ``sensor_id``, ``ego_vx`` (m/s).
+            (rad), ``rcs`` (dBsm), ``range_sc`` (m), ``sensor_id``, ``ego_vx`` (m/s), and ``us`` (its time, us).
         keep : ndarray of bool
             The filter's verdict.
 
@@ -130,93 +130,74 @@ class LearnedStream:
         sizes = np.zeros(n, dtype=np.int64)
         rows = np.flatnonzero(keep)
         now = float(columns["t"][0])
-        buffer = window.columns
-        recent = now - buffer["t"] <= self.span
+        recent = now - window.floats[_F["t"]] <= self.span
         if not recent.all():
-            for name in _BUFFER:
-                buffer[name] = buffer[name][recent]
+            window.floats, window.ints = window.floats[:, recent], window.ints[:, recent]
         if len(rows) == 0:
             return clusters, sizes, []
-        nan = np.full(len(rows), np.nan)
-        measured = {
-            "x": columns["x"][rows],
-            "y": columns["y"][rows],
-            "t": columns["t"][rows],
-            "v": columns["v_r"][rows],
-            "los": nan if "los" in self._absent else columns["los"][rows],
-        }
-        for field, column in _OPTIONAL.items():
-            measured[field] = nan if field in self._absent else np.asarray(columns[column], dtype=np.float64)[rows]
-        order = np.lexsort([measured[name] for name in reversed(_SORT_KEY)])
-        rows = rows[order]
-        start = len(buffer["t"])
-        for name in Detections._fields:
-            buffer[name] = np.concatenate([buffer[name], measured[name][order]])
-        detections = Detections(**{name: buffer[name] for name in Detections._fields})
+        new = np.full((len(_FLOATS), len(rows)), np.nan)
+        for name, column in (("x", "x"), ("y", "y"), ("t", "t"), ("v", "v_r"), ("los", "los"), *_OPTIONAL.items()):
+            if name not in self._absent:
+                new[_F[name]] = columns[column][rows]
+        order = np.lexsort(new[[_F[name] for name in reversed(_SORT_KEY)]])
+        rows, new = rows[order], new[:, order]
+        start = window.floats.shape[1]
+        floats = np.concatenate([window.floats, new], axis=1)
+        detections = Detections(*floats[: len(Detections._fields)])
         features, local = causal_detection_features(detections, start)
-        objectness = self._proba(self._objectness, model.objectness_classifier_, features[:, self._detection_columns])
+        X = features[:, self._detection_columns]
+        objectness = self._proba(self._objectness, model.objectness_classifier_, X)
+        floats[_F["vx"], start:], floats[_F["vy"], start:] = local.vx, local.vy
+        floats[_F["count"], start:], floats[_F["spread"], start:] = local.count, local.spread
+        floats[_F["objectness"], start:] = objectness
         node = objectness > model.objectness_threshold_
         numbers = window.n_kept + np.arange(len(rows))
         window.n_kept += len(rows)
-        for name, values in (
-            ("vx", local.vx),
-            ("vy", local.vy),
-            ("count", local.count),
-            ("spread", local.spread),
-            ("objectness", objectness),
-            ("node", node),
-            ("number", numbers),
-            ("cluster", np.where(node, numbers, -1)),
-            ("us", np.full(len(rows), int(columns["us"]), dtype=np.int64)),
-        ):
-            buffer[name] = np.concatenate([buffer[name], values])
+        ints = np.empty((len(_INTS), len(rows)), dtype=np.int64)
+        ints[_I["node"]], ints[_I["number"]] = node, numbers
+        ints[_I["cluster"]], ints[_I["us"]] = np.where(node, numbers, -1), int(columns["us"])
+        window.floats, window.ints = floats, np.concatenate([window.ints, ints], axis=1)
         if not node.any():
             return clusters, sizes, []
+        flags = window.ints[_I["node"]].astype(bool)
         i, j = causal_pairs(
-            buffer["x"], buffer["y"], buffer["t"], buffer["node"], start, model.pair_radius, model.pair_window
+            detections.x, detections.y, detections.t, flags, start, model.pair_radius, model.pair_window
         )
         links = np.zeros(0)
         if len(i):
-            motion = LocalMotion(vx=buffer["vx"], vy=buffer["vy"], count=buffer["count"], spread=buffer["spread"])
-            X = pair_features(detections, motion, buffer["objectness"], i, j)[:, self._pair_columns]
+            motion = LocalMotion(*(floats[_F[name]] for name in LocalMotion._fields))
+            X = causal_pair_features(detections, motion, floats[_F["objectness"]], i, j)[:, self._pair_columns]
             links = self._proba(self._links, model.link_classifier_, X)
-        number = buffer["number"]
+        number = window.ints[_I["number"]]
         new_clusters, new_sizes, child, survivor = step(
             window.state, now, numbers[node], number[i], number[j], links, model.pair_window, model.link_threshold_
         )
-        first_new = int(numbers[0])
         merges = []
+        cluster = window.ints[_I["cluster"]]
         if len(child):
-            renamed = dict(zip(child.tolist(), survivor.tolist(), strict=True))
+            first_new = int(numbers[0])
             merges = [(s, c) for c, s in zip(child.tolist(), survivor.tolist(), strict=True) if c < first_new]
-            cluster = buffer["cluster"]
             old = cluster[:start]
-            for c in child.tolist():  # in order: a survivor may be merged away later in the same scan
-                old[old == c] = renamed[c]
-        buffer["cluster"][start:][node] = new_clusters
+            for c, s in zip(child.tolist(), survivor.tolist(), strict=True):  # in order: chains of merges
+                if c < first_new:
+                    old[old == c] = s
+        cluster[start:][node] = new_clusters
         clusters[rows[node]] = new_clusters
         sizes[rows[node]] = new_sizes
         return clusters, sizes, merges
 
     def recent(self, sequence):
         """The buffered nodes of a sequence: ``cluster`` now, ``x``, ``y`` (m), ``v_r`` (m/s), ``los`` (rad), ``us``."""
-        buffer = self._windows[sequence].columns
-        node = buffer["node"]
-        return {
-            name: buffer[key][node]
-            for name, key in (
-                ("cluster", "cluster"),
-                ("x", "x"),
-                ("y", "y"),
-                ("v_r", "v"),
-                ("los", "los"),
-                ("us", "us"),
-            )
+        window = self._windows[sequence]
+        node = window.ints[_I["node"]].astype(bool)
+        found = {
+            name: window.floats[_F[key]][node] for name, key in (("x", "x"), ("y", "y"), ("v_r", "v"), ("los", "los"))
         }
+        return {"cluster": window.ints[_I["cluster"]][node], "us": window.ints[_I["us"]][node], **found}
 
     def retained_rows(self):
         """Detections held by the windows of every sequence."""
-        return sum(len(window.columns["t"]) for window in self._windows.values())
+        return sum(window.floats.shape[1] for window in self._windows.values())
 
     @staticmethod
     def _proba(compiled, model, X):

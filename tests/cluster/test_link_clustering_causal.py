@@ -233,3 +233,25 @@ def test_causal_must_be_a_boolean(data):
     X, y = data
     with pytest.raises(ValueError, match="causal"):
         LinkClustering(causal="yes").fit(X, y)
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(0, 2**16), st.integers(2, 80), st.booleans())
+def test_compiled_pair_features_equal_the_numpy_ones(seed, n, measured):
+    # The reference: the offline (numpy) pair features, on the same detections and pairs.
+    from sklearn_radar.cluster._causal_link_features import causal_pair_features
+    from sklearn_radar.cluster._link_features import pair_features
+
+    rng = np.random.default_rng(seed)
+    d = _random_detections(n, rng)
+    if not measured:  # absent measurements are NaN, and so are the features that need them
+        d = d._replace(los=np.full(n, np.nan), rcs=np.full(n, np.nan), sensor=np.full(n, np.nan))
+    _, local = causal_detection_features(d)
+    objectness = rng.random(n)
+    i, j = causal_pairs(d.x, d.y, d.t, np.ones(n, dtype=bool), 0, 3.0, 0.25)
+    np.testing.assert_allclose(
+        causal_pair_features(d, local, objectness, i, j),
+        pair_features(d, local, objectness, i, j),
+        rtol=1e-9,
+        atol=1e-9,
+    )
