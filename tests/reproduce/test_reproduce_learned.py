@@ -50,7 +50,7 @@ def _direct_model(folder, results, causal=False):
     X = pd.concat([X for X, _, _ in tables], ignore_index=True)
     y = np.concatenate([y for _, y, _ in tables])
     params = {**SMALL, "link__window": 0.5, "link__random_state": results["meta"]["seed"], "link__n_jobs": 1}
-    return learned_pipeline({**params, "link__causal": causal}).fit(X, y)
+    return learned_pipeline({**params, "link__causal": causal, "filter__causal": causal}).fit(X, y)
 
 
 def _test_scores(folder, results, model):
@@ -159,6 +159,7 @@ def test_stream_runs_the_causal_model(learned_run, tiny_folder, tmp_path):
     # The stream's final ids are the causal model's offline labels (predict on each whole sequence).
     results = json.loads((learned_run / "results.json").read_text())
     model = load_learned(learned_run / "learned_causal.joblib")
+    assert model.get_params()["filter__causal"] is True
     out = tmp_path / "predictions.json"
     args = ["stream", "--data", str(tiny_folder), "--params", str(learned_run / "params.json"), "--out", str(out)]
     with contextlib.redirect_stdout(io.StringIO()):
