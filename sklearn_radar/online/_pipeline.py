@@ -43,7 +43,8 @@ class ScanResult:
     objects : ObjectList
         The live objects of the scan's sequence.
     aliases : list of (int, int, int, str)
-        The merges decided at this scan: (timestamp us, surviving id, merged id, ``"stage1"`` or ``"stage2"``);
+        The merges decided at this scan: (timestamp us, surviving id, merged id, ``"stage1"``, ``"stage2"``
+        or, with the learned grouping, ``"learned"``);
         from now on the merged id is an alias of the surviving one.  A merge of clusters that are one
         object already (through other merges) makes no alias.
     merges : list of (int, int)

@@ -160,6 +160,10 @@ def test_stream_runs_the_causal_model(learned_run, tiny_folder, tmp_path):
     results = json.loads((learned_run / "results.json").read_text())
     model = load_learned(learned_run / "learned_causal.joblib")
     assert model.get_params()["filter__causal"] is True
+    from sklearn_radar.online import OnlinePipeline
+
+    online = OnlinePipeline.from_params(learned_run / "params.json", "learned")
+    assert online.learned and online.experiment == "learned" and online.pipeline[-1].causal
     out = tmp_path / "predictions.json"
     args = ["stream", "--data", str(tiny_folder), "--params", str(learned_run / "params.json"), "--out", str(out)]
     with contextlib.redirect_stdout(io.StringIO()):
