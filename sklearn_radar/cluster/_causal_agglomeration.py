@@ -165,26 +165,41 @@ def _step(state, now, new_nodes, i, j, links, window, threshold):
         nodes.append(node)
         clusters.append(node)
         times.append(now)
-    # The evidence of the new pairs (every new node is still a cluster of its own).
-    for e in range(len(i)):
-        a, b = clusters[position[i[e]]], j[e]
-        if b in total[a]:
-            total[a][b] += links[e]
-            total[b][a] += links[e]
-            count[a][b] += 1
-            count[b][a] += 1
-        else:
-            total[a][b] = links[e]
-            total[b][a] = links[e]
-            count[a][b] = 1
-            count[b][a] = 1
+    # The evidence of the new pairs: each new node b is still a cluster of its own, and its pairs (a block of j)
+    # sum up per cluster a of their earlier end, in the pairs' order; no pair of clusters (a, b) had evidence before.
     heap = [(0.0, np.int64(0), np.int64(0))]
     heap.pop()
-    for e in range(len(i)):
-        a, b = clusters[position[i[e]]], j[e]
-        mean = total[a][b] / count[a][b]
-        if mean > threshold:
-            heap.append((-mean, min(a, b), max(a, b)))
+    distinct = np.empty(len(i), dtype=np.int64)
+    sums = np.empty(len(i), dtype=np.float64)
+    counts = np.empty(len(i), dtype=np.int64)
+    e = 0
+    while e < len(i):
+        b = j[e]
+        found = 0
+        while e < len(i) and j[e] == b:
+            a = clusters[position[i[e]]]
+            slot = -1
+            for q in range(found):
+                if distinct[q] == a:
+                    slot = q
+                    break
+            if slot < 0:
+                distinct[found], sums[found], counts[found] = a, links[e], 1
+                found += 1
+            else:
+                sums[slot] += links[e]
+                counts[slot] += 1
+            e += 1
+        to_b, counts_b = total[b], count[b]
+        for q in range(found):
+            a = distinct[q]
+            to_b[a] = sums[q]
+            total[a][b] = sums[q]
+            counts_b[a] = counts[q]
+            count[a][b] = counts[q]
+            mean = sums[q] / counts[q]
+            if mean > threshold:
+                heap.append((-mean, min(a, b), max(a, b)))
     heapq.heapify(heap)
     child = List.empty_list(types.int64)
     survivor = List.empty_list(types.int64)
