@@ -5,17 +5,12 @@ import pickle
 import numpy as np
 import pandas as pd
 import pytest
-from hypothesis import given, settings
-from hypothesis import strategies as st
 from sklearn.base import clone
 from sklearn.pipeline import Pipeline
 
 from sklearn_radar import DopplerDensityFilter, FrameTransform, instance_target
 from sklearn_radar.cluster import LinkClustering
-from sklearn_radar.cluster._causal_agglomeration import confirmed_roots, new_state, sequence_merges, step
-from sklearn_radar.cluster._causal_link_features import causal_detection_features, causal_pairs
 from sklearn_radar.cluster._link_clustering import LINK_GRID, MIN_SIZE_GRID, OBJECTNESS_GRID
-from sklearn_radar.cluster._link_features import Detections, detection_features, pairs_within
 from sklearn_radar.datasets import make_scenes
 
 #: Fixed thresholds (no tuning): the cheap configuration.
@@ -25,103 +20,6 @@ FIXED = {"link_threshold": 0.5, "objectness_threshold": 0.3, "min_cluster_size":
 def _same_partition(a, b):
     a, b = np.asarray(a), np.asarray(b)
     return len(set(zip(a.tolist(), b.tolist(), strict=True))) == len(set(a.tolist())) == len(set(b.tolist()))
-
-
-def _random_detections(n, rng, times=12):
-    t = np.sort(rng.integers(0, times, n) * 0.04)
-    return Detections(
-        x=rng.uniform(0, 8, n),
-        y=rng.uniform(0, 8, n),
-        t=t,
-        v=rng.normal(0, 3, n),
-        los=rng.uniform(-np.pi, np.pi, n),
-        rcs=rng.normal(0, 5, n),
-        range=rng.uniform(5, 80, n),
-        sensor=rng.integers(1, 5, n).astype(float),
-        ego=np.full(n, 8.0),
-    )
-
-
-@settings(max_examples=30, deadline=None)
-@given(st.integers(0, 2**16), st.integers(1, 120))
-def test_causal_features_are_the_offline_features_of_the_data_truncated_at_each_time(seed, n):
-    # The reference: the offline (past and future) features computed on the detections up to each time; for the
-    # detections of that last time, their whole neighbourhood is then the past.
-    d = _random_detections(n, np.random.default_rng(seed))
-    features, local = causal_detection_features(d)
-    for time in np.unique(d.t):
-        upto = d.t <= time
-        truncated = Detections(*(values[upto] for values in d))
-        expected, expected_local = detection_features(truncated)
-        last = truncated.t == time
-        np.testing.assert_allclose(features[upto][last], expected[last], rtol=1e-9, atol=1e-9)
-        np.testing.assert_allclose(local.vx[upto][last], expected_local.vx[last], rtol=1e-9, atol=1e-9)
-        np.testing.assert_allclose(local.count[upto][last], expected_local.count[last])
-
-
-def test_features_from_a_start_are_those_of_the_whole_run():
-    # The online path computes the new scan's features against a window of the past: the same numbers.
-    d = _random_detections(200, np.random.default_rng(3), times=40)
-    whole, whole_local = causal_detection_features(d)
-    start = int(np.searchsorted(d.t, d.t[120]))
-    tail, tail_local = causal_detection_features(d, start)
-    np.testing.assert_array_equal(tail, whole[start:])
-    np.testing.assert_array_equal(tail_local.vx, whole_local.vx[start:])
-
-
-@settings(max_examples=50, deadline=None)
-@given(st.integers(0, 2**16), st.integers(0, 80), st.sampled_from([0.0, 0.04, 0.25]), st.sampled_from([1.0, 3.0]))
-def test_causal_pairs_are_the_offline_pairs_in_arrival_order(seed, n, window, radius):
-    rng = np.random.default_rng(seed)
-    d = _random_detections(n, rng)
-    node = rng.random(n) < 0.7
-    i, j = causal_pairs(d.x, d.y, d.t, node, 0, radius, window)
-    ref_i, ref_j = pairs_within(d.x, d.y, d.t, radius, window, node)
-    assert set(zip(i.tolist(), j.tolist(), strict=True)) == set(zip(ref_i.tolist(), ref_j.tolist(), strict=True))
-    assert len(i) == len(ref_i)
-    assert np.all(np.diff(j * (n + 1) + i) > 0)  # in the order of j, then i
-    start = n // 2
-    later = j >= start
-    tail_i, tail_j = causal_pairs(d.x, d.y, d.t, node, start, radius, window)
-    np.testing.assert_array_equal(tail_i, i[later])
-    np.testing.assert_array_equal(tail_j, j[later])
-
-
-def test_the_causal_merges_worked_by_hand():
-    # Nodes 0, 1 at 0 s; 2 at 0.1 s; 3 at 0.2 s; 4 at 0.6 s; pair window 0.25 s, threshold 0.5.
-    #   0 s: (0, 1) 0.9 -> {0, 1}.
-    #   0.1 s: (0, 2) 0.2, (1, 2) 0.3: mean 0.25 -> 2 alone.
-    #   0.2 s: (0, 3) 0.8, (1, 3) 0.9, (2, 3) 0.9.  Means: {0,1}-3 0.85, 2-3 0.9: 3 joins 2 (the older);
-    #          then {0,1}-{2,3}: (0.2 + 0.3 + 0.8 + 0.9) / 4 = 0.55 > 0.5: the old clusters merge, 0 survives.
-    #   0.6 s: node 4, no pair; cluster 0 (last node at 0.2 s) retires.
-    t = np.array([0.0, 0.0, 0.1, 0.2, 0.6])
-    node = np.ones(5, dtype=bool)
-    i = np.array([0, 0, 1, 0, 1, 2])
-    j = np.array([1, 2, 2, 3, 3, 3])
-    links = np.array([0.9, 0.2, 0.3, 0.8, 0.9, 0.9])
-    roots, sizes = sequence_merges(t, node, i, j, links, 0.25, 0.5)
-    np.testing.assert_array_equal(roots, [0, 0, 0, 0, 4])
-    np.testing.assert_array_equal(sizes, [2, 2, 1, 4, 1])
-    np.testing.assert_array_equal(confirmed_roots(roots, sizes, 2), [0, 0, -1, 0, -1])
-    # The same, step by step: the merges in order, the older survives, and the retired cluster is forgotten.
-    state = new_state()
-    step(state, 0.0, [0, 1], [0], [1], [0.9], 0.25, 0.5)
-    clusters, counts, child, survivor = step(state, 0.1, [2], [0, 1], [2, 2], [0.2, 0.3], 0.25, 0.5)
-    assert clusters.tolist() == [2] and counts.tolist() == [1] and len(child) == 0
-    clusters, counts, child, survivor = step(state, 0.2, [3], [0, 1, 2], [3, 3, 3], [0.8, 0.9, 0.9], 0.25, 0.5)
-    assert clusters.tolist() == [0] and counts.tolist() == [4]
-    assert list(zip(child.tolist(), survivor.tolist(), strict=True)) == [(3, 2), (2, 0)]
-    step(state, 0.6, [4], [], [], [], 0.25, 0.5)
-    total, _, size, *_ = state
-    assert sorted(size.keys()) == [4] and sorted(total.keys()) == [4]
-
-
-def test_a_low_mean_stops_the_merging_and_a_node_below_objectness_is_noise():
-    t = np.array([0.0, 0.0, 0.0])
-    node = np.array([True, True, False])
-    roots, sizes = sequence_merges(t, node, np.array([0]), np.array([1]), np.array([0.5]), 0.25, 0.5)
-    np.testing.assert_array_equal(roots, [0, 1, -1])  # 0.5 does not exceed 0.5
-    np.testing.assert_array_equal(sizes, [1, 1, 0])
 
 
 def _scenes(n_sequences=2, duration=2.0, random_state=0):
@@ -233,25 +131,3 @@ def test_causal_must_be_a_boolean(data):
     X, y = data
     with pytest.raises(ValueError, match="causal"):
         LinkClustering(causal="yes").fit(X, y)
-
-
-@settings(max_examples=30, deadline=None)
-@given(st.integers(0, 2**16), st.integers(2, 80), st.booleans())
-def test_compiled_pair_features_equal_the_numpy_ones(seed, n, measured):
-    # The reference: the offline (numpy) pair features, on the same detections and pairs.
-    from sklearn_radar.cluster._causal_link_features import causal_pair_features
-    from sklearn_radar.cluster._link_features import pair_features
-
-    rng = np.random.default_rng(seed)
-    d = _random_detections(n, rng)
-    if not measured:  # absent measurements are NaN, and so are the features that need them
-        d = d._replace(los=np.full(n, np.nan), rcs=np.full(n, np.nan), sensor=np.full(n, np.nan))
-    _, local = causal_detection_features(d)
-    objectness = rng.random(n)
-    i, j = causal_pairs(d.x, d.y, d.t, np.ones(n, dtype=bool), 0, 3.0, 0.25)
-    np.testing.assert_allclose(
-        causal_pair_features(d, local, objectness, i, j),
-        pair_features(d, local, objectness, i, j),
-        rtol=1e-9,
-        atol=1e-9,
-    )
