@@ -115,9 +115,9 @@ _ENTRY = []
 def _step_entry(args):
     """The compiled :func:`_step` for these argument types, called without numba's dispatch.
 
-    Numba's dispatcher types every argument at each call; for the state's nested typed containers that costs
-    about 0.4 ms, more than the step itself.  The types never change (the state is :func:`new_state`'s, the
-    arrays contiguous of fixed dtypes), so the entry point found once serves every later call.
+    Numba's dispatcher types every argument at each call, which for the state's nested typed containers costs
+    more than the step itself (:ref:`online-learned`).  The types never change (the state is :func:`new_state`'s,
+    the arrays contiguous of fixed dtypes), so the entry point found once serves every later call.
     """
     if not _ENTRY:
         signature = tuple(numba.typeof(arg) for arg in args)

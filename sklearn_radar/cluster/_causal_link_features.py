@@ -220,9 +220,8 @@ N_PAIR_FEATURES = len(PAIR_FEATURES)
 def causal_pair_features(d: Detections, local: LocalMotion, objectness, i, j):
     """:func:`~._link_features.pair_features` in one compiled loop (the causal estimator's and the stream's).
 
-    The same features by the same formulas; one loop over the pairs instead of some forty numpy calls over the
-    whole sequence, which is what a scan of a stream can afford.  Offline (``causal=True``) and online use this
-    one, so that both compute the same floating-point numbers.
+    The same features by the same formulas, in one loop over the pairs.  Offline (``causal=True``) and online
+    use this one, so that both compute the same floating-point numbers.
 
     Parameters
     ----------
