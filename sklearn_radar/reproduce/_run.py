@@ -571,5 +571,5 @@ def _title(key):
         OBJECTS: "the object experiment (the framework's stages tuned for PQ)",
         TRACKING: "object tracking online (IDF1, ID switches, MOTA of the streamed ids)",
         CLASSIFICATION: "the classifier of clusters (class PQ, mAP@0.5, macro-F1, mCov)",
-        LEARNED: "the learned grouping (fitted on the training half's instances, scored offline)",
+        LEARNED: "the learned grouping (fitted on the training half's instances, scored offline and causally)",
     }[key]
