@@ -61,13 +61,16 @@ def prototype_pq(preset, seed, options):
     return record["pq"]
 
 
-def load(preset, seed, n_sequences, duration):
-    """Working detections of the training and the test half (through the front, per sequence), and targets."""
+def load(preset, seed, n_sequences, duration, causal=False):
+    """Working detections of the training and the test half (through the front, per sequence), and targets.
+
+    ``causal``: the front's filter counts the past only, as a stream's does.
+    """
     scenes = make_scenes(n_sequences=n_sequences, duration=duration, difficulty=preset, random_state=seed)
     target = precluster_target(scenes.data, scenes.target)
     train_rows, _ = sequence_train_test_split(scenes.groups, test_size=0.5, random_state=seed)
     train_ids = set(np.unique(scenes.groups[train_rows]).tolist())
-    front = Pipeline([("frame", FrameTransform(frame="frame")), ("filter", DopplerDensityFilter())])
+    front = Pipeline([("frame", FrameTransform(frame="frame")), ("filter", DopplerDensityFilter(causal=causal))])
     halves = {True: ([], []), False: ([], [])}
     for number in np.unique(scenes.groups):
         rows = np.flatnonzero(scenes.groups == number)

@@ -1,6 +1,15 @@
 """Benchmark of the whole framework online: per-scan latency of OnlinePipeline, real-time factor, flat memory.
 
-Run: ``python benchmarks/bench_online.py [--minutes 10] [--experiments 1 8 12 13] [--repeat 3]``.
+Run: ``python benchmarks/bench_online.py [--minutes 10] [--experiments 1 8 12 13] [--repeat 3] [--learned]``.
+
+``--learned`` adds the learned grouping (a causal LinkClustering after the
+frame transform and the filter, row ``learned``), fitted once before the
+streams on a simulated training recording of its own (``--learned-train``
+sequences of 20 s of the realistic preset, other seeds than the stream's;
+``--learned-max-iter`` boosting iterations, 40 as the main job's causal
+model), trained on the pre-clustered instances as the main job trains it,
+thresholds tuned as ``LinkClustering`` tunes them; the fit time and
+the thresholds are printed.
 
 The recording is simulated a minute at a time (realistic preset, the
 RadarScenes rates: four unsynchronised sensors with a 60 ms cycle, a scan
@@ -49,8 +58,61 @@ def minute_of_data(k, difficulty="realistic"):
     return data
 
 
+#: The experiment number that stands for the learned grouping (the fitted model's file in LEARNED_MODEL_ENV).
+LEARNED = 0
+LEARNED_MODEL_ENV = "SKLEARN_RADAR_BENCH_LEARNED_MODEL"
+
+
+def fit_learned(n_sequences, path, max_iter):
+    """Fit the causal learned pipeline on simulated training sequences; save it to ``path``; print what it took."""
+    import joblib
+    from sklearn.pipeline import Pipeline
+
+    from sklearn_radar import DopplerDensityFilter, FrameTransform, instance_target
+    from sklearn_radar.cluster import LinkClustering
+    from sklearn_radar.datasets import make_scenes
+    from sklearn_radar.metrics import precluster_target
+
+    scenes = make_scenes(n_sequences=n_sequences, duration=20.0, difficulty="realistic", random_state=1000)
+    y = precluster_target(scenes.data, instance_target(scenes.data["track_id"], scenes.data["sequence"]))
+    model = Pipeline(
+        [
+            ("frame", FrameTransform(frame="car")),
+            ("filter", DopplerDensityFilter()),
+            ("link", LinkClustering(causal=True, window=0.5, max_iter=max_iter, random_state=0)),
+        ]
+    )
+    start = time.perf_counter()
+    model.fit(scenes.data, y)
+    link = model[-1]
+    print(
+        f"learned: causal LinkClustering fitted on {n_sequences} x 20 s ({len(scenes.data)} detections) in "
+        f"{time.perf_counter() - start:.0f} s; link {link.link_threshold_}, objectness {link.objectness_threshold_}, "
+        f"min size {link.min_cluster_size_}, out-of-fold PQ {link.cv_score_:.3f}",
+        flush=True,
+    )
+    joblib.dump(model, path)
+
+
+def bench_pipeline(number):
+    """The offline pipeline of experiment ``number``, or the saved learned one (:data:`LEARNED`)."""
+    if number == LEARNED:
+        import os
+
+        import joblib
+
+        return joblib.load(os.environ[LEARNED_MODEL_ENV])
+    from sklearn_radar.experiments import experiment_pipeline
+
+    return experiment_pipeline(number)
+
+
 def retained_rows(online):
     """Rows held by the windows of the stream (filter, stage 1, stage 2) and the ids remembered."""
+    if online.learned:
+        rows = online._learned.retained_rows()
+        rows += sum(0 if state.filter is None else len(state.filter.window) for state in online._sequences.values())
+        return rows, sum(len(known) for known in online._learned_ids.of_sequence.values())
     rows = sum(window.points.t.shape[0] for window in online._stage1._windows.values())
     for state in online._sequences.values():
         rows += state.merge.rows["t"].shape[0] + state.merge.tracks["t"].shape[0]
@@ -98,11 +160,10 @@ def run(number, minutes, objects, one_minute=False):
     ``objects`` 2 times stage 1 alone (ScanStream) on the same scans instead; 3 all stages and a Tracker
     (``noise_radius=1`` m, the rest at its defaults) without the object list.
     """
-    from sklearn_radar.experiments import experiment_pipeline
     from sklearn_radar.online import OnlinePipeline, Tracker
     from sklearn_radar.online._replay import scan_order
 
-    online = OnlinePipeline(experiment_pipeline(number), tracker=Tracker(noise_radius=1.0) if objects == 3 else None)
+    online = OnlinePipeline(bench_pipeline(number), tracker=Tracker(noise_radius=1.0) if objects == 3 else None)
     wall, cpu, after = [], [], {}
     recorded = 0.0
     simulated = minute_of_data(0) if one_minute else None
@@ -148,7 +209,7 @@ def run(number, minutes, objects, one_minute=False):
 def main():
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--minutes", type=int, default=10)
-    parser.add_argument("--experiments", type=int, nargs="+", default=[1, 8, 12, 13])
+    parser.add_argument("--experiments", type=int, nargs="*", default=[1, 8, 12, 13])
     parser.add_argument(
         "--kinds", type=int, nargs="+", default=[2, 0, 1, 3], help="2: stage 1 alone, 0: all, 1: +objects, 3: +tracker"
     )
@@ -156,6 +217,9 @@ def main():
     parser.add_argument(
         "--one-minute", action="store_true", help="simulate one minute, replay it shifted (RSS of the stream alone)"
     )
+    parser.add_argument("--learned", action="store_true", help="add the learned grouping (causal LinkClustering)")
+    parser.add_argument("--learned-train", type=int, default=4, help="training sequences (20 s) of the learned one")
+    parser.add_argument("--learned-max-iter", type=int, default=40, help="boosting iterations of the learned one")
     parser.add_argument("--child", nargs=3, type=int, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
@@ -163,7 +227,17 @@ def main():
         run(number, minutes, objects, args.one_minute)
         return
     print(f"OnlinePipeline, realistic preset, 4 sensors, {args.minutes} min of recording per setting")
-    for number in args.experiments:
+    numbers = list(args.experiments)
+    if args.learned:
+        import os
+        import tempfile
+
+        path = os.path.join(tempfile.mkdtemp(), "learned_causal.joblib")
+        fit_learned(args.learned_train, path, args.learned_max_iter)
+        os.environ[LEARNED_MODEL_ENV] = path
+        numbers.append(LEARNED)
+        args.kinds = [kind for kind in args.kinds if kind != 2]  # no stage 1 of its own
+    for number in numbers:
         for objects in args.kinds:  # stage 1 alone, the four stages, with the object list, with a tracker
             runs = [child_figures(number, args.minutes, objects, args.one_minute) for _ in range(args.repeat)]
             for f in runs:
@@ -171,7 +245,8 @@ def main():
             if args.repeat > 1:
                 p50, p99 = ([f["cpu_us"][k] for f in runs] for k in (0, 1))
                 print(
-                    f"#{number:<2} {KINDS[objects]:12}  spread of {args.repeat} runs: "
+                    f"{'learned' if number == LEARNED else f'#{number:<2}'} {KINDS[objects]:12}  "
+                    f"spread of {args.repeat} runs: "
                     f"cpu p50 {min(p50):.0f}-{max(p50):.0f} us, p99 {min(p99):.0f}-{max(p99):.0f} us"
                 )
 
@@ -186,11 +261,12 @@ def child_figures(number, minutes, objects, one_minute=False):
 
 def print_figures(number, objects, minutes, f):
     """One line of figures: latency, real-time factor, memory after the first and the last minute."""
+    name = "learned" if number == LEARNED else f"#{number:<2}"
     unknown = {"rss_mb": float("nan"), "rss_now_mb": float("nan"), "rows": 0, "ids": 0}  # stage 1 alone: not measured
     first = f["after_minutes"].get("1", unknown)
     last = f["after_minutes"].get(str(minutes), unknown)
     print(
-        f"#{number:<2} {KINDS[objects]:12}  "
+        f"{name} {KINDS[objects]:12}  "
         f"scans {f['n_scans']}  "
         f"wall p50/p99/max {f['wall_us'][0]:.0f}/{f['wall_us'][1]:.0f}/{f['wall_us'][2]:.0f} us  "
         f"cpu p50/p99/max {f['cpu_us'][0]:.0f}/{f['cpu_us'][1]:.0f}/{f['cpu_us'][2]:.0f} us  "

@@ -21,9 +21,17 @@ prints per preset the test PQ per method, the paired differences ``learned - obj
 ``learned - max(objects, baseline)`` (mean ± 2 SE over seeds), and the error anatomy (sums over seeds), and writes
 ``benchmarks/results/learned_rows.csv`` (one row per preset, seed and method).
 
+``--method learned_causal`` runs the causal learned grouping alone on the same data and split:
+``LinkClustering(causal=True, max_iter=40)`` (the main job's causal model) fitted on the training half through a front
+whose filter is causal too, the test half labelled by its ``predict`` (what ``OnlinePipeline`` streams), saved as
+``learned_causal_<preset>_seed<seed>.json``; ``--summary`` then sets it beside the saved offline rows of the same
+seeds.  The object experiment's saved rows hold its stage-2 setting only (not its stage 1), so its causal score is
+not recomputed here: the main job's learned section has it, with the sliding-window baseline.
+
 Run (one core, niced; several minutes per preset and seed on a busy 2-core machine)::
 
     OMP_NUM_THREADS=1 nice -n 19 python benchmarks/experiment_learned.py --data easy realistic radarscenes --seeds 0 1 2
+    OMP_NUM_THREADS=1 nice -n 19 python benchmarks/experiment_learned.py --method learned_causal --data realistic
     python benchmarks/experiment_learned.py --summary
 """
 
@@ -119,6 +127,72 @@ def run(preset, seed, options):
     return records
 
 
+def run_causal(preset, seed, options):
+    """The causal learned grouping's record on one preset and seed (the split of :func:`run`)."""
+    (train, y_train), (test, y_test) = bench.load(preset, seed, options.n_sequences, options.duration, causal=True)
+    times, groups = test["t"].to_numpy(), test["sequence"].to_numpy()
+    n_scans = test.groupby(["sequence", "sensor_id", "timestamp"]).ngroups
+    model = LinkClustering(causal=True, max_iter=40, n_jobs=options.threads)
+    start = time.perf_counter()
+    with threadpool_limits(options.threads):
+        model.fit(train, y_train)
+        fit_s = time.perf_counter() - start
+        start = time.perf_counter()
+        labels = model.predict(test)
+        predict_s = time.perf_counter() - start
+    record = _scores("learned_causal", labels, y_test, times, groups)
+    record.update(
+        variant="LinkClustering(causal=True)",
+        cv_pq=model.cv_score_,
+        fit_s=fit_s,
+        predict_ms_per_scan=1e3 * predict_s / n_scans,
+        params={
+            "link_threshold": model.link_threshold_,
+            "objectness_threshold": model.objectness_threshold_,
+            "min_cluster_size": model.min_cluster_size_,
+        },
+        preset=preset,
+        seed=seed,
+        n_sequences=options.n_sequences,
+        duration=options.duration,
+    )
+    return [record]
+
+
+def causal_summary(directory):
+    """The causal learned grouping beside the offline rows of the same presets and seeds."""
+    records = []
+    for path in sorted(directory.glob("learned_causal_*_seed*.json")):
+        records.extend(json.loads(path.read_text(encoding="utf-8")))
+    if not records:
+        return
+    causal = pd.DataFrame([_flat(r) for r in records])
+    for preset, part in causal.groupby("preset", sort=False):
+        rows = []
+        for seed in sorted(part.seed):
+            offline = directory / f"learned_{preset}_seed{seed}.json"
+            saved = (
+                {r["method"]: r for r in json.loads(offline.read_text(encoding="utf-8"))} if offline.exists() else {}
+            )
+            own = part[part.seed == seed].iloc[0]
+            rows.append(
+                {
+                    "seed": seed,
+                    "learned_causal": own.pq,
+                    **{method: saved[method]["pq"] for method in METHODS if method in saved},
+                    "missed_causal": own.missed,
+                    "missed_learned": saved["learned"]["errors"]["missed"] if "learned" in saved else np.nan,
+                }
+            )
+        table = pd.DataFrame(rows).set_index("seed")
+        print(f"\n{preset}: the causal learned grouping (test PQ) beside the offline rows of the same seeds")
+        print(table.round(3).to_string())
+        if "learned" in table:
+            print(
+                f"learned_causal - learned (offline): {_mean_2se(table.learned_causal - table.learned)} (mean ± 2 SE)"
+            )
+
+
 def _flat(record):
     row = {key: value for key, value in record.items() if key not in ("errors", "params")}
     row.update(record["errors"])
@@ -136,7 +210,8 @@ def summary(directory):
     """Print the tables of every saved (preset, seed) and write the rows as CSV; returns the DataFrame."""
     records = []
     for path in sorted(directory.glob("learned_*_seed*.json")):
-        records.extend(json.loads(path.read_text(encoding="utf-8")))
+        if not path.name.startswith("learned_causal_"):
+            records.extend(json.loads(path.read_text(encoding="utf-8")))
     if not records:
         print(f"no results in {directory}")
         return None
@@ -175,13 +250,19 @@ def main(argv=None):
     parser.add_argument("--threads", type=int, default=1, help="threads of the classifiers and the searches")
     parser.add_argument("--results", type=Path, default=RESULTS, help="folder of the saved rows")
     parser.add_argument("--summary", action="store_true", help="only print the tables of the saved rows")
+    parser.add_argument(
+        "--method",
+        choices=["offline", "learned_causal"],
+        default="offline",
+        help="the three offline methods, or the causal learned grouping alone",
+    )
     options = parser.parse_args(argv)
     if not options.summary:
         options.results.mkdir(parents=True, exist_ok=True)
         for preset in options.data:
             for seed in options.seeds:
                 print(f"{preset} seed {seed}: {options.n_sequences} x {options.duration:g} s", flush=True)
-                records = run(preset, seed, options)
+                records = (run_causal if options.method == "learned_causal" else run)(preset, seed, options)
                 for r in records:
                     print(
                         f"  {r['method']:<9} {r['variant']:<24} test PQ {r['pq']:.3f} (cv {r['cv_pq']:.3f}) "
@@ -189,9 +270,11 @@ def main(argv=None):
                         f"predict {r['predict_ms_per_scan']:.2f} ms/scan",
                         flush=True,
                     )
-                path = options.results / f"learned_{preset}_seed{seed}.json"
+                stem = "learned_causal" if options.method == "learned_causal" else "learned"
+                path = options.results / f"{stem}_{preset}_seed{seed}.json"
                 path.write_text(json.dumps(records, indent=1, default=float), encoding="utf-8")
     summary(options.results)
+    causal_summary(options.results)
     return 0
 
 

@@ -2,6 +2,7 @@
 
 import numpy as np
 import pytest
+from sklearn.base import clone
 from sklearn.utils.estimator_checks import parametrize_with_checks
 
 from sklearn_radar import ClusterMerger, DopplerDensityFilter, FrameTransform, RadarDBSCAN, config_context
@@ -49,6 +50,26 @@ _NEEDS_INSTANCES = (
 #: predictions of other sequences or time spans) has nothing to hold out and raises, naming the parameters
 #: (tests/cluster/test_link_clustering.py).
 _LINK_CLUSTERING = LinkClustering(link_threshold=0.5, objectness_threshold=0.5, min_cluster_size=1, max_iter=5)
+_CAUSAL_LINK_CLUSTERING = clone(_LINK_CLUSTERING).set_params(causal=True)
+#: The checks LinkClustering fails by design, causal or not.
+_LINK_CLUSTERING_FAILURES = {
+    "check_clustering": _NEEDS_INSTANCES,
+    "check_clustering(readonly_memmap=True)": _NEEDS_INSTANCES,
+    "check_non_transformer_estimators_n_iter": (
+        "max_iter is the number of boosting iterations of its two classifiers (scikit-learn's "
+        "HistGradientBoostingClassifier, whose n_iter_ each fitted classifier has); the clustering itself "
+        "does not iterate, so there is no n_iter_ of its own."
+    ),
+    "check_methods_sample_order_invariance": (
+        "predict numbers the clusters 0, 1, ... in order of each cluster's first row (as labels_ of every "
+        "clusterer here), so permuting the rows renames the clusters; the partition itself does not depend on "
+        "the row order (tested with hypothesis in tests/cluster/test_link_clustering.py)."
+    ),
+    "check_methods_subset_invariance": (
+        "A detection's features count its neighbours among the detections given to predict (as Eq. 1's "
+        "filter does), so predicting a subset changes the features and hence the clusters, by design."
+    ),
+}
 EXPECTED_FAILED_CHECKS = {
     "DopplerDensityFilter()": {
         "check_methods_subset_invariance": (
@@ -102,23 +123,9 @@ EXPECTED_FAILED_CHECKS = {
         "check_positive_only_tag_during_fit": _NEEDS_GROUPS,
         "check_readonly_memmap_input": _NEEDS_GROUPS,
     },
-    repr(_LINK_CLUSTERING): {
-        "check_clustering": _NEEDS_INSTANCES,
-        "check_clustering(readonly_memmap=True)": _NEEDS_INSTANCES,
-        "check_non_transformer_estimators_n_iter": (
-            "max_iter is the number of boosting iterations of its two classifiers (scikit-learn's "
-            "HistGradientBoostingClassifier, whose n_iter_ each fitted classifier has); the clustering itself "
-            "does not iterate, so there is no n_iter_ of its own."
-        ),
-        "check_methods_sample_order_invariance": (
-            "predict numbers the clusters 0, 1, ... in order of each cluster's first row (as labels_ of every "
-            "clusterer here), so permuting the rows renames the clusters; the partition itself does not depend on "
-            "the row order (tested with hypothesis in tests/cluster/test_link_clustering.py)."
-        ),
-        "check_methods_subset_invariance": (
-            "A detection's features count its neighbours among the detections given to predict (as Eq. 1's "
-            "filter does), so predicting a subset changes the features and hence the clusters, by design."
-        ),
+    **{
+        repr(link_clustering): _LINK_CLUSTERING_FAILURES
+        for link_clustering in (_LINK_CLUSTERING, _CAUSAL_LINK_CLUSTERING)
     },
     "ClusterMerger()": {
         "check_clustering": "Its default stage 1 is RadarDBSCAN() with vr_min = 0.4 m/s: " + _BY_DESIGN_NOISE,
@@ -190,6 +197,7 @@ CHECKS = _strict(
             PointClassifier(radius=2.0),
             PointClassifier(radius=2.0, causal=True),
             _LINK_CLUSTERING,
+            _CAUSAL_LINK_CLUSTERING,
         ],
         expected_failed_checks=_expected_failed_checks,
     )

@@ -317,7 +317,7 @@ def _check_setting_options(args):
 
 
 def _check_stream_options(args):
-    """``stream``: as :func:`_check_setting_options`, and a setting with an online version."""
+    """``stream``: as :func:`_check_setting_options`, and --track and --history with what they need."""
     _check_setting_options(args)
     if args.track and args.classifier is not None:
         raise ValueError("--track does not go with --classifier: the classifiers label the final object ids")
@@ -325,11 +325,6 @@ def _check_stream_options(args):
         raise ValueError("--track runs the Tracker saved in --params: give --params")
     if args.history is not None and args.classifier is None:
         raise ValueError("--history chooses how --classifier classifies the objects: give --classifier with it")
-    if args.experiment == _LEARNED:
-        raise ValueError(
-            f"--experiment {_LEARNED}: the learned grouping has no online (causal) version yet; apply it offline with "
-            f"'sklearn-radar cluster --experiment {_LEARNED}'"
-        )
 
 
 def _at_least(low):
@@ -375,8 +370,9 @@ _CLASSIFIER_HELP = (
 
 #: What ``--experiment`` of ``cluster`` and ``stream`` takes.
 _SAVED_EXPERIMENT_HELP = (
-    "which saved experiment: a number 1-13, 'objects' or 'learned' (the learned grouping's saved model; 'cluster' "
-    "only: it has no online version yet) (default: the run's best by cross-validated score on the training half)"
+    "which saved experiment: a number 1-13, 'objects' or 'learned' (the learned grouping's saved model: 'cluster' "
+    "applies the offline one, 'stream' the causal one) (default: the run's best by cross-validated score on the "
+    "training half)"
 )
 #: The learned experiment's key (the CLI imports no experiment module).
 _LEARNED = "learned"

@@ -11,7 +11,7 @@ from .._files import atomic_write
 from ..classification import DEVKIT_CLASS_NAMES
 from ..datasets import load_radarscenes
 from ..experiments._learned import LEARNED_EXPERIMENT
-from ..experiments._saved import NO_ONLINE_LEARNED, _read_params, params_setting, saved_tracker
+from ..experiments._saved import learned_model, params_setting, saved_tracker
 from ..online import OnlinePipeline, Tracker
 from ..online._objects import ObjectList
 from ..online._replay import replay
@@ -53,9 +53,7 @@ def recording_seconds(data):
     return float((span["max"] - span["min"]).sum()) * 1e-6
 
 
-def stream_radarscenes(
-    data, params, out, objects=None, experiment=None, classifier=None, track=False, history=None
-):
+def stream_radarscenes(data, params, out, objects=None, experiment=None, classifier=None, track=False, history=None):
     """Replay a RadarScenes folder through the online pipeline of a saved setting; write devkit predictions.
 
     The scans of all sequences are fed in timestamp order (the sensors of a
@@ -94,7 +92,7 @@ def stream_radarscenes(
         Object-list CSV to write (one row per live object per scan); None: none.
     experiment : int or "objects", default=None
         Which saved experiment; None: the best (by the cross-validated training score).  The learned grouping
-        (``"learned"``) has no online version yet: it is refused (ValueError).
+        (``"learned"``) streams its causal model (the entry's ``causal_model``).
     classifier : str or path-like, default=None
         File written by :func:`~sklearn_radar.classification.save_classifier`,
         with the same rules as for ``sklearn-radar cluster``
@@ -118,11 +116,9 @@ def stream_radarscenes(
         ``n_road_users`` (objects classified as a road user in some window); with ``track`` also
         ``tracker`` (its parameters as saved) and ``n_tracks`` (confirmed tracks).
     """
-    if experiment == LEARNED_EXPERIMENT:
-        raise ValueError(NO_ONLINE_LEARNED)
-    if params is not None and experiment is None:
-        _refuse_learned_best(params)
     setting, pipeline, chosen = params_setting(params, experiment, classifier)
+    if setting is not None and setting["experiment"] == LEARNED_EXPERIMENT:  # the causal model runs online
+        pipeline = learned_model(setting, params, causal=True)
     model = None
     if classifier is not None:
         model = classifier_setting(classifier, setting, params, pipeline)
@@ -187,6 +183,8 @@ def with_history(classifier, history, path):
             "features cannot be switched on or off at prediction (mean_proba and none can)"
         )
     classifier.set_params(history=history)
+
+
 def _saved_tracker(params, classifier):
     """The Tracker saved in ``params`` and its saved parameters; ValueError naming the file when it has none."""
     if classifier is not None:
@@ -203,13 +201,6 @@ def _saved_tracker(params, classifier):
         return Tracker(**found), found
     except (TypeError, ValueError) as error:
         raise ValueError(f"{params}: the key 'tracker' holds parameters the Tracker does not take: {error}") from None
-
-
-def _refuse_learned_best(params):
-    """A ValueError when the best setting of ``params`` is the learned grouping (before its model is loaded)."""
-    saved = _read_params(Path(params))
-    if isinstance(saved, dict) and saved.get("best") == LEARNED_EXPERIMENT:
-        raise ValueError(f"{params}: its best setting is {NO_ONLINE_LEARNED}")
 
 
 def classify_objects(model, data, object_ids):

@@ -16,6 +16,8 @@ from .._labels import consecutive_labels, drop_small_clusters, roots_to_rows
 from .._schema import CLASSIFIER_LAYOUT, CLUSTER_FEATURE_READS, ArrayLayout, ColumnsRead
 from .._validation import read_columns, sequence_slices
 from ._agglomeration import mean_link_merges, roots_at
+from ._causal_agglomeration import confirmed_roots, sequence_merges
+from ._causal_link_features import causal_detection_features, causal_pair_features, causal_pairs
 from ._link_features import (
     DETECTION_FEATURES,
     PAIR_FEATURES,
@@ -26,7 +28,7 @@ from ._link_features import (
     pairs_within,
     usable,
 )
-from ._link_training import cross_fit, fold_of_groups, positive_proba, tune
+from ._link_training import cross_fit, fold_of_groups, positive_proba, tune, tune_causal
 
 #: Working detections as LinkClustering reads them from an array: the classifiers' layout, then the ego speed
 #: ``ego_vx`` (m/s; a measurement without a neutral value: absent, its feature is left out).
@@ -135,6 +137,23 @@ class LinkClustering(ClusterMixin, BaseEstimator):
     random_state : int, RandomState instance or None, default=0
         Seeds the classifiers and the pair subsampling.  An int (the
         default) makes :meth:`fit` reproducible.
+    causal : bool, default=False
+        Decide from the past only, as a stream must
+        (:class:`~sklearn_radar.online.OnlinePipeline` runs a fitted causal
+        model scan by scan and gives the same clusters).  A detection's
+        neighbourhood is then the detections at its time or before; the
+        candidate pairs are the same; the agglomeration runs time by time:
+        at each time the new detections above the objectness threshold
+        enter as single clusters, the link probabilities of their pairs add
+        to the evidence between the clusters they join, and mean-link
+        merges run until no mean exceeds ``link_threshold`` (older clusters
+        may merge; a merged cluster keeps the id of its older side).
+        ``min_cluster_size`` is a confirmation: a detection is labelled
+        when its cluster has at least that many detections at its time
+        (after that time's merges), and is noise otherwise; its label is
+        the cluster it ends in.  :meth:`fit` trains the classifiers on the
+        causal features and tunes the thresholds with the causal
+        agglomeration.
 
     Attributes
     ----------
@@ -207,6 +226,7 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         "window": [Interval(Real, 0, None, closed="neither")],
         "n_jobs": [None, Integral],
         "random_state": ["random_state"],
+        "causal": ["boolean"],
     }
 
     def __init__(
@@ -223,6 +243,7 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         window=0.5,
         n_jobs=None,
         random_state=0,
+        causal=False,
     ):
         self.link_threshold = link_threshold
         self.objectness_threshold = objectness_threshold
@@ -235,6 +256,7 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         self.window = window
         self.n_jobs = n_jobs
         self.random_state = random_state
+        self.causal = causal
 
     @_fit_context(prefer_skip_nested_validation=True)
     def fit(self, X, y=None):
@@ -260,7 +282,7 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         """
         X, c = read_columns(self, X, LINK_READS, reset=True)
         y = _check_instances(y, len(c["x"]))
-        sequences = _sequences(c)
+        sequences = _sequences(c, self.causal)
         kept = np.concatenate([s.rows for s in sequences])
         if not np.any(y[kept] >= 0):
             raise ValueError(
@@ -293,7 +315,7 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         """
         check_is_fitted(self, "link_classifier_")
         X, c = read_columns(self, X, LINK_READS, reset=False)
-        sequences = _sequences(c)
+        sequences = _sequences(c, self.causal)
         with thread_bound(_effective_n_jobs(self.n_jobs)):
             return self._labels(sequences, len(c["x"]))
 
@@ -350,14 +372,18 @@ class LinkClustering(ClusterMixin, BaseEstimator):
             i, j = self._pairs(s, p > floor)  # a positive pair: both detections of one instance
             truth = y[s.rows]
             pairs.append((i, j))
-            pair_x.append(pair_features(s.detections, s.local, p, i, j)[:, pair_columns])
+            pair_x.append(self._pair_features(s, p, i, j)[:, pair_columns])
             pair_y.append((truth[i] == truth[j]) & is_object[i])
         pair_folds = [fold[i] for fold, (i, _) in zip(folds, pairs, strict=True)]
         self.n_training_pairs_ = int(sum(len(i) for i, _ in pairs))
         self.link_classifier_, links = cross_fit(
             pair_x, pair_y, pair_folds, self.max_iter, seeds[1], self.max_pairs, rng, out_of_fold=tuning
         )
-        if tuning:
+        if tuning and self.causal:
+            setting, score = tune_causal(
+                sequences, objectness, pairs, links, grids, c, y, self.window, self.pair_window
+            )
+        elif tuning:
             setting, score = tune(sequences, objectness, pairs, links, grids, c, y, self.window)
         else:
             setting, score = tuple(grid[0] for grid in grids), np.nan
@@ -376,8 +402,15 @@ class LinkClustering(ClusterMixin, BaseEstimator):
             )
         )
 
+    def _pair_features(self, s, objectness, i, j):
+        """The pair features of the pairs (i, j) of sequence s (causal: the compiled loop a stream runs too)."""
+        features = causal_pair_features if self.causal else pair_features
+        return features(s.detections, s.local, objectness, i, j)
+
     def _pairs(self, s, subset):
         d = s.detections
+        if self.causal:  # the same pairs, in the order the causal agglomeration takes them
+            return causal_pairs(d.x, d.y, d.t, subset, 0, self.pair_radius, self.pair_window)
         return pairs_within(d.x, d.y, d.t, self.pair_radius, self.pair_window, subset)
 
     # ------------------------------------------------------------------ labelling
@@ -391,10 +424,14 @@ class LinkClustering(ClusterMixin, BaseEstimator):
             objectness = positive_proba(self.objectness_classifier_, s.features[:, detection_columns])
             node = objectness > self.objectness_threshold_
             i, j = self._pairs(s, node)
-            links = positive_proba(
-                self.link_classifier_, pair_features(s.detections, s.local, objectness, i, j)[:, pair_columns]
-            )
-            local = sequence_roots(len(s.rows), i, j, links, node, self.link_threshold_, self.min_cluster_size_)
+            links = positive_proba(self.link_classifier_, self._pair_features(s, objectness, i, j)[:, pair_columns])
+            if self.causal:
+                final, sizes = sequence_merges(
+                    s.detections.t, node, i, j, links, self.pair_window, self.link_threshold_
+                )
+                local = confirmed_roots(final, sizes, self.min_cluster_size_)
+            else:
+                local = sequence_roots(len(s.rows), i, j, links, node, self.link_threshold_, self.min_cluster_size_)
             roots_to_rows(s.rows, local, roots)
         return consecutive_labels(roots)
 
@@ -459,8 +496,12 @@ def _present(c):
     return present
 
 
-def _sequences(c):
-    """The kept detections of each sequence, sorted by a key free of the row order, with their features."""
+def _sequences(c, causal=False):
+    """The kept detections of each sequence, sorted by a key free of the row order, with their features.
+
+    ``causal``: each detection's features from its past only, and the times as given (not from the sequence's
+    first), so that a stream that starts anywhere computes the same numbers.
+    """
     n = len(c["x"])
     keep = np.ones(n, dtype=bool) if c["keep"] is None else c["keep"] != 0
     nan = np.full(n, np.nan)
@@ -484,10 +525,10 @@ def _sequences(c):
         rows = rows[keep[rows]]
         rows = rows[np.lexsort([columns[name][rows] for name in reversed(_SORT_KEY)])]
         values = {name: columns[name][rows] for name in Detections._fields}
-        if len(rows):
+        if len(rows) and not causal:
             values["t"] = values["t"] - values["t"].min()
         detections = Detections(**values)
-        features, local = detection_features(detections)
+        features, local = (causal_detection_features if causal else detection_features)(detections)
         sequences.append(_Sequence(rows=rows, detections=detections, features=features, local=local))
     return sequences
 
@@ -497,7 +538,7 @@ def _groups(sequences, c, cv):
     if len(sequences) > 1:
         return [np.full(len(s.rows), k, dtype=np.int64) for k, s in enumerate(sequences)]
     (s,) = sequences
-    t = s.detections.t
+    t = s.detections.t - (s.detections.t.min() if len(s.rows) else 0.0)
     span = float(t.max()) if len(t) else 0.0
     if span <= 0:
         return [np.zeros(len(t), dtype=np.int64)]

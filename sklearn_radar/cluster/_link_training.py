@@ -6,6 +6,7 @@ import numpy as np
 
 from .._labels import drop_small_clusters, roots_to_rows
 from ._agglomeration import mean_link_merges, roots_at
+from ._causal_agglomeration import confirmed_roots, sequence_merges
 
 #: Rows from which the classifiers stop early (as scikit-learn's ``early_stopping="auto"``), and the fewest rows of
 #: the smaller class that allow it (its stratified hold-out of 10 % needs some of each class).
@@ -191,6 +192,49 @@ def tune(sequences, objectness, pairs, links, grids, c, y, window):
             for size in size_grid:
                 labels = drop_small_clusters(roots, size)
                 score = panoptic_quality(y, labels, times=c["t"], groups=groups, window=window).pq
+                if score > best_score:
+                    best, best_score = (threshold, gate, size), score
+    return best, best_score
+
+
+def tune_causal(sequences, objectness, pairs, links, grids, c, y, window, pair_window):
+    """As :func:`tune`, with the causal agglomeration (and ``min_cluster_size`` as its confirmation count).
+
+    Parameters
+    ----------
+    sequences, objectness, pairs, links, grids, c, y, window
+        As for :func:`tune`; the pairs in the order of
+        :func:`~._causal_link_features.causal_pairs`.
+    pair_window : float
+        The pair window, s (when clusters retire).
+
+    Returns
+    -------
+    setting : tuple
+        ``(link_threshold, objectness_threshold, min_cluster_size)``; the first of the grids' order among equals.
+    score : float
+        Its panoptic quality.
+    """
+    from ..metrics import panoptic_quality  # as in tune
+
+    n_rows = len(y)
+    groups = np.zeros(n_rows) if c["sequence"] is None else c["sequence"]
+    link_grid, objectness_grid, size_grid = grids
+    best, best_score = None, -1.0
+    for gate in objectness_grid:
+        for threshold in link_grid:
+            merged = []
+            for s, p, (i, j), link in zip(sequences, objectness, pairs, links, strict=True):
+                node = p > gate
+                both = node[i] & node[j]
+                merged.append(
+                    sequence_merges(s.detections.t, node, i[both], j[both], link[both], pair_window, threshold)
+                )
+            for size in size_grid:
+                roots = np.full(n_rows, -1, dtype=np.int64)
+                for s, (local, sizes) in zip(sequences, merged, strict=True):
+                    roots_to_rows(s.rows, confirmed_roots(local, sizes, size), roots)
+                score = panoptic_quality(y, roots, times=c["t"], groups=groups, window=window).pq
                 if score > best_score:
                     best, best_score = (threshold, gate, size), score
     return best, best_score

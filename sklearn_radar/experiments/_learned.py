@@ -4,8 +4,9 @@ The learned experiment is the object experiment's front (:func:`object_pipeline`
 FCS and the Doppler-density filter at the paper's chosen setting, which the object experiment does not tune)
 followed by :class:`~sklearn_radar.cluster.LinkClustering` (``link``), whose thresholds are tuned for panoptic
 quality inside its ``fit``.  Unlike every other setting of ``sklearn-radar reproduce`` it is a fitted model, not a
-parameter setting: the run saves it as a file (:func:`save_learned`) and ``params.json`` points to it.  It has no
-online (causal) version yet.  Read more in the :ref:`User Guide <user-guide-objects>`.
+parameter setting: the run saves it as a file (:func:`save_learned`) and ``params.json`` points to it; its causal
+twin (``link__causal=True``), saved beside it, is what ``sklearn-radar stream`` runs.  Read more in the
+:ref:`User Guide <user-guide-objects>`.
 """
 
 from __future__ import annotations

@@ -27,10 +27,11 @@ SAVED_EXPERIMENT = [
     StrOptions({OBJECT_EXPERIMENT, LEARNED_EXPERIMENT}),
     None,
 ]
-#: Why the learned grouping does not stream.
-NO_ONLINE_LEARNED = (
-    f"experiment {LEARNED_EXPERIMENT!r}: the learned grouping has no online (causal) version yet; apply it offline "
-    f"with 'sklearn-radar cluster --experiment {LEARNED_EXPERIMENT}'"
+#: Why a learned entry of an older run does not stream.
+NO_CAUSAL_MODEL = (
+    f"experiment {LEARNED_EXPERIMENT!r} names no causal model (key 'causal_model'; runs of older versions fitted "
+    f"the offline one only): rerun 'sklearn-radar reproduce --experiments {LEARNED_EXPERIMENT}', or apply it "
+    f"offline with 'sklearn-radar cluster --experiment {LEARNED_EXPERIMENT}'"
 )
 
 
@@ -169,12 +170,13 @@ def _json_type(value):
 def setting_pipeline(setting, path):
     """The pipeline of a checked setting; ValueError names the file and the parameter it cannot set.
 
-    The learned grouping has no pipeline to build (it is a fitted model, :func:`learned_model`), nor an online
-    version: a ValueError says so.
+    The learned grouping has no pipeline to build: it is a fitted model, and the one that runs online (what
+    :class:`~sklearn_radar.online.OnlinePipeline` takes from here) is its causal one (:func:`learned_model` with
+    ``causal=True``).
     """
     number = setting["experiment"]
     if number == LEARNED_EXPERIMENT:
-        raise ValueError(f"{path}: {NO_ONLINE_LEARNED}")
+        return learned_model(setting, path, causal=True)
     where = f"{path}: experiments['{number}']"
     named = f"#{number}" if number != OBJECT_EXPERIMENT else repr(number)
     params = {k: v for k, v in setting["params"].items() if k.split("__")[0] in ("cluster", "merge", "filter")}
@@ -199,8 +201,11 @@ def setting_pipeline(setting, path):
     return pipeline
 
 
-def learned_model(setting, path):
+def learned_model(setting, path, causal=False):
     """The fitted pipeline of the learned grouping's checked setting, from the file its ``model`` names.
+
+    With ``causal``, the causal model (the file its ``causal_model`` names, a LinkClustering with
+    ``causal=True``): what runs online.
 
     The file is read relative to the folder of ``params.json`` (``path``), checked before it is unpickled
     (:func:`~sklearn_radar.experiments._learned.load_learned`: **only load files you trust**), and its front must
@@ -213,18 +218,26 @@ def learned_model(setting, path):
     ValueError
         Naming the file: not a learned model written by a run, or with another front than ``params``.
     """
-    file = Path(path).parent / setting["model"]
+    key = "causal_model" if causal else "model"
+    if causal and (not isinstance(setting.get(key), str) or not setting.get(key)):
+        raise ValueError(f"{path}: {NO_CAUSAL_MODEL}")
+    file = Path(path).parent / setting[key]
     model = load_learned(file)
     if not hasattr(model, "steps"):
         raise ValueError(f"{file}: holds a bare LinkClustering; the run saves the whole pipeline from raw detections")
     front = model.get_params()
+    expected = dict(setting["params"])
+    if causal and "filter__causal" in expected:  # the causal model's filter is causal, the entry's the offline one's
+        expected["filter__causal"] = True
     # As params.json holds them (a tuple is a JSON array).
-    differ = sorted(k for k, v in setting["params"].items() if k not in front or json.loads(json.dumps(front[k])) != v)
+    differ = sorted(k for k, v in expected.items() if k not in front or json.loads(json.dumps(front[k])) != v)
     if differ:
         raise ValueError(
             f"{path}: experiments['{LEARNED_EXPERIMENT}'] does not describe the model in {file}: its params "
             f"{differ} differ from the model's (a model file of another run?)"
         )
+    if bool(model[-1].causal) != causal:
+        raise ValueError(f"{file}: holds a model with causal={model[-1].causal}, its entry's '{key}' needs {causal}")
     return model
 
 

@@ -9,8 +9,9 @@ import pandas as pd
 
 from ..cluster._velocity import _estimate_velocities
 
-#: The stages whose merges make aliases: stage-1 clusters that met, or a stage-2 merge.
-ALIAS_REASONS = ("stage1", "stage2")
+#: The stages whose merges make aliases: stage-1 clusters that met, a stage-2 merge, or a merge of the learned
+#: grouping's clusters.
+ALIAS_REASONS = ("stage1", "stage2", "learned")
 
 
 class ObjectIds:

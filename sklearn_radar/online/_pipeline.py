@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import copy
 from collections.abc import Mapping
 from dataclasses import dataclass
 
@@ -10,10 +11,11 @@ from sklearn.base import clone
 from sklearn.pipeline import Pipeline
 
 from .._schema import RAW_LAYOUT
-from ..cluster import ClusterMerger, RadarDBSCAN, ScanStream
+from ..cluster import ClusterMerger, LinkClustering, RadarDBSCAN, ScanStream
 from ..experiments._saved import load_params, setting_pipeline
 from ..preprocessing import DopplerDensityFilter, FrameTransform
 from ._filter import FilterWindow
+from ._learned_stream import LearnedIds, LearnedStream, check_learned, learned_update
 from ._merger import MergeWindow
 from ._objects import ObjectIds, ObjectList, ObjectTable, empty_object_list, object_figures
 from ._tracker import Tracker, sequence_frame
@@ -41,7 +43,8 @@ class ScanResult:
     objects : ObjectList
         The live objects of the scan's sequence.
     aliases : list of (int, int, int, str)
-        The merges decided at this scan: (timestamp us, surviving id, merged id, ``"stage1"`` or ``"stage2"``);
+        The merges decided at this scan: (timestamp us, surviving id, merged id, ``"stage1"``, ``"stage2"``
+        or, with the learned grouping, ``"learned"``);
         from now on the merged id is an alias of the surviving one.  A merge of clusters that are one
         object already (through other merges) makes no alias.
     merges : list of (int, int)
@@ -140,6 +143,9 @@ class OnlinePipeline:
         The offline pipeline; read once, at construction.  Stage 1's
         ``eps_t`` must be set (the window) and ``cluster_vr_min`` of both
         stages None (the gate judges whole clusters): a ValueError otherwise.
+        Or a fitted pipeline ending in a :class:`~sklearn_radar.cluster.LinkClustering`
+        with ``causal=True`` (the learned grouping, in place of both stages:
+        :ref:`online-learned`).
     tracker : Tracker or None, default=None
         Tracks the objects from scan to scan (a fresh copy per sequence):
         :attr:`ScanResult.track_id` gives its track ids, from the object ids
@@ -181,10 +187,17 @@ class OnlinePipeline:
         frame, filter_, stage1, merger = _stages(pipeline)
         self._frame = frame
         self._filter_params = filter_
+        self._learned = self._learned_ids = None
+        if isinstance(stage1, LinkClustering):  # the learned grouping in place of both stages
+            self._learned = LearnedStream(stage1)
+            self._learned_ids = LearnedIds(float(stage1.pair_window))
+            stage1, merger = None, None
+            self._min_size = int(self._learned.model.min_cluster_size_)
+        else:
+            self._min_size = 1 if merger is None else int(merger.min_cluster_size)
         self._merger = merger
-        self._min_size = 1 if merger is None else int(merger.min_cluster_size)
-        self._stage1 = ScanStream(stage1)
-        self._eps_t = float(stage1.eps_t)
+        self._stage1 = None if stage1 is None else ScanStream(stage1)
+        self._eps_t = float(self._learned.span if stage1 is None else stage1.eps_t)
         self._sequences = {}
         self._ids = ObjectIds()
 
@@ -196,8 +209,8 @@ class OnlinePipeline:
         ----------
         path : str or path-like
             ``params.json`` written by ``sklearn-radar reproduce``.
-        experiment : int or "objects", default=None
-            Which saved experiment; None: the one ``sklearn-radar
+        experiment : int, "objects" or "learned", default=None
+            Which saved experiment (``"learned"``: its causal model); None: the one ``sklearn-radar
             reproduce`` marked as the run's best.
         tracker : Tracker or None, default=None
             The tracking stage, as for :class:`OnlinePipeline`.
@@ -220,18 +233,32 @@ class OnlinePipeline:
         return head + repr(self.pipeline).replace("\n", "\n" + " " * len(head)) + tail + ")"
 
     @property
+    def learned(self):
+        """bool: Whether the grouping is the learned one (a fitted causal LinkClustering)."""
+        return self._learned is not None
+
+    @property
     def min_cluster_size(self):
-        """int: The confirmation count, stage 2's ``min_cluster_size`` (1 without stage 2)."""
+        """int: The confirmation count, stage 2's ``min_cluster_size`` (1 without stage 2; the learned grouping's)."""
         return self._min_size
 
     def causal_pipeline(self):
         """The offline pipeline whose labels this stream gives: every stage causal (stage 2: ``causal_min_size=True``).
 
+        With the learned grouping: a copy of the fitted pipeline with the filter causal, whose ``predict``
+        gives the labels (the stream's ids resolved through the aliases, where confirmed).
+
         Returns
         -------
         pipeline : sklearn.pipeline.Pipeline
-            An unfitted clone.
+            An unfitted clone (with the learned grouping: a fitted copy).
         """
+        if self._learned is not None:  # the fitted model as it is, the filter causal
+            causal = copy.deepcopy(self.pipeline)
+            for name, step in causal.steps:
+                if isinstance(step, DopplerDensityFilter):
+                    causal.set_params(**{f"{name}__causal": True})
+            return causal
         causal = clone(self.pipeline)
         for name, step in causal.steps:
             if isinstance(step, DopplerDensityFilter | RadarDBSCAN):
@@ -276,7 +303,7 @@ class OnlinePipeline:
             scan, or the scan is not newer than the last one of its
             sequence (which includes its own sensors' last scans).
         """
-        c = _read_scan(scan)
+        c = _read_scan(scan, ("rcs",) if self._learned is not None and self._learned.needs_rcs else ())
         n = len(c["timestamp"])
         if n == 0:
             result = _empty_result([], [], [])
@@ -290,6 +317,8 @@ class OnlinePipeline:
         work = self._frame._working_columns(c)
         x, y, v_r, t, heading = work["x"], work["y"], work["v_r"], work["t"], work["heading"]
         keep = np.ones(n, dtype=bool) if state.filter is None else state.filter.keep(x, y, t, v_r)
+        if self._learned is not None:
+            return learned_update(self, state, sequence, us, c, work, keep, objects)
         stage1_columns = {"x": x, "y": y, "v_r": v_r, "t": t, "sequence": np.full(n, float(sequence))}
         stage1_columns.update(keep=keep, range_sc=c["range_sc"], heading=heading)
         labels = self._stage1._label(stage1_columns, one_scan=True)
@@ -374,7 +403,7 @@ def _stages(pipeline):
     if not isinstance(pipeline, Pipeline):
         raise ValueError(f"OnlinePipeline: pipeline must be a scikit-learn Pipeline, got {type(pipeline).__name__}")
     steps = [step for _, step in pipeline.steps if step not in (None, "passthrough")]
-    kinds = [FrameTransform, DopplerDensityFilter, RadarDBSCAN | ClusterMerger]
+    kinds = [FrameTransform, DopplerDensityFilter, RadarDBSCAN | ClusterMerger | LinkClustering]
     if not (
         len(steps) in (2, 3)
         and isinstance(steps[0], kinds[0])
@@ -383,13 +412,16 @@ def _stages(pipeline):
     ):
         names = [type(step).__name__ for step in steps]
         raise ValueError(
-            "OnlinePipeline: pipeline must be FrameTransform, an optional DopplerDensityFilter, then RadarDBSCAN "
-            f"or ClusterMerger; got {names}"
+            "OnlinePipeline: pipeline must be FrameTransform, an optional DopplerDensityFilter, then RadarDBSCAN, "
+            f"ClusterMerger or a fitted causal LinkClustering; got {names}"
         )
     for step in steps:
         step._validate_params()
     frame, final = steps[0], steps[-1]
     filter_ = steps[1] if len(steps) == 3 else None
+    if isinstance(final, LinkClustering):
+        check_learned(final)
+        return frame, filter_, final, None
     merger = final if isinstance(final, ClusterMerger) else None
     stage1 = final if merger is None else (merger.stage1 if merger.stage1 is not None else RadarDBSCAN())
     if not isinstance(stage1, RadarDBSCAN):
@@ -403,24 +435,25 @@ def _stages(pipeline):
     return frame, filter_, stage1, merger
 
 
-def _read_scan(scan):
-    """The scan's columns as float64 arrays (``sequence`` and ``sensor_id`` as given), checked."""
+def _read_scan(scan, extra=()):
+    """The scan's columns (and the ``extra`` ones) as float64 arrays (``sequence`` and ``sensor_id`` as given)."""
+    required = SCAN_COLUMNS + tuple(extra)
     if not isinstance(scan, Mapping) and not hasattr(scan, "columns"):
         raise ValueError(f"OnlinePipeline.update: scan must be a DataFrame or a mapping, got {type(scan).__name__}")
     names = scan.columns if hasattr(scan, "columns") else scan.keys()
-    missing = [name for name in SCAN_COLUMNS if name not in names]
+    missing = [name for name in required if name not in names]
     if missing:
         raise ValueError(f"OnlinePipeline.update: the scan lacks the column(s) {missing}")
     try:  # the columns as given: one conversion (and one finiteness test below) for all
-        block = np.array([scan[name] for name in SCAN_COLUMNS], dtype=np.float64)
+        block = np.array([scan[name] for name in required], dtype=np.float64)
     except (ValueError, TypeError):
         block = None
     if block is None or block.ndim != 2:  # not 1-D columns of one length: flatten, and name a bad one
-        columns = [np.ravel(scan[name]) for name in SCAN_COLUMNS]
+        columns = [np.ravel(scan[name]) for name in required]
         n = len(columns[0])
         lengths = [len(values) for values in columns]
         if min(lengths) != n or max(lengths) != n:
-            name = SCAN_COLUMNS[next(i for i, length in enumerate(lengths) if length != n)]
+            name = required[next(i for i, length in enumerate(lengths) if length != n)]
             raise ValueError(f"OnlinePipeline.update: column {name!r} has another length than 'range_sc' ({n})")
         block = np.array(columns, dtype=np.float64)
     n = block.shape[1]
@@ -429,9 +462,9 @@ def _read_scan(scan):
     if not np.isfinite(total):
         finite = np.isfinite(block).all(axis=1)
         if not finite.all():
-            bad = SCAN_COLUMNS[int(np.flatnonzero(~finite)[0])]
+            bad = required[int(np.flatnonzero(~finite)[0])]
             raise ValueError(f"OnlinePipeline.update: column {bad!r} holds values that are not finite")
-    c = dict(zip(SCAN_COLUMNS, block, strict=True))
+    c = dict(zip(required, block, strict=True))
     for name in ("sequence", "sensor_id"):
         values = np.ravel(scan[name]) if name in names else np.zeros(n, dtype=np.int64)
         if len(values) != n:

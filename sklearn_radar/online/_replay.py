@@ -19,7 +19,8 @@ def replay(online, data, objects=False):
     replayed : dict
         ``labels`` (stage 1), ``reported`` (the object ids as given at each scan), ``confirmed`` (as given at
         each scan), ``object_ids`` (final: every alias resolved to its surviving id, and with stage 2's
-        ``min_cluster_size`` the causal confirmation rule applied to them, as the causal pipeline does), ``keep``,
+        ``min_cluster_size`` the causal confirmation rule applied to them, as the causal pipeline does; with the
+        learned grouping, the detections confirmed when they came), ``keep``,
         ``latency`` and ``cpu`` (wall and thread CPU time per scan, s), ``aliases``, ``objects`` (a
         DataFrame, or None) and ``track_id`` (the tracker's id of each detection as given at its scan; None
         without a tracker).
@@ -48,7 +49,10 @@ def replay(online, data, objects=False):
     aliases += online.finish().aliases
     survivor = _survivors(aliases)
     final = np.array([survivor(i) if i >= 0 else -1 for i in reported.tolist()], dtype=np.int64)
-    final = drop_small_clusters(final, online.min_cluster_size, data["timestamp"].to_numpy())
+    if online.learned:  # the learned grouping confirms at each detection's time: its confirmed flag
+        final = np.where(confirmed, final, -1)
+    else:
+        final = drop_small_clusters(final, online.min_cluster_size, data["timestamp"].to_numpy())
     table = pd.concat(scan_objects, ignore_index=True) if scan_objects else None
     return {
         "labels": labels,

@@ -297,6 +297,44 @@ class InstanceErrors(JsonRecord):
 
 
 @record
+class LearnedCausalResult(JsonRecord):
+    """The learned grouping's causal model (``LinkClustering(causal=True)``), fitted on the training half.
+
+    Fitted as the offline one, on causal features, its thresholds tuned with the causal agglomeration; what
+    ``sklearn-radar stream --experiment learned`` runs scan by scan.
+
+    Attributes
+    ----------
+    model_file : str
+        The fitted causal pipeline's file in the run's folder.
+    link_threshold, objectness_threshold : float
+        The tuned thresholds.
+    min_cluster_size : int
+        The tuned confirmation count, detections.
+    cv_pq : float
+        PQ of the tuned thresholds on the out-of-fold predictions of the training half.
+    fit_wall_time_s : float
+        Time of the fit, s.
+    v1_test : float
+        Radar V-measure on the test half, causal, 0-1.
+    n_clusters_test : int
+        Clusters found on the test half.
+    instance_test : InstanceScores
+        Object-level scores on the test half, causal (the stream's final ids).
+    """
+
+    model_file: str
+    link_threshold: float
+    objectness_threshold: float
+    min_cluster_size: int
+    cv_pq: float
+    fit_wall_time_s: float
+    v1_test: float
+    n_clusters_test: int
+    instance_test: InstanceScores
+
+
+@record
 class LearnedResult(JsonRecord):
     """Beyond the paper: the learned grouping (``learned``), fitted on the training half, scored offline.
 
@@ -330,7 +368,9 @@ class LearnedResult(JsonRecord):
         The error anatomy on the test half of the learned grouping, and of the object experiment's and the
         strongest offline baseline's kept settings where they ran, by name.
     wall_time_s : float
-        Fit, scoring and error anatomy, s.
+        Fit, scoring and error anatomy, s (the causal model's included).
+    causal : LearnedCausalResult or None, default=None
+        The causal model, fitted and scored beside (None in runs of older versions).
     model : Pipeline or None, default=None
         The fitted pipeline itself, for the classification step of the same run (not written: the file holds it).
     """
@@ -348,4 +388,5 @@ class LearnedResult(JsonRecord):
     instance_test: InstanceScores
     errors: dict[str, InstanceErrors]
     wall_time_s: float
+    causal: LearnedCausalResult | None = None
     model: Any = field(default=None, compare=False, repr=False, metadata=NOT_WRITTEN)

@@ -1,5 +1,9 @@
 """The learned step: the learned grouping fitted on the training half, scored on the test half, its errors by cause.
 
+Beside the offline model, the causal one (``link__causal=True``) is fitted on the same training half and scored
+causally on the test half (its offline ``predict``, which equals the stream's final ids); it is saved as
+:data:`LEARNED_CAUSAL_FILE` for ``sklearn-radar stream``.
+
 The pipeline (:func:`~sklearn_radar.experiments._learned.learned_pipeline`) is fitted once, in this process (it
 needs every training example at once), with the pre-clustered target that the object experiment's PQ is scored
 against, and the run's seed; each test sequence is labelled where it lives by the fitted model's ``predict``.  The
@@ -23,13 +27,18 @@ from ..metrics._parts import combine_instance_parts, combine_parts, instance_par
 from ._classification import strongest_offline_baseline
 from ._constants import BASELINES, OBJECTS, SCORE_WINDOW_S
 from ._context import Outcome
-from ._experiment_records import InstanceErrors, InstanceScores, LearnedResult
+from ._experiment_records import InstanceErrors, InstanceScores, LearnedCausalResult, LearnedResult
 from ._tuning import native_params
 
 #: The fitted learned pipeline's file in the run's folder (``params.json``'s ``"learned"`` entry points to it).
 LEARNED_FILE = "learned.joblib"
+#: The fitted causal learned pipeline's file (``"causal_model"`` of the entry): what ``stream`` runs.
+LEARNED_CAUSAL_FILE = "learned_causal.joblib"
 #: The learned grouping's parameters in the run beside the front's (LinkClustering's defaults otherwise).
 LEARNED_PARAMS = {}
+#: The causal model's, under LEARNED_PARAMS: fewer boosting iterations, for the stream's time per scan (the
+#: measured PQ cost: :ref:`user-guide-learned`).
+LEARNED_CAUSAL_PARAMS = {"link__max_iter": 40}
 #: The object-level scores kept (those of :class:`InstanceScores`).
 _SCORES = tuple(name for name in InstanceScores.__dataclass_fields__ if name != "window_s")
 #: The error anatomy's name of each setting.
@@ -57,6 +66,7 @@ def run_learned(env, key, needed):
     errors = {LEARNED_NAME: _errors(parts)}
     for name, pipeline in _compared(needed):
         errors[name] = _errors(env.sequences.map(refitted_sequence, env.test, pipeline, executor=env.executor))
+    causal, causal_model = _causal(env, params, X_train, y_train)
     link = model[-1]
     result = LearnedResult(
         params=native_params({k: v for k, v in model.get_params().items() if _is_setting(k)}),
@@ -72,13 +82,39 @@ def run_learned(env, key, needed):
         instance_test=InstanceScores(window_s=SCORE_WINDOW_S, **{k: float(scores[k]) for k in _SCORES}),
         errors=errors,
         wall_time_s=time.perf_counter() - start,
+        causal=causal,
         model=model,
     )
     summary = (
-        f"    learned: test PQ {result.instance_test.pq:.3f} offline (fitted in {fit_s:.1f} s; no causal version), "
-        f"missed segments {errors[LEARNED_NAME].missed} of {errors[LEARNED_NAME].n_true}"
+        f"    learned: test PQ {result.instance_test.pq:.3f} offline, {causal.instance_test.pq:.3f} causal (fitted in "
+        f"{fit_s:.1f} s and {causal.fit_wall_time_s:.1f} s), "
+        f"missed segments {errors[LEARNED_NAME].missed} of {errors[LEARNED_NAME].n_true} offline"
     )
-    return Outcome(result, summary, models={LEARNED_FILE: model})
+    return Outcome(result, summary, models={LEARNED_FILE: model, LEARNED_CAUSAL_FILE: causal_model})
+
+
+def _causal(env, params, X_train, y_train):
+    """The causal learned pipeline (its filter causal too) fitted on the training half, and its record with the causal
+    test scores: its ``predict``, which the stream's final ids equal."""
+    model = learned_pipeline({**LEARNED_CAUSAL_PARAMS, **params, "link__causal": True, "filter__causal": True})
+    fit_start = time.perf_counter()
+    model.fit(X_train, y_train)
+    fit_s = time.perf_counter() - fit_start
+    parts = env.sequences.map(predicted_sequence, env.test, model, executor=env.executor)
+    scores = combine_instance_parts([p["instance"] for p in parts])
+    link = model[-1]
+    record = LearnedCausalResult(
+        model_file=LEARNED_CAUSAL_FILE,
+        link_threshold=link.link_threshold_,
+        objectness_threshold=link.objectness_threshold_,
+        min_cluster_size=link.min_cluster_size_,
+        cv_pq=link.cv_score_,
+        fit_wall_time_s=fit_s,
+        v1_test=combine_parts("v1", [p["v1"] for p in parts]),
+        n_clusters_test=int(sum(p["n_clusters"] for p in parts)),
+        instance_test=InstanceScores(window_s=SCORE_WINDOW_S, **{k: float(scores[k]) for k in _SCORES}),
+    )
+    return record, model
 
 
 def _is_setting(name):

@@ -166,6 +166,8 @@ class RunResults(JsonRecord):
     def saved_classifiers(self):
         """The file names of the models the run saved in its folder: the classifiers, then the learned grouping."""
         files = [] if self.learned is None else [self.learned.model_file]
+        if self.learned is not None and self.learned.causal is not None:
+            files.append(self.learned.causal.model_file)
         if self.classification is None:
             return files
         return [row.classifier_file for row in self.classification.settings.values() if row.classifier_file] + files
@@ -250,6 +252,8 @@ class RunResults(JsonRecord):
                 "stage1_params": None,
                 "model": self.learned.model_file,
             }
+            if self.learned.causal is not None:
+                experiments[LEARNED_EXPERIMENT]["causal_model"] = self.learned.causal.model_file
         for key in (OBJECT_EXPERIMENT, LEARNED_EXPERIMENT):
             classified = (self.classification.settings if self.classification else {}).get(key)
             if key in experiments and classified is not None and classified.classifier_file:

@@ -54,7 +54,7 @@ from ._constants import (
 )
 from ._context import RunContext
 from ._io import RUN_TOOL, check_apart, check_run_folder, previous_run_files, run_marker
-from ._learned import LEARNED_FILE
+from ._learned import LEARNED_CAUSAL_FILE, LEARNED_FILE
 from ._progress import DATA, REPORT, RunProgress, duration, uncompiled_kernels
 from ._report import write_report
 from ._results import DataMeta, RunMeta, RunResults
@@ -81,6 +81,7 @@ RUN_FILES = (
     CONVERGENCE,
     *CLASSIFIER_FILES.values(),
     LEARNED_FILE,
+    LEARNED_CAUSAL_FILE,
 )
 #: Simulated data of at most this many sequence-seconds (the default run's 4 x 20 s) with one search at a time
 #: runs in this process although ``--workers`` asks for a local cluster (why: :ref:`contributing-runner`).
@@ -436,7 +437,7 @@ def _run_step(run, env, keys, context, found, position, key, ahead):
     if outcome.tracks is not None:
         context.tracks.update(outcome.tracks)
     for name, model in (outcome.models or {}).items():
-        (save_learned if name == LEARNED_FILE else save_classifier)(model, run.out / name)
+        (save_learned if name in (LEARNED_FILE, LEARNED_CAUSAL_FILE) else save_classifier)(model, run.out / name)
     if outcome.summary:
         run.say(outcome.summary)
     run.results.meta.completed.append(key)
@@ -572,5 +573,5 @@ def _title(key):
         OBJECTS: "the object experiment (the framework's stages tuned for PQ)",
         TRACKING: "object tracking online (MOTA, IDF1, HOTA of the streamed and tracked ids, a baseline tracker)",
         CLASSIFICATION: "the classifier of clusters (class PQ, mAP@0.5, macro-F1, mCov)",
-        LEARNED: "the learned grouping (fitted on the training half's instances, scored offline)",
+        LEARNED: "the learned grouping (fitted on the training half's instances, scored offline and causally)",
     }[key]

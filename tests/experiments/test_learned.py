@@ -28,7 +28,7 @@ def test_load_params_reads_the_entry_and_no_pipeline_is_built_from_it(tmp_path):
     path = _params_file(tmp_path / "params.json")
     setting = load_params(path, "learned")
     assert setting["model"] == "learned.joblib" and load_params(path) == setting
-    with pytest.raises(ValueError, match="'learned': the learned grouping has no online"):
+    with pytest.raises(ValueError, match="'learned' names no causal model"):
         setting_pipeline(setting, path)
 
 

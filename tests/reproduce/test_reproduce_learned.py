@@ -44,13 +44,25 @@ def _sequence_table(folder, number):
     return X, precluster_target(scenes.data, scenes.target), scenes.data
 
 
-def _direct_model(folder, results):
+def _direct_model(folder, results, causal=False):
     """LinkClustering fitted on the run's training half here, apart from the reproduce code."""
     tables = [_sequence_table(folder, n) for n in results["meta"]["data"]["train_sequences"]]
     X = pd.concat([X for X, _, _ in tables], ignore_index=True)
     y = np.concatenate([y for _, y, _ in tables])
     params = {**SMALL, "link__window": 0.5, "link__random_state": results["meta"]["seed"], "link__n_jobs": 1}
-    return learned_pipeline(params).fit(X, y)
+    return learned_pipeline({**params, "link__causal": causal, "filter__causal": causal}).fit(X, y)
+
+
+def _test_scores(folder, results, model):
+    """(target, labels, times, groups) of the run's test half labelled by ``model``."""
+    targets, labels, times, groups = [], [], [], []
+    for number in results["meta"]["data"]["test_sequences"]:
+        X, target, data = _sequence_table(folder, number)
+        targets.append(target)
+        labels.append(model.predict(X))
+        times.append(data["timestamp"].to_numpy(dtype=np.float64) * 1e-6)
+        groups.append(np.full(len(X), number))
+    return tuple(map(np.concatenate, (targets, labels, times, groups)))
 
 
 def test_learned_is_not_in_the_default_run_but_can_be_chosen():
@@ -80,14 +92,27 @@ def test_the_record_scores_what_a_directly_fitted_model_labels(learned_run, tiny
     assert set(record["errors"]) >= {"learned grouping", "object experiment"} and len(record["errors"]) == 3
 
 
+def test_the_causal_record_scores_what_a_directly_fitted_causal_model_labels(learned_run, tiny_folder):
+    results = json.loads((learned_run / "results.json").read_text())
+    record = results["learned"]["causal"]
+    assert record["model_file"] == "learned_causal.joblib" and (learned_run / "learned_causal.joblib").is_file()
+    model = _direct_model(tiny_folder, results, causal=True)
+    assert record["link_threshold"] == model[-1].link_threshold_
+    assert record["min_cluster_size"] == model[-1].min_cluster_size_
+    target, label, time, group = _test_scores(tiny_folder, results, model)
+    assert record["instance_test"]["pq"] == pytest.approx(panoptic_quality(target, label, times=time, groups=group).pq)
+    assert load_learned(learned_run / "learned_causal.joblib")[-1].causal is True
+
+
 def test_params_json_points_to_the_model_with_the_front(learned_run):
     saved = json.loads((learned_run / "params.json").read_text())
     entry = saved["experiments"]["learned"]
     assert entry["model"] == "learned.joblib" and entry["cv_pq"] is None
+    assert entry["causal_model"] == "learned_causal.joblib"
     assert entry["params"]["filter__vr_threshold"] == 0.1 and not any(k.startswith("link__") for k in entry["params"])
     assert saved["best"] == "objects"  # the learned grouping is not ranked
     marker = json.loads((learned_run / "run.json").read_text())
-    assert "learned.joblib" in marker["files"]
+    assert "learned.joblib" in marker["files"] and "learned_causal.joblib" in marker["files"]
     assert RunResults.read(learned_run / "results.json").to_json_dict() == json.loads(
         (learned_run / "results.json").read_text()
     )
@@ -96,7 +121,9 @@ def test_params_json_points_to_the_model_with_the_front(learned_run):
 def test_report_section(learned_run):
     report = (learned_run / "report.md").read_text()
     assert "### The learned grouping" in report
-    assert "no online version yet, so it is scored offline only" in report
+    causal = json.loads((learned_run / "results.json").read_text())["learned"]["causal"]
+    assert f"| learned grouping, causal | past only | {causal['instance_test']['pq']:.3f} |" in report
+    assert "| object experiment, causal | past only |" in report
     errors = json.loads((learned_run / "results.json").read_text())["learned"]["errors"]["learned grouping"]
     assert f"| learned grouping | {errors['n_true']} | {errors['missed']} | {errors['noise']} |" in report
 
@@ -105,8 +132,9 @@ def test_at_a_glance_names_the_learned_grouping(learned_run):
     report = (learned_run / "report.md").read_text()
     glance = report.split("## At a glance", 1)[1].split("\n## ", 1)[0]
     learned = json.loads((learned_run / "results.json").read_text())["learned"]
-    assert "- the learned grouping (fitted on the training half's labels, offline only): test PQ " in glance
-    assert f"test PQ {learned['instance_test']['pq']:.3f}" in glance
+    assert "- the learned grouping (fitted on the training half's labels): test PQ " in glance
+    assert f"test PQ {learned['instance_test']['pq']:.3f} offline" in glance
+    assert f", {learned['causal']['instance_test']['pq']:.3f} causal against " in glance
     assert f"missed ground-truth segments {learned['errors']['learned grouping']['missed']}" in glance
 
 
@@ -127,16 +155,39 @@ def test_cluster_applies_the_saved_model_to_the_run_s_test_labels(learned_run, t
         assert adjusted_rand_score(expected[expected >= 0], applied[applied >= 0]) == pytest.approx(1.0)
 
 
-def test_stream_refuses_the_learned_grouping(learned_run, tiny_folder, tmp_path, capsys):
-    args = ["stream", "--data", str(tiny_folder), "--params", str(learned_run / "params.json")]
-    assert main([*args, "--out", str(tmp_path / "p.json"), "--experiment", "learned"]) == 2
-    error = capsys.readouterr().err
-    assert "learned" in error and "no online (causal) version yet" in error
-    assert not (tmp_path / "p.json").exists()
-    from sklearn_radar.cli._stream import stream_radarscenes
+def test_stream_runs_the_causal_model(learned_run, tiny_folder, tmp_path):
+    # The stream's final ids are the causal model's offline labels (predict on each whole sequence).
+    results = json.loads((learned_run / "results.json").read_text())
+    model = load_learned(learned_run / "learned_causal.joblib")
+    assert model.get_params()["filter__causal"] is True
+    from sklearn_radar.online import OnlinePipeline
 
-    with pytest.raises(ValueError, match="'learned': the learned grouping has no online"):
-        stream_radarscenes(tiny_folder, learned_run / "params.json", tmp_path / "q.json", experiment="learned")
+    online = OnlinePipeline.from_params(learned_run / "params.json", "learned")
+    assert online.learned and online.experiment == "learned" and online.pipeline[-1].causal
+    out = tmp_path / "predictions.json"
+    args = ["stream", "--data", str(tiny_folder), "--params", str(learned_run / "params.json"), "--out", str(out)]
+    with contextlib.redirect_stdout(io.StringIO()):
+        assert main([*args, "--experiment", "learned"]) == 0
+    predictions = json.loads(out.read_text())["predictions"]
+    for number in results["meta"]["data"]["test_sequences"]:
+        X, _, data = _sequence_table(tiny_folder, number)
+        expected = model.predict(X)
+        streamed = np.array([predictions[u][1] for u in data["uuid"]])
+        assert np.array_equal(streamed >= 0, expected >= 0)
+        assert adjusted_rand_score(expected[expected >= 0], streamed[streamed >= 0]) == pytest.approx(1.0)
+
+
+def test_stream_of_a_learned_entry_without_a_causal_model_names_it(learned_run, tiny_folder, tmp_path, capsys):
+    saved = json.loads((learned_run / "params.json").read_text())
+    del saved["experiments"]["learned"]["causal_model"]
+    run = tmp_path / "run"
+    run.mkdir()
+    (run / "params.json").write_text(json.dumps(saved))
+    (run / "learned.joblib").write_bytes((learned_run / "learned.joblib").read_bytes())
+    args = ["stream", "--data", str(tiny_folder), "--params", str(run / "params.json"), "--experiment", "learned"]
+    assert main([*args, "--out", str(tmp_path / "p.json")]) == 1
+    assert "names no causal model" in capsys.readouterr().err
+    assert not (tmp_path / "p.json").exists()
 
 
 def test_a_foreign_or_damaged_model_file_is_refused_naming_it(learned_run, tiny_folder, tmp_path, capsys):
