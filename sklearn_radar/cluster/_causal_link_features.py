@@ -150,13 +150,17 @@ def _neighbourhoods(x, y, t, v, los, start):
     return count, near, similar, n_moving, mean_abs, spread, vx, vy, residual
 
 
-def causal_pairs(x, y, t, node, start, radius, window):
+def causal_pairs(x, y, t, node, start, radius, window, max_links=None):
     """Candidate pairs ``i < j`` with ``j >= start``, in the order of ``j``, then ``i``.
 
     The pairs of :func:`~._link_features.pairs_within` (planar distance
     <= ``radius``, time difference <= ``window``, both detections in
     ``node``) whose later detection is ``start`` or after: each pair is
-    found once, when its later detection arrives.
+    found once, when its later detection arrives.  With ``max_links``, a
+    detection keeps only its ``max_links`` nearest earlier candidates in the
+    scaled distance ``(dx^2 + dy^2) / radius^2 + (dt / window)^2`` (ties to
+    the earlier one): a choice made from the detection and its past only, so
+    a stream that starts at ``start`` keeps the same pairs.
 
     Parameters
     ----------
@@ -172,6 +176,8 @@ def causal_pairs(x, y, t, node, start, radius, window):
         m.
     window : float
         s.
+    max_links : int or None, default=None
+        Most pairs kept per later detection; None keeps them all.
 
     Returns
     -------
@@ -185,31 +191,41 @@ def causal_pairs(x, y, t, node, start, radius, window):
         np.int64(start),
         np.float64(radius),
         np.float64(window),
+        np.int64(-1 if max_links is None else max_links),
     )
 
 
 @numba.njit(cache=True, nogil=True)
-def _pairs(x, y, t, node, start, radius, window):
-    n = len(x)
+def _pairs(x, y, t, node, start, radius, window, max_links):
     found_i = np.empty(16, dtype=np.int64)
     found_j = np.empty(16, dtype=np.int64)
+    near = np.empty(16, dtype=np.float64)  # scaled squared distance of each pair found
     used = 0
+    nodes = np.flatnonzero(node)  # only nodes take part: the loops visit them alone, in index order
     lo = 0
-    for j in range(start, n):
-        while t[j] - t[lo] > window:
+    for b in range(np.searchsorted(nodes, start), len(nodes)):
+        j = nodes[b]
+        while t[j] - t[nodes[lo]] > window:
             lo += 1
-        if not node[j]:
-            continue
-        for i in range(lo, j):
-            if not node[i] or abs(x[i] - x[j]) > radius or abs(y[i] - y[j]) > radius:
+        first = used
+        for a in range(lo, b):
+            i = nodes[a]
+            if abs(x[i] - x[j]) > radius or abs(y[i] - y[j]) > radius:
                 continue
             if math.hypot(x[i] - x[j], y[i] - y[j]) <= radius:
                 if used == len(found_i):
                     found_i = np.concatenate((found_i, np.empty(used, dtype=np.int64)))
                     found_j = np.concatenate((found_j, np.empty(used, dtype=np.int64)))
+                    near = np.concatenate((near, np.empty(used, dtype=np.float64)))
                 found_i[used] = i
                 found_j[used] = j
+                dt = (t[j] - t[i]) / window if window > 0 else 0.0
+                near[used] = ((x[i] - x[j]) ** 2 + (y[i] - y[j]) ** 2) / (radius * radius) + dt * dt
                 used += 1
+        if max_links >= 0 and used - first > max_links:  # the nearest, back in the order of i
+            nearest = np.sort(first + np.argsort(near[first:used], kind="mergesort")[:max_links])
+            found_i[first : first + max_links] = found_i[nearest]
+            used = first + max_links
     return found_i[:used].copy(), found_j[:used].copy()
 
 

@@ -154,6 +154,13 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         the cluster it ends in.  :meth:`fit` trains the classifiers on the
         causal features and tunes the thresholds with the causal
         agglomeration.
+    max_links_per_detection : int >= 1 or None, default=None
+        With ``causal=True``, the most candidate pairs that a detection
+        forms with earlier ones: its nearest, in x-y distance over
+        ``pair_radius`` and time difference over ``pair_window`` (in fit,
+        :meth:`predict` and a stream alike).  Bounds the work per scan of
+        :class:`~sklearn_radar.online.OnlinePipeline`.  None keeps every
+        candidate; ``causal=False`` requires None.
 
     Attributes
     ----------
@@ -227,6 +234,7 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         "n_jobs": [None, Integral],
         "random_state": ["random_state"],
         "causal": ["boolean"],
+        "max_links_per_detection": [None, Interval(Integral, 1, None, closed="left")],
     }
 
     def __init__(
@@ -244,6 +252,7 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         n_jobs=None,
         random_state=0,
         causal=False,
+        max_links_per_detection=None,
     ):
         self.link_threshold = link_threshold
         self.objectness_threshold = objectness_threshold
@@ -257,6 +266,7 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         self.n_jobs = n_jobs
         self.random_state = random_state
         self.causal = causal
+        self.max_links_per_detection = max_links_per_detection
 
     @_fit_context(prefer_skip_nested_validation=True)
     def fit(self, X, y=None):
@@ -280,6 +290,11 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         -------
         self : LinkClustering
         """
+        if self.max_links_per_detection is not None and not self.causal:
+            raise ValueError(
+                "LinkClustering: max_links_per_detection requires causal=True (it chooses among a detection's "
+                "earlier candidates); leave it None with causal=False"
+            )
         X, c = read_columns(self, X, LINK_READS, reset=True)
         y = _check_instances(y, len(c["x"]))
         sequences = _sequences(c, self.causal)
@@ -410,7 +425,9 @@ class LinkClustering(ClusterMixin, BaseEstimator):
     def _pairs(self, s, subset):
         d = s.detections
         if self.causal:  # the same pairs, in the order the causal agglomeration takes them
-            return causal_pairs(d.x, d.y, d.t, subset, 0, self.pair_radius, self.pair_window)
+            return causal_pairs(
+                d.x, d.y, d.t, subset, 0, self.pair_radius, self.pair_window, self.max_links_per_detection
+            )
         return pairs_within(d.x, d.y, d.t, self.pair_radius, self.pair_window, subset)
 
     # ------------------------------------------------------------------ labelling

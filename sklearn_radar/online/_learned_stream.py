@@ -161,7 +161,14 @@ class LearnedStream:
             return clusters, sizes, []
         flags = window.ints[_I["node"]].astype(bool)
         i, j = causal_pairs(
-            detections.x, detections.y, detections.t, flags, start, model.pair_radius, model.pair_window
+            detections.x,
+            detections.y,
+            detections.t,
+            flags,
+            start,
+            model.pair_radius,
+            model.pair_window,
+            model.max_links_per_detection,
         )
         links = np.zeros(0)
         if len(i):

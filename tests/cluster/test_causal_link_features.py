@@ -68,6 +68,42 @@ def test_causal_pairs_are_the_offline_pairs_in_arrival_order(seed, n, window, ra
     np.testing.assert_array_equal(tail_j, j[later])
 
 
+@settings(max_examples=50, deadline=None)
+@given(
+    st.integers(0, 2**16),
+    st.integers(0, 80),
+    st.sampled_from([0.0, 0.04, 0.25]),
+    st.sampled_from([1.0, 3.0]),
+    st.integers(1, 6),
+)
+def test_max_links_keeps_each_detections_nearest_earlier_candidates(seed, n, window, radius, max_links):
+    # The reference: every candidate pair by brute force, each later detection's sorted by the scaled distance.
+    rng = np.random.default_rng(seed)
+    d = _random_detections(n, rng)
+    if n > 4:
+        d = d._replace(x=np.round(d.x), y=np.round(d.y))  # ties of the distance, broken by the earlier detection
+    node = rng.random(n) < 0.7
+    i, j = causal_pairs(d.x, d.y, d.t, node, 0, radius, window, max_links)
+    expected = []
+    for b in range(n):
+        found = [
+            (((d.x[a] - d.x[b]) ** 2 + (d.y[a] - d.y[b]) ** 2) / radius**2 + ((d.t[b] - d.t[a]) / window) ** 2, a)
+            if window > 0
+            else (((d.x[a] - d.x[b]) ** 2 + (d.y[a] - d.y[b]) ** 2) / radius**2, a)
+            for a in range(b)
+            if node[a]
+            and node[b]
+            and d.t[b] - d.t[a] <= window
+            and np.hypot(d.x[a] - d.x[b], d.y[a] - d.y[b]) <= radius
+        ]
+        expected += [(a, b) for a in sorted(a for _, a in sorted(found)[:max_links])]
+    assert list(zip(i.tolist(), j.tolist(), strict=True)) == expected
+    start = n // 2
+    tail_i, tail_j = causal_pairs(d.x, d.y, d.t, node, start, radius, window, max_links)
+    np.testing.assert_array_equal(tail_i, i[j >= start])
+    np.testing.assert_array_equal(tail_j, j[j >= start])
+
+
 @settings(max_examples=30, deadline=None)
 @given(st.integers(0, 2**16), st.integers(2, 80), st.booleans())
 def test_compiled_pair_features_equal_the_numpy_ones(seed, n, measured):

@@ -131,3 +131,9 @@ def test_causal_must_be_a_boolean(data):
     X, y = data
     with pytest.raises(ValueError, match="causal"):
         LinkClustering(causal="yes").fit(X, y)
+
+
+def test_max_links_per_detection_requires_causal(data):
+    X, y = data
+    with pytest.raises(ValueError, match="max_links_per_detection requires causal=True"):
+        LinkClustering(**{**FIXED, "causal": False, "max_links_per_detection": 4}).fit(X, y)

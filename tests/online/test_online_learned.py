@@ -56,6 +56,19 @@ def test_online_ids_resolved_through_the_aliases_equal_offline_causal_predict(fi
     _same_partition(replayed["object_ids"], expected)
 
 
+def test_a_cap_on_the_links_per_detection_streams_as_offline_predict(recording):
+    scenes = make_scenes(n_sequences=2, duration=3.0, difficulty="realistic", random_state=0)
+    y = instance_target(scenes.data["track_id"], scenes.data["sequence"])
+    capped = _pipeline(max_links_per_detection=2).fit(scenes.data, y)
+    online = OnlinePipeline(capped)
+    replayed = replay(online, recording)
+    expected = online.causal_pipeline().predict(recording)
+    assert (expected >= 0).sum() > 100
+    _same_partition(replayed["object_ids"], expected)
+    uncapped = _pipeline().fit(scenes.data, y).predict(recording)
+    assert not np.array_equal(expected, uncapped)  # the cap leaves links out
+
+
 def test_ids_are_unique_across_sequences_and_the_older_survives(fitted, recording):
     replayed = replay(OnlinePipeline(fitted), recording)
     ids, sequence = replayed["reported"], recording["sequence"].to_numpy()
