@@ -7,9 +7,10 @@ frame transform and the filter, row ``learned``), fitted once before the
 streams on a simulated training recording of its own (``--learned-train``
 sequences of 20 s of the realistic preset, other seeds than the stream's;
 ``--learned-max-iter`` boosting iterations, 40 as the main job's causal
-model), trained on the pre-clustered instances as the main job trains it,
-thresholds tuned as ``LinkClustering`` tunes them; the fit time and
-the thresholds are printed.
+model; ``--learned-max-links`` its ``max_links_per_detection``), trained
+on the pre-clustered instances as the main job trains it, thresholds
+tuned as ``LinkClustering`` tunes them; the fit time and the thresholds
+are printed.
 
 The recording is simulated a minute at a time (realistic preset, the
 RadarScenes rates: four unsynchronised sensors with a 60 ms cycle, a scan
@@ -63,7 +64,7 @@ LEARNED = 0
 LEARNED_MODEL_ENV = "SKLEARN_RADAR_BENCH_LEARNED_MODEL"
 
 
-def fit_learned(n_sequences, path, max_iter):
+def fit_learned(n_sequences, path, max_iter, max_links=None):
     """Fit the causal learned pipeline on simulated training sequences; save it to ``path``; print what it took."""
     import joblib
     from sklearn.pipeline import Pipeline
@@ -79,7 +80,12 @@ def fit_learned(n_sequences, path, max_iter):
         [
             ("frame", FrameTransform(frame="car")),
             ("filter", DopplerDensityFilter()),
-            ("link", LinkClustering(causal=True, window=0.5, max_iter=max_iter, random_state=0)),
+            (
+                "link",
+                LinkClustering(
+                    causal=True, window=0.5, max_iter=max_iter, random_state=0, max_links_per_detection=max_links
+                ),
+            ),
         ]
     )
     start = time.perf_counter()
@@ -220,6 +226,9 @@ def main():
     parser.add_argument("--learned", action="store_true", help="add the learned grouping (causal LinkClustering)")
     parser.add_argument("--learned-train", type=int, default=4, help="training sequences (20 s) of the learned one")
     parser.add_argument("--learned-max-iter", type=int, default=40, help="boosting iterations of the learned one")
+    parser.add_argument(
+        "--learned-max-links", type=int, default=None, help="max_links_per_detection of the learned one (None: all)"
+    )
     parser.add_argument("--child", nargs=3, type=int, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
@@ -233,7 +242,7 @@ def main():
         import tempfile
 
         path = os.path.join(tempfile.mkdtemp(), "learned_causal.joblib")
-        fit_learned(args.learned_train, path, args.learned_max_iter)
+        fit_learned(args.learned_train, path, args.learned_max_iter, args.learned_max_links)
         os.environ[LEARNED_MODEL_ENV] = path
         numbers.append(LEARNED)
         args.kinds = [kind for kind in args.kinds if kind != 2]  # no stage 1 of its own

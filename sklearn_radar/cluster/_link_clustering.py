@@ -268,6 +268,11 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         self.causal = causal
         self.max_links_per_detection = max_links_per_detection
 
+    def __setstate__(self, state):
+        # A model pickled before max_links_per_detection existed formed every candidate pair.
+        state.setdefault("max_links_per_detection", None)
+        super().__setstate__(state)
+
     @_fit_context(prefer_skip_nested_validation=True)
     def fit(self, X, y=None):
         """Fit the objectness and link classifiers, tune the thresholds, and label the training data.

@@ -137,3 +137,13 @@ def test_max_links_per_detection_requires_causal(data):
     X, y = data
     with pytest.raises(ValueError, match="max_links_per_detection requires causal=True"):
         LinkClustering(**{**FIXED, "causal": False, "max_links_per_detection": 4}).fit(X, y)
+
+
+def test_a_model_pickled_before_max_links_per_detection_forms_every_pair(data, fitted):
+    X, _ = data
+    old = clone(fitted)
+    old.__dict__.update(fitted.__dict__)
+    del old.__dict__["max_links_per_detection"]  # as pickled by the version without the parameter
+    loaded = pickle.loads(pickle.dumps(old))
+    assert loaded.max_links_per_detection is None
+    np.testing.assert_array_equal(loaded.predict(X), fitted.predict(X))
