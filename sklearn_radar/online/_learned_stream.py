@@ -132,7 +132,8 @@ class LearnedStream:
         now = float(columns["t"][0])
         recent = now - window.floats[_F["t"]] <= self.span
         if not recent.all():
-            window.floats, window.ints = window.floats[:, recent], window.ints[:, recent]
+            first = int(np.argmax(recent)) if recent.any() else len(recent)  # the window is in time order
+            window.floats, window.ints = window.floats[:, first:], window.ints[:, first:]
         if len(rows) == 0:
             return clusters, sizes, []
         new = np.full((len(_FLOATS), len(rows)), np.nan)
