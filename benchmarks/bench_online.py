@@ -7,7 +7,8 @@ frame transform and the filter, row ``learned``), fitted once before the
 streams on a simulated training recording of its own (``--learned-train``
 sequences of 20 s of the realistic preset, other seeds than the stream's;
 ``--learned-max-iter`` boosting iterations, 40 as the main job's causal
-model; ``--learned-max-links`` its ``max_links_per_detection``), trained
+model; ``--learned-max-links`` its ``max_links_per_detection``, 16 as the
+main job's, ``none`` for every pair), trained
 on the pre-clustered instances as the main job trains it, thresholds
 tuned as ``LinkClustering`` tunes them; the fit time and the thresholds
 are printed.
@@ -227,7 +228,10 @@ def main():
     parser.add_argument("--learned-train", type=int, default=4, help="training sequences (20 s) of the learned one")
     parser.add_argument("--learned-max-iter", type=int, default=40, help="boosting iterations of the learned one")
     parser.add_argument(
-        "--learned-max-links", type=int, default=None, help="max_links_per_detection of the learned one (None: all)"
+        "--learned-max-links",
+        type=lambda value: None if value == "none" else int(value),
+        default=16,
+        help="max_links_per_detection of the learned one, 16 as the main job's causal model ('none': every pair)",
     )
     parser.add_argument("--child", nargs=3, type=int, help=argparse.SUPPRESS)
     args = parser.parse_args()

@@ -49,7 +49,8 @@ def _direct_model(folder, results, causal=False):
     tables = [_sequence_table(folder, n) for n in results["meta"]["data"]["train_sequences"]]
     X = pd.concat([X for X, _, _ in tables], ignore_index=True)
     y = np.concatenate([y for _, y, _ in tables])
-    params = {**SMALL, "link__window": 0.5, "link__random_state": results["meta"]["seed"], "link__n_jobs": 1}
+    params = {**(learned_step.LEARNED_CAUSAL_PARAMS if causal else {}), **SMALL, "link__window": 0.5}
+    params.update({"link__random_state": results["meta"]["seed"], "link__n_jobs": 1})
     return learned_pipeline({**params, "link__causal": causal, "filter__causal": causal}).fit(X, y)
 
 
