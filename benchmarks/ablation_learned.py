@@ -35,7 +35,8 @@ threads.
 
 Run (one core, niced)::
 
-    OMP_NUM_THREADS=1 nice -n 19 python benchmarks/ablation_learned.py --phase designs features centre
+    OMP_NUM_THREADS=1 nice -n 19 python benchmarks/ablation_learned.py --phase designs centre
+    OMP_NUM_THREADS=1 nice -n 19 python benchmarks/ablation_learned.py --phase features --data realistic
     python benchmarks/ablation_learned.py --summary
 """
 
@@ -450,10 +451,9 @@ def main(argv=None):
         return 0
     if not options.summary:
         options.results.mkdir(parents=True, exist_ok=True)
-        for phase in options.phase:  # phase by phase: the designs of every preset first
-            for preset in options.data:
-                for seed in options.seeds:
-                    run_seed(preset, seed, {phase}, options)
+        for preset in options.data:  # the phases of one preset and seed together: one fit of the default for all
+            for seed in options.seeds:
+                run_seed(preset, seed, set(options.phase), options)
     summary(options.results)
     return 0
 
