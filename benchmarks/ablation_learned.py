@@ -424,7 +424,30 @@ def summary(directory):
                 f"{method:<26} {len(both):>5} {both[method].mean():6.3f} {recall.loc[both.index, method].mean():6.3f} "
                 f"{fit:6.0f}  {difference}"
             )
+        if {"objects", "baseline"} <= set(pq):
+            both = pq[[DEFAULT, "objects", "baseline"]].dropna()
+            best = np.maximum(both.objects, both.baseline)
+            print(
+                f"{DEFAULT} - objects: {_mean_2se(both[DEFAULT] - both.objects)}; {DEFAULT} - max(objects, baseline): "
+                f"{_mean_2se(both[DEFAULT] - best)} ({len(both)} seeds)"
+            )
+        missed = {m: _missed(rows, preset, m, default.index) for m in (DEFAULT, "old grids, refit", "objects")}
+        missed = {m: v for m, v in missed.items() if v is not None}
+        if DEFAULT in missed and "objects" in missed:
+            print(
+                "missed segments (sums over those seeds): "
+                + ", ".join(f"{m} {v}" for m, v in missed.items())
+                + f"; {DEFAULT} against objects {missed[DEFAULT] / missed['objects'] - 1:+.1%}"
+            )
     return table
+
+
+def _missed(rows, preset, method, seeds):
+    """Missed test segments of ``method`` summed over ``seeds``; None when a seed lacks it."""
+    found = {r["seed"]: r["errors"]["missed"] for r in rows if r["preset"] == preset and r["method"] == method}
+    if not set(seeds) <= set(found):
+        return None
+    return int(sum(found[s] for s in seeds))
 
 
 def main(argv=None):
