@@ -15,6 +15,10 @@ grids, as the library tunes its own:
   agglomeration cut at that threshold: the two are the same partition, so one row stands for both;
 * ``mean-link, old grids`` -- the library's grouping tuned over the grids before they were widened (objectness from
   0.05, min size to 20), on the same classifiers;
+* ``average linkage`` -- average linkage (UPGMA) of the same links: the link of two clusters is the sum of P(link)
+  over their candidate pairs divided by the product of their sizes (pairs that are no candidates count as 0), as
+  scipy's average linkage of the distance 1 - P on the dense matrix (the issue's first prototype); its link grid
+  reaches down to 0.0005;
 * ``centre voting`` -- two ``HistGradientBoostingRegressor`` (150 iterations) on the detection features predict each
   road-user detection's offset (m) to its instance's centre (the mean position of the instance's detections within
   0.1 s); detections above the objectness gate are moved by the offset and grouped by DBSCAN with ``min_samples=1``
@@ -43,6 +47,7 @@ Run (one core, niced)::
 from __future__ import annotations
 
 import argparse
+import heapq
 import json
 import math
 import sys
@@ -52,6 +57,8 @@ from pathlib import Path
 import numba
 import numpy as np
 import pandas as pd
+from numba import types
+from numba.typed import Dict, List
 from threadpoolctl import threadpool_limits
 
 HERE = Path(__file__).resolve().parent
@@ -72,6 +79,7 @@ from sklearn_radar.metrics import panoptic_quality  # noqa: E402
 RESULTS = HERE / "results"
 OLD_OBJECTNESS_GRID = (0.05, 0.15, 0.3, 0.5)
 OLD_MIN_SIZE_GRID = (1, 3, 6, 10, 15, 20)
+AVERAGE_LINK_GRID = (0.0005, 0.001, 0.002, 0.003, 0.005, 0.01, 0.02, 0.03, 0.05, 0.07, *lc.LINK_GRID)
 EPS_GRID = (0.3, 0.5, 0.75, 1.0, 1.5, 2.0)
 CENTRE_WINDOW = 0.1  # s: the instance's detections whose mean is the centre, and the time of the voting's DBSCAN
 DEFAULT = "mean-link"
@@ -124,7 +132,75 @@ def _kruskal(n, i, j, p):
     return child[:m].copy(), survivor[:m].copy(), link[:m].copy()
 
 
-MERGES = {"mean-link": mean_link_merges, "components": kruskal_merges, "mean-link, old grids": mean_link_merges}
+def average_link_merges(n, i, j, p, floor):
+    """Average-linkage (UPGMA) merges, in the form of ``mean_link_merges``: the link of two clusters is the sum of
+    ``p`` over their candidate pairs divided by the product of their sizes (non-candidate pairs count as p = 0), the
+    merges of scipy's average linkage on the dense distance ``1 - p`` (checked on random graphs).  Average linkage
+    is reducible, so the links of the merges never increase and ``roots_at`` replays them."""
+    i, j, p = np.asarray(i, np.int64), np.asarray(j, np.int64), np.asarray(p, np.float64)
+    return _average(np.int64(n), i, j, p, np.float64(floor))
+
+
+@numba.njit(cache=True)
+def _average(n, i, j, p, floor):
+    neighbours = List()
+    for _ in range(n):
+        neighbours.append(Dict.empty(key_type=types.int64, value_type=types.float64))
+    for e in range(len(i)):
+        neighbours[i[e]][j[e]] = p[e]
+        neighbours[j[e]][i[e]] = p[e]
+    size = np.ones(n, np.float64)
+    version = np.zeros(n, np.int64)
+    alive = np.ones(n, np.bool_)
+    heap = [(0.0, np.int64(0), np.int64(0), np.int64(0), np.int64(0))]
+    heap.pop()
+    for e in range(len(i)):
+        if p[e] > floor:
+            heap.append((-p[e], min(i[e], j[e]), max(i[e], j[e]), np.int64(0), np.int64(0)))
+    heapq.heapify(heap)
+    child = np.empty(max(n - 1, 0), np.int64)
+    survivor = np.empty(max(n - 1, 0), np.int64)
+    link = np.empty(max(n - 1, 0), np.float64)
+    m = 0
+    while len(heap):
+        negative, a, b, va, vb = heapq.heappop(heap)
+        if not (alive[a] and alive[b]) or version[a] != va or version[b] != vb:
+            continue
+        if len(neighbours[a]) < len(neighbours[b]):
+            a, b = b, a
+        alive[b] = False
+        child[m], survivor[m], link[m] = b, a, -negative
+        m += 1
+        nb = neighbours[b]
+        na = neighbours[a]
+        del na[b]
+        for c, s in nb.items():
+            if c == a:
+                continue
+            nc = neighbours[c]
+            del nc[b]
+            if c in na:
+                na[c] += s
+            else:
+                na[c] = s
+            nc[a] = na[c]
+        nb.clear()
+        size[a] += size[b]
+        version[a] += 1
+        for c, s in na.items():
+            value = s / (size[a] * size[c])
+            if value > floor:
+                lo, hi = min(a, c), max(a, c)
+                heapq.heappush(heap, (-value, lo, hi, version[lo], version[hi]))
+    return child[:m].copy(), survivor[:m].copy(), link[:m].copy()
+
+
+MERGES = {
+    "mean-link": mean_link_merges,
+    "components": kruskal_merges,
+    "mean-link, old grids": mean_link_merges,
+    "average linkage": average_link_merges,
+}
 
 
 def tune_merges(sequences, objectness, pairs, links, grids, c, y, window, merges_fn):
@@ -294,12 +370,16 @@ def run_centre(model, seen, test, y_test, times, groups, seed):
 # ------------------------------------------------------------------------------------------ variants
 
 
-def run_designs(model, seen, fit_s, test, y_test, times, groups):
+def run_designs(model, seen, fit_s, test, y_test, times, groups, designs=DESIGNS):
     sequences, objectness, pairs, links, grids, c, y, window = seen
     parts = test_parts(model, test)
     records = []
-    for design in DESIGNS:
-        design_grids = grids if design != "mean-link, old grids" else (grids[0], OLD_OBJECTNESS_GRID, OLD_MIN_SIZE_GRID)
+    for design in designs:
+        design_grids = grids
+        if design == "mean-link, old grids":
+            design_grids = (grids[0], OLD_OBJECTNESS_GRID, OLD_MIN_SIZE_GRID)
+        elif design == "average linkage":  # its links are diluted by the pairs that are no candidates: lower ones
+            design_grids = (AVERAGE_LINK_GRID, grids[1], grids[2])
         start = time.perf_counter()
         setting, score = tune_merges(sequences, objectness, pairs, links, design_grids, c, y, window, MERGES[design])
         tune_s = time.perf_counter() - start
@@ -359,6 +439,8 @@ def run_seed(preset, seed, phases, options):
         wanted += list(FEATURE_GROUPS)
     if "centre" in phases:
         wanted.append("centre voting")
+    if "average" in phases:
+        wanted.append("average linkage")
     wanted = [v for v in wanted if not _path(options.results, preset, seed, v).exists()]
     if not wanted:
         return
@@ -368,10 +450,12 @@ def run_seed(preset, seed, phases, options):
     for variant in wanted:
         print(f"{preset} seed {seed}: {variant}", flush=True)
         with threadpool_limits(options.threads):
-            if variant in ("designs", "centre voting") and model is None:
+            if variant in ("designs", "centre voting", "average linkage") and model is None:
                 model, seen, fit_s = fit_capturing(train, y_train, options.threads)
             if variant == "designs":
                 records = run_designs(model, seen, fit_s, test, y_test, times, groups)
+            elif variant == "average linkage":
+                records = run_designs(model, seen, fit_s, test, y_test, times, groups, designs=("average linkage",))
             elif variant == "centre voting":
                 records = run_centre(model, seen, test, y_test, times, groups, seed)
             else:
@@ -404,7 +488,7 @@ def summary(directory):
         print(f"no results in {directory}")
         return None
     table = pd.DataFrame([{k: r[k] for k in ("preset", "seed", "method", "pq", "recall", "fit_s")} for r in rows])
-    order = [*DESIGNS, "centre voting", *FEATURE_GROUPS, "old grids, refit", "objects", "baseline"]
+    order = [*DESIGNS, "average linkage", "centre voting", *FEATURE_GROUPS, "old grids, refit", "objects", "baseline"]
     for preset in ("easy", "realistic", "radarscenes"):
         part = table[table.preset == preset]
         if not (part.method == DEFAULT).any():
@@ -455,7 +539,7 @@ def main(argv=None):
     presets = ["easy", "realistic", "radarscenes"]
     parser.add_argument("--data", nargs="+", default=["realistic", "easy", "radarscenes"], choices=presets)
     parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3, 4])
-    parser.add_argument("--phase", nargs="+", default=["designs"], choices=["designs", "features", "centre"])
+    parser.add_argument("--phase", nargs="+", default=["designs"], choices=["designs", "features", "centre", "average"])
     parser.add_argument("--feature-presets", nargs="+", default=["realistic"], choices=presets)
     parser.add_argument("--n-sequences", type=int, default=4)
     parser.add_argument("--duration", type=float, default=20.0, help="s per sequence")
