@@ -526,6 +526,33 @@ def summary(directory):
     return table
 
 
+def rst_table(table):
+    """The summary as a reStructuredText list-table: mean test PQ per variant and preset, and the paired difference
+    to the default (mean ± 2 SE, seeds in brackets when fewer than the default's)."""
+    presets = [
+        p for p in ("easy", "realistic", "radarscenes") if ((table.preset == p) & (table.method == DEFAULT)).any()
+    ]
+    order = [*DESIGNS, "average linkage", "centre voting", *FEATURE_GROUPS, "old grids, refit", "objects", "baseline"]
+    lines = [".. list-table::", "   :header-rows: 1", "", "   * - variant"] + [f"     - {p}" for p in presets]
+    for method in order:
+        cells = []
+        for preset in presets:
+            pq = table[table.preset == preset].pivot(index="seed", columns="method", values="pq")
+            if method not in pq:
+                cells.append("not run")
+                continue
+            both = pq[list(dict.fromkeys([DEFAULT, method]))].dropna()
+            cell = f"{both[method].mean():.3f}"
+            if method != DEFAULT:
+                cell += f" ({_mean_2se(both[method] - both[DEFAULT])})"
+            if len(both) < len(pq[DEFAULT].dropna()):
+                cell += f" [{len(both)} seeds]"
+            cells.append(cell)
+        if any(cell != "not run" for cell in cells):
+            lines += [f"   * - {method}"] + [f"     - {cell}" for cell in cells]
+    return "\n".join(lines)
+
+
 def _missed(rows, preset, method, seeds):
     """Missed test segments of ``method`` summed over ``seeds``; None when a seed lacks it."""
     found = {r["seed"]: r["errors"]["missed"] for r in rows if r["preset"] == preset and r["method"] == method}
@@ -546,6 +573,7 @@ def main(argv=None):
     parser.add_argument("--threads", type=int, default=1)
     parser.add_argument("--results", type=Path, default=RESULTS)
     parser.add_argument("--summary", action="store_true", help="only print the tables of the saved results")
+    parser.add_argument("--rst", action="store_true", help="with --summary: also print the table for the user guide")
     parser.add_argument("--fit-time", action="store_true", help="time one fit of the default (realistic, seed 0)")
     options = parser.parse_args(argv)
     if options.fit_time:
@@ -561,7 +589,9 @@ def main(argv=None):
         for preset in options.data:  # the phases of one preset and seed together: one fit of the default for all
             for seed in options.seeds:
                 run_seed(preset, seed, set(options.phase), options)
-    summary(options.results)
+    table = summary(options.results)
+    if options.rst and table is not None:
+        print(rst_table(table))
     return 0
 
 
