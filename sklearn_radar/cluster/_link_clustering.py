@@ -45,9 +45,9 @@ LINK_READS = ColumnsRead(
 )
 
 #: The settings the automatic tuning tries (each fixed parameter replaces its grid by its value).
-OBJECTNESS_GRID = (0.05, 0.15, 0.3, 0.5)
+OBJECTNESS_GRID = (0.01, 0.02, 0.05, 0.15, 0.3, 0.5)
 LINK_GRID = tuple(np.round(np.arange(0.1, 0.951, 0.05), 2).tolist())
-MIN_SIZE_GRID = (1, 3, 6, 10, 15, 20)
+MIN_SIZE_GRID = (1, 3, 6, 10, 15, 20, 25, 30, 40)
 #: P(road user) above which a training detection takes part in the link classifier's pairs.
 CANDIDATE_OBJECTNESS = 0.05
 

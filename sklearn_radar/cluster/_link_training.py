@@ -2,16 +2,26 @@
 
 from __future__ import annotations
 
+import weakref
+
 import numpy as np
 
 from .._labels import drop_small_clusters, roots_to_rows
 from ._agglomeration import mean_link_merges, roots_at
 from ._causal_agglomeration import confirmed_roots, sequence_merges
+from ._tree_walk import boosting_proba, compile_boosting
 
 #: Rows from which the classifiers stop early (as scikit-learn's ``early_stopping="auto"``), and the fewest rows of
 #: the smaller class that allow it (its stratified hold-out of 10 % needs some of each class).
 EARLY_STOPPING_ROWS = 10_000
 EARLY_STOPPING_CLASS_ROWS = 50
+#: Batches of at most this many rows go through the compiled tree walk (equal to ``predict_proba`` to the bit, without
+#: its fixed cost of about a millisecond per call); larger ones through ``predict_proba`` (its OpenMP threads).
+WALK_ROWS = 4096
+
+#: The compiled trees of each classifier met, as ``(its list of predictors, compiled or None)``: a refit classifier
+#: has a new list, so an entry is valid only while the list is the same object.
+_COMPILED = weakref.WeakKeyDictionary()
 
 
 def binary_classifier(max_iter, seed, early_stopping):
@@ -51,6 +61,10 @@ def _fit(X, y, max_iter, seed):
 def positive_proba(model, X):
     """P(True) of each row of ``X`` by a model of :func:`_fit`.
 
+    Batches of at most :data:`WALK_ROWS` rows go through the compiled tree
+    walk of :mod:`._tree_walk` (the same probabilities as ``predict_proba``),
+    larger ones through ``predict_proba``.
+
     Parameters
     ----------
     model : HistGradientBoostingClassifier or float
@@ -65,7 +79,24 @@ def positive_proba(model, X):
         return np.full(len(X), model)
     if len(X) == 0:
         return np.zeros(0)
+    if len(X) <= WALK_ROWS:
+        compiled = _compiled(model)
+        if compiled is not None:
+            return boosting_proba(compiled, X)
     return model.predict_proba(X)[:, 1]
+
+
+def _compiled(model):
+    """The compiled trees of ``model`` (None when the walk does not cover it), compiled on first use."""
+    predictors = getattr(model, "_predictors", None)
+    try:
+        entry = _COMPILED.get(model)
+    except TypeError:  # not weakly referable
+        return compile_boosting(model)
+    if entry is None or entry[0] is not predictors:
+        entry = (predictors, compile_boosting(model))
+        _COMPILED[model] = entry
+    return entry[1]
 
 
 def fold_of_groups(groups, cv):

@@ -1,5 +1,6 @@
 """LinkClustering: learned objectness and links with mean-link agglomeration, as a scikit-learn clusterer."""
 
+import copy
 import pickle
 
 import numpy as np
@@ -15,6 +16,7 @@ from sklearn_radar import DopplerDensityFilter, FrameTransform, instance_target
 from sklearn_radar._validation import read_columns
 from sklearn_radar.cluster import LinkClustering, _link_training
 from sklearn_radar.cluster._link_clustering import LINK_GRID, LINK_READS, MIN_SIZE_GRID, OBJECTNESS_GRID, _sequences
+from sklearn_radar.cluster._link_features import DETECTION_FEATURES
 from sklearn_radar.datasets import make_scenes
 
 #: Fixed thresholds: no tuning, so no out-of-fold fits (the cheap configuration of most tests).
@@ -175,6 +177,30 @@ def test_the_classifiers_run_with_the_threads_they_are_given(data, monkeypatch):
     assert seen and all(seen)
     assert all(threads == [1] * len(threads) for threads in seen[: len(seen) // 2])
     assert all(threads == [2] * len(threads) for threads in seen[len(seen) // 2 :])
+
+
+@pytest.mark.parametrize("walk_rows", [0, 10**9], ids=["predict_proba", "tree walk"])
+def test_labels_do_not_depend_on_how_the_classifiers_are_evaluated(data, fitted, monkeypatch, walk_rows):
+    X, _ = data
+    monkeypatch.setattr(_link_training, "WALK_ROWS", walk_rows)
+    np.testing.assert_array_equal(fitted.predict(X), fitted.labels_)
+
+
+def test_positive_proba_walks_small_batches_and_follows_a_refit(data, fitted, monkeypatch):
+    X, _ = data
+    sequence = _sequences(read_columns(fitted, X, LINK_READS, reset=False)[1])[0]
+    rows = sequence.features[:50][:, np.isin(list(DETECTION_FEATURES), fitted.detection_feature_names_)]
+    model = copy.deepcopy(fitted.objectness_classifier_)  # refit below: not the fixture's
+    calls = []
+    original = type(model).predict_proba
+    monkeypatch.setattr(type(model), "predict_proba", lambda self, Z: calls.append(len(Z)) or original(self, Z))
+    np.testing.assert_array_equal(_link_training.positive_proba(model, rows), original(model, rows)[:, 1])
+    assert calls == []  # walked, not predict_proba
+    model.fit(rows, np.arange(len(rows)) % 3 == 0)  # the same object, new trees
+    np.testing.assert_array_equal(_link_training.positive_proba(model, rows), original(model, rows)[:, 1])
+    monkeypatch.setattr(_link_training, "WALK_ROWS", 10)
+    _link_training.positive_proba(model, rows)
+    assert calls == [len(rows)]  # a large batch goes through predict_proba
 
 
 # ---------------------------------------------------------------------------------------------- bad input
