@@ -1,10 +1,12 @@
 """The tracking step: the run's settings streamed through the online pipeline, their ids scored over time.
 
-Each setting of :data:`~._constants.TRACKED` that the run has (the object experiment when it ran; the paper's
-settings, the run's tuned ones where their experiments ran, the paper's otherwise) is replayed scan by scan
+Each setting of :data:`~._constants.TRACKED` that the run has (the object experiment when it ran; the learned
+grouping's causal model, fitted by the learned step, when it ran; the paper's settings, the run's tuned ones where
+their experiments ran, the paper's otherwise) is replayed scan by scan
 through :class:`~sklearn_radar.online.OnlinePipeline` on every test sequence, where it lives, with a
 :class:`~sklearn_radar.online.Tracker` on its object ids.  The Tracker's few parameters are chosen on the training
-half (:data:`TRACKER_GRID`, for MOTA) on the object setting's ids; the baseline tracker
+half (:data:`TRACKER_GRID`, for MOTA) on the object setting's ids, and every setting streams with them (the learned
+model's own training-half ids are in-sample: it was fitted on them); the baseline tracker
 (:class:`._baseline_tracker.NearestCentroidTracker` on SlidingDBSCAN's clusters) is tuned the same way.  The ids
 are scored per 0.5 s time window: MOTA and IDF1 (:func:`~sklearn_radar.metrics.tracking_scores`), HOTA, DetA and
 AssA (:func:`~sklearn_radar.metrics.hota_scores`) (:ref:`online-tracking`).
@@ -21,6 +23,7 @@ from sklearn.base import clone
 
 from ..experiments import SKLEARN_BASELINES, baseline_pipeline, experiment_pipeline, get_experiment, paper_params
 from ..experiments._baselines import SLIDING_BASELINE
+from ..experiments._learned import learned_pipeline
 from ..experiments._saved import setting_pipeline
 from ..metrics import tracking_scores
 from ..metrics._hota import combine_hota_counts, hota_counts
@@ -30,10 +33,10 @@ from ..online._replay import replay
 from ..online._scans import scan_order
 from ..preprocessing import FrameTransform
 from ._baseline_tracker import NearestCentroidTracker
-from ._constants import BASELINES, OBJECTS, SCORE_WINDOW_S, TRACKED, TRACKING
+from ._constants import BASELINES, LEARNED, OBJECTS, SCORE_WINDOW_S, TRACKED, TRACKING
 from ._context import Outcome
 from ._records import JsonRecord, record
-from ._tuning import search_seed, tune
+from ._tuning import native_params, search_seed, tune
 
 #: The counts of :func:`tracking_scores` that add up over sequences.
 _COUNTS = ("id_switches", "misses", "false_positives", "n_objects", "n_matches", "idtp", "idfp", "idfn", "n_windows")
@@ -92,13 +95,15 @@ class TrackingResult(JsonRecord):
     Attributes
     ----------
     number : int or None
-        The paper's experiment whose setting streams; None for another (the object experiment).
+        The paper's experiment whose setting streams; None for another (the object experiment, the learned grouping).
     method : str
     setting_source : str
         ``"tuned #13"`` or ``"fixed #1"`` (the run's setting), ``"paper's #13"`` (the experiment did not run),
-        ``"tuned for PQ"`` (the object experiment's).
+        ``"tuned for PQ"`` (the object experiment's), ``"causal, fitted on the training half"`` (the learned
+        grouping's causal model).
     params : dict
-        The setting, as pipeline parameters (stage 1's included for stage 2).
+        The setting, as pipeline parameters (stage 1's included for stage 2; the learned model's as set where they
+        differ from :func:`~sklearn_radar.experiments._learned.learned_pipeline`'s, the fitted thresholds aside).
     reported : TrackingScores
         The object ids as given with each detection when its scan was labelled.
     final : TrackingScores
@@ -201,9 +206,22 @@ class TrackedSetting:
 def setting_to_track(key, needed):
     """The :class:`TrackedSetting` of :data:`TRACKED` key ``key``, or None when the run lacks it.
 
-    One branch per kind of setting: the object experiment's (only when it ran), a paper experiment's (the run's
-    or the paper's).
+    One branch per kind of setting: the object experiment's (only when it ran), the learned grouping's causal
+    model (only when the learned step ran in this run: the fitted model is not read back from a results file), a
+    paper experiment's (the run's or the paper's).
     """
+    if key == LEARNED:
+        result = needed.get(LEARNED)
+        model = None if result is None or result.causal is None else result.causal.model
+        if model is None:
+            return None
+        unset = learned_pipeline().get_params()
+        params = {
+            name: value
+            for name, value in model.get_params().items()
+            if "__" in name and name != "link__n_jobs" and value != unset[name]
+        }
+        return TrackedSetting(model, native_params(params), "causal, fitted on the training half", None, LEARNED)
     if key == OBJECTS:
         result = needed.get(OBJECTS)
         if result is None:

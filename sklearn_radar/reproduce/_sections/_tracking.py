@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._constants import LEARNED
 from .._context import RunContext
 from .._results import RunResults
 from .._tracking import TrackingScores
@@ -115,6 +116,13 @@ def _tuned_lines(step):
             f"{tracker.criterion} {tracker.train_score:.3f}); every setting above runs with them. `params.json` "
             "saves them under `tracker` for `sklearn-radar stream --track`."
         )
+        if LEARNED in step.settings:
+            lines.append(
+                "The learned grouping streams its causal model (`LinkClustering(causal=True)`, fitted by the learned "
+                "step on the training half) with these too: its own training-half ids are in-sample (the model was "
+                "fitted on them), cleaner than its test ids, so a Tracker tuned on them would be tuned for data "
+                "better than it will see."
+            )
     else:
         lines.append(
             "The run has no object experiment, on whose ids the Tracker is tuned: it ran at its defaults "
@@ -136,7 +144,8 @@ def _values(params):
 
 
 def glance_line(results: RunResults):
-    """The best tracked setting (by test MOTA) beside the baseline tracker, for "At a glance"; or None."""
+    """The best tracked setting (by test MOTA), the learned grouping when tracked, the baseline tracker, for "At a
+    glance"; or None."""
     step = results.tracking
     tracked = {} if step is None else {k: r for k, r in step.settings.items() if r.tracked is not None}
     if not tracked:
@@ -147,6 +156,8 @@ def glance_line(results: RunResults):
         f"tracking online, test half: {_name(key, tracked[key])} with the Tracker (the best by test MOTA) "
         f"{_said(tracked[key].tracked)}"
     )
+    if key != LEARNED and LEARNED in tracked:
+        line += f"; {_name(LEARNED, tracked[LEARNED])} (causal) with the Tracker {_said(tracked[LEARNED].tracked)}"
     if step.baseline is not None:
         line += f"; the baseline tracker (SlidingDBSCAN + nearest centroid) {_said(step.baseline.scores)}"
     return line + "; its section has the details."
