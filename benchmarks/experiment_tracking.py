@@ -44,6 +44,9 @@ Run (about an hour per preset and 3 seeds on 2 shared cores)::
 
     OMP_NUM_THREADS=1 nice -n 19 python benchmarks/experiment_tracking.py --tune --data realistic --seeds 0 1 2
     OMP_NUM_THREADS=1 nice -n 19 python benchmarks/experiment_tracking.py --data realistic --seeds 0 1 2
+
+``--save FOLDER`` writes each seed's rows as ``tracking_<preset>_<seed>.json`` (seeds may then run as separate
+processes); ``--summary --save FOLDER`` prints the tables of the saved rows.
 """
 
 from __future__ import annotations
@@ -423,7 +426,14 @@ def main(argv=None):
     parser.add_argument("--tune", action="store_true", help="only tune the clusterings (saved in --cache)")
     parser.add_argument("--n-settings", type=int, default=30, help="random settings tried per tracker")
     parser.add_argument("--save", default=None, help="folder of each seed's rows (JSON), none by default")
+    parser.add_argument("--summary", action="store_true", help="only the tables of the rows saved in --save")
     options = parser.parse_args(argv)
+    if options.summary:
+        for preset in options.presets:
+            runs = [json.loads(p.read_text()) for p in sorted(Path(options.save).glob(f"tracking_{preset}_*.json"))]
+            if runs:
+                print(table(preset, runs))
+        return 0
     tables = []
     for preset in options.presets:
         runs = []
