@@ -167,9 +167,9 @@ def test_the_report_leads_with_the_object_setting_and_the_baseline(tracked):
     assert "tracking online, test half:" in glance and "the baseline tracker (SlidingDBSCAN" in glance
 
 
-def test_the_learned_grouping_streams_its_saved_causal_model_with_the_tuned_tracker(tracked_learned, tiny_folder):
-    """The causal model the learned step saved, replayed here on the test half with the Tracker tuned on the object
-    setting: the recorded scores are its ids'; it comes second, after the object setting."""
+def test_the_learned_grouping_streams_its_saved_causal_model_with_its_tuned_tracker(tracked_learned, tiny_folder):
+    """The causal model the learned step saved, replayed here on the test half with the Tracker tuned on its own
+    training ids: the recorded scores are its ids'; it comes second, after the object setting."""
     results = RunResults.read(tracked_learned / "results.json")
     settings = results.tracking.settings
     assert list(settings) == ["objects", "learned", "1", "8", "12", "13"]
@@ -179,9 +179,10 @@ def test_the_learned_grouping_streams_its_saved_causal_model_with_the_tuned_trac
     assert entry.params["link__causal"] is True and entry.params["filter__causal"] is True
     assert entry.params["link__max_iter"] == 10
     assert results.tracking.tracker.tuned_on == "objects"
+    assert results.tracking.learned_tracker.tuned_on == "learned"
     model = load_learned(tracked_learned / results.learned.causal.model_file)
     scenes = load_radarscenes(tiny_folder)
-    tracker = Tracker(**results.tracking.tracker.params)
+    tracker = Tracker(**results.tracking.learned_tracker.params)
     final, tracks, rows = _replayed(scenes, results.meta.data.test_sequences, model, tracker)
     for ids, found in ((final, entry.final), (tracks, entry.tracked)):
         expected = _scores(scenes, rows, ids)
@@ -189,6 +190,22 @@ def test_the_learned_grouping_streams_its_saved_causal_model_with_the_tuned_trac
             (expected["idf1"], expected["mota"], expected["id_switches"], expected["n_objects"]), abs=1e-12
         )
     assert entry.tracked.hota == pytest.approx(_scores(scenes, rows, tracks)["hota"], abs=1e-12)
+
+
+def test_the_learned_tracker_is_the_best_of_its_grid_on_the_learned_stream_of_the_training_half(
+    tracked_learned, tiny_folder
+):
+    results = RunResults.read(tracked_learned / "results.json")
+    chosen = results.tracking.learned_tracker
+    model = load_learned(tracked_learned / results.learned.causal.model_file)
+    scenes = load_radarscenes(tiny_folder)
+    found = []
+    for candidate in candidates(TRACKER_GRID):
+        _, tracks, rows = _replayed(scenes, results.meta.data.train_sequences, model, Tracker(**candidate))
+        found.append(_scores(scenes, rows, tracks)["mota"])
+    assert chosen.criterion == "MOTA" and chosen.n_candidates == len(found)
+    assert chosen.train_score == pytest.approx(max(found), abs=1e-12)
+    assert chosen.params == candidates(TRACKER_GRID)[int(np.argmax(found))]
 
 
 def test_the_report_names_the_tracked_learned_grouping(tracked_learned):
@@ -199,7 +216,7 @@ def test_the_report_names_the_tracked_learned_grouping(tracked_learned):
     ours = names[: next(i for i, name in enumerate(names) if name.startswith("baseline: SlidingDBSCAN"))]
     assert ours[0].startswith("objects (tuned for PQ)")
     assert "learned (causal, fitted on the training half)" in ours
-    assert "its own training-half ids are in-sample" in section
+    assert "with a Tracker chosen the same way on that stream's training-half ids" in section
     glance = report.split("## At a glance")[1].split("\n## ")[0]
     line = next(line for line in glance.splitlines() if "tracking online, test half:" in line)
     assert "learned" in line

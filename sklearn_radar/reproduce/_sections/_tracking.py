@@ -113,16 +113,17 @@ def _tuned_lines(step):
             f"The Tracker's parameters were chosen on the training half, on the {tracker.tuned_on} setting's ids, "
             f"for {tracker.criterion} among {tracker.n_candidates} combinations of `min_hits`, `max_age` (s) and "
             f"`gate` (standard deviations), the others at their defaults: {_values(tracker.params)} (training "
-            f"{tracker.criterion} {tracker.train_score:.3f}); every setting above runs with them. `params.json` "
-            "saves them under `tracker` for `sklearn-radar stream --track`."
+            f"{tracker.criterion} {tracker.train_score:.3f}); every setting above but the learned grouping runs "
+            "with them. `params.json` saves them under `tracker` for `sklearn-radar stream --track`."
         )
-        if LEARNED in step.settings:
-            lines.append(
-                "The learned grouping streams its causal model (`LinkClustering(causal=True)`, fitted by the learned "
-                "step on the training half) with these too: its own training-half ids are in-sample (the model was "
-                "fitted on them), cleaner than its test ids, so a Tracker tuned on them would be tuned for data "
-                "better than it will see."
-            )
+    learned = step.learned_tracker
+    if learned is not None:
+        lines.append(
+            "The learned grouping streams its causal model (`LinkClustering(causal=True)`, fitted by the learned "
+            "step on the training half), with a Tracker chosen the same way on that stream's training-half ids "
+            f"(in-sample: the model was fitted on that half): {_values(learned.params)} (training "
+            f"{learned.criterion} {learned.train_score:.3f})."
+        )
     else:
         lines.append(
             "The run has no object experiment, on whose ids the Tracker is tuned: it ran at its defaults "
