@@ -24,15 +24,29 @@ Rows of the table, per preset (mean over seeds ± standard error; paired differe
 * ``objects + Tracker``: :class:`sklearn_radar.online.Tracker` on the reported ids (``noise_radius=None``);
 * ``objects + Tracker, noise``: the same with ``noise_radius`` tuned too (noise detections near a confirmed track
   whose Doppler agrees take its id);
+* ``learned causal (reported)``: the learned grouping's causal model (``learned_pipeline`` with ``link__causal`` and
+  ``filter__causal``, ``LEARNED_CAUSAL_PARAMS``: what the main job's learned step fits), fitted on the training half
+  with the pre-clustered instance target (``precluster_target``, as ``experiment_learned.py``), streamed through
+  ``OnlinePipeline``, its ids as reported at each scan;
+* ``learned causal + Tracker``: the Tracker on those ids, its parameters tuned on the training half's learned ids
+  the same way as ``objects + Tracker`` (those ids are in-sample: the model was fitted on that half);
+* ``learned causal + objects' Tracker``: the Tracker at ``objects + Tracker``'s setting (what the main job does);
 * ``SlidingDBSCAN + nearest``: the baseline a user would write (:class:`NearestCentroidTracker` below):
   SlidingDBSCAN's clusters of each scan associated to the tracks' last centroids with the Hungarian method, a gate
   in metres, the same confirmation and deletion rule.  It is a class of this script, not of the library: it is the
   comparison point (no motion model, no Doppler), not a tracker to recommend.
 
+Besides, per seed, the causal per-frame PQ (``panoptic_quality`` on the streamed final ids, 0.5 s windows, against
+the pre-clustered target, as ``experiment_learned.py`` scores) of the learned stream, the object setting's stream and
+SlidingDBSCAN on the test half, and its paired differences.
+
 Run (about an hour per preset and 3 seeds on 2 shared cores)::
 
     OMP_NUM_THREADS=1 nice -n 19 python benchmarks/experiment_tracking.py --tune --data realistic --seeds 0 1 2
     OMP_NUM_THREADS=1 nice -n 19 python benchmarks/experiment_tracking.py --data realistic --seeds 0 1 2
+
+``--save FOLDER`` writes each seed's rows as ``tracking_<preset>_<seed>.json`` (seeds may then run as separate
+processes); ``--summary --save FOLDER`` prints the tables of the saved rows.
 """
 
 from __future__ import annotations
@@ -56,13 +70,18 @@ from sklearn.base import clone
 from sklearn_radar import FrameTransform
 from sklearn_radar.datasets import make_scenes
 from sklearn_radar.experiments import object_pipeline
-from sklearn_radar.metrics import hota_scores, tracking_scores
+from sklearn_radar.experiments._learned import learned_pipeline
+from sklearn_radar.metrics import hota_scores, panoptic_quality, precluster_target, tracking_scores
 from sklearn_radar.model_selection import sequence_train_test_split
 from sklearn_radar.online import OnlinePipeline, Tracker
 from sklearn_radar.online._replay import replay
 from sklearn_radar.online._scans import scan_order
 
 PRESETS = ("realistic", "radarscenes", "easy")
+#: The learned step's causal model (``reproduce/_learned.py``: LEARNED_CAUSAL_PARAMS, the window, causal front).
+LEARNED_CAUSAL = {"link__max_iter": 40, "link__window": 0.5, "link__causal": True, "filter__causal": True}
+#: The label columns, which the learned model is not given.
+LABEL_COLUMNS = ("uuid", "track_id", "label_id")
 OBJECTS, SLIDING = "objects causal", "SlidingDBSCAN"
 
 
@@ -159,12 +178,19 @@ def streamed(preset, seed, tuned, options):
     )
     sliding_variant = next(v for v in variants() if v.name == SLIDING)
     sliding = clone(sliding_variant.searched).set_params(**tuned[SLIDING]["params"])
+    instances = precluster_target(scenes.data, scenes.target)
+    inputs = scenes.data[[c for c in scenes.data.columns if c not in LABEL_COLUMNS]]
+    learned = learned_pipeline({**LEARNED_CAUSAL, "link__random_state": seed, "link__n_jobs": 1})
+    start = time.perf_counter()
+    learned.fit(inputs.iloc[train].reset_index(drop=True), instances[train])
+    print(f"  {preset} seed {seed}: learned causal model fitted in {time.perf_counter() - start:.0f} s", flush=True)
     halves = {}
     for half, rows in (("train", train), ("test", test)):
         parts = []
         for sequence in np.unique(scenes.groups[rows]):
             data = scenes.data.iloc[rows[scenes.groups[rows] == sequence]].reset_index(drop=True)
             replayed = replay(OnlinePipeline(objects), data)
+            learned_ids = replay(OnlinePipeline(learned), data)
             work = clone(sliding_variant.stage0).fit_transform(data)
             part = fixed_frame(data)
             part.update(
@@ -173,8 +199,11 @@ def streamed(preset, seed, tuned, options):
                 final=replayed["object_ids"],
                 sliding=clone(sliding).fit(work)[-1].labels_,
                 sequence=np.full(len(data), sequence),
+                learned=learned_ids["reported"],
+                learned_final=learned_ids["object_ids"],
             )
             part["truth"] = scenes.target[rows[scenes.groups[rows] == sequence]]
+            part["instances"] = instances[rows[scenes.groups[rows] == sequence]]
             parts.append(part)
         halves[half] = parts
     return halves
@@ -261,8 +290,12 @@ def sample(space, n, seed):
 def tuned_tracker(parts, make, clusters, space, n, seed):
     """The setting of ``space`` with the best training MOTA among ``n`` random ones (defaults first)."""
     best = (-np.inf, None)
+    truth = np.concatenate([p["truth"] for p in parts])
+    times = np.concatenate([p["t"] for p in parts])
+    groups = np.concatenate([p["sequence"] for p in parts])
     for setting in [{}, *sample(space, n, seed)]:
-        mota = scores(parts, track(parts, lambda s=setting: make(**s), clusters))["mota"]
+        ids = track(parts, lambda s=setting: make(**s), clusters)
+        mota = tracking_scores(truth, ids, times=times, groups=groups, window=0.5)["mota"]  # no HOTA: not needed
         if mota > best[0]:
             best = (mota, setting)
     return best
@@ -272,8 +305,28 @@ def tuned_tracker(parts, make, clusters, space, n, seed):
 FORMS = {
     "objects + Tracker": (Tracker, TRACKER_SPACE, lambda p: p["reported"]),
     "objects + Tracker, noise": (Tracker, NOISE_SPACE, lambda p: p["reported"]),
+    "learned causal + Tracker": (Tracker, TRACKER_SPACE, lambda p: p["learned"]),
     "SlidingDBSCAN + nearest": (NearestCentroidTracker, BASELINE_SPACE, lambda p: p["sliding"]),
 }
+#: The streams whose causal per-frame PQ is measured: name -> their final ids (or labels) on a part.
+PQ_STREAMS = {
+    "learned causal": lambda p: p["learned_final"],
+    "objects causal": lambda p: p["final"],
+    "SlidingDBSCAN": lambda p: p["sliding"],
+}
+
+
+def causal_pq(parts):
+    """Per-frame PQ (0.5 s windows) of each of :data:`PQ_STREAMS` on ``parts``, against the pre-clustered target."""
+    target = np.concatenate([p["instances"] for p in parts])
+    times = np.concatenate([p["t"] for p in parts])
+    groups = np.concatenate([p["sequence"] for p in parts])
+    return {
+        name: float(
+            panoptic_quality(target, np.concatenate([ids(p) for p in parts]), times=times, groups=groups, window=0.5).pq
+        )
+        for name, ids in PQ_STREAMS.items()
+    }
 
 
 def measure(preset, seed, tuned, options):
@@ -287,6 +340,7 @@ def measure(preset, seed, tuned, options):
         "objects (final, not causal)": {"scores": scores(test, np.concatenate([p["final"] for p in test]))},
         "oracle: truth on clustered": {"scores": scores(test, np.where(reported >= 0, truth, -1))},
         "oracle: cluster majority": {"scores": scores(test, np.concatenate([majority(p) for p in test]))},
+        "learned causal (reported)": {"scores": scores(test, np.concatenate([p["learned"] for p in test]))},
     }
     for name, (kind, space, clusters) in FORMS.items():
         start = time.perf_counter()
@@ -294,7 +348,15 @@ def measure(preset, seed, tuned, options):
         test_ids = track(test, lambda kind=kind, setting=setting: kind(**setting), clusters)
         rows[name] = {"scores": scores(test, test_ids), "setting": setting, "train_mota": train_mota}
         rows[name]["seconds"] = time.perf_counter() - start
+    setting = rows["objects + Tracker"]["setting"]
+    ids = track(test, lambda: Tracker(**setting), lambda p: p["learned"])
+    rows["learned causal + objects' Tracker"] = {"scores": scores(test, ids)}
+    pq = causal_pq(test)
+    print(f"  {preset} seed {seed} causal PQ, test half: " + ", ".join(f"{k} {v:.3f}" for k, v in pq.items()))
+    rows["_pq"] = pq
     for name, row in rows.items():
+        if name == "_pq":
+            continue
         s = row["scores"]
         print(
             f"  {preset} seed {seed} {name:<30} MOTA {s['mota']:.3f} IDF1 {s['idf1']:.3f} HOTA {s['hota']:.3f} "
@@ -317,25 +379,38 @@ def _mean_se(values):
 
 
 def table(preset, runs):
-    """Mean ± standard error over seeds; paired differences to the reported ids and to the baseline tracker."""
-    names = list(runs[0])
+    """Mean ± standard error over seeds; paired differences (mean ± standard error) to the reported ids, the baseline
+    tracker and, for the learned grouping, the tracked object setting; the causal PQ of the streams."""
+    names = [name for name in runs[0] if name != "_pq"]
+    metrics = ("mota", "idf1", "hota", "deta", "assa")
     lines = [f"\n{preset}: {len(runs)} seed(s), test half; mean ± standard error over seeds"]
-    lines.append(f"{'':<30} " + " ".join(f"{m:>15}" for m in ("MOTA", "IDF1", "HOTA", "DetA", "AssA")))
+    lines.append(f"{'':<36} " + " ".join(f"{m:>15}" for m in ("MOTA", "IDF1", "HOTA", "DetA", "AssA")))
     for name in names:
-        cells = [_mean_se([r[name]["scores"][m] for r in runs]) for m in ("mota", "idf1", "hota", "deta", "assa")]
-        lines.append(f"{name:<30} " + " ".join(f"{m:.3f} ± {se:.3f}".rjust(15) for m, se in cells))
-    for reference in ("objects (reported)", "SlidingDBSCAN + nearest"):
+        cells = [_mean_se([r[name]["scores"][m] for r in runs]) for m in metrics]
+        lines.append(f"{name:<36} " + " ".join(f"{m:.3f} ± {se:.3f}".rjust(15) for m, se in cells))
+    for reference in ("objects (reported)", "SlidingDBSCAN + nearest", "objects + Tracker"):
         for name in names:
             if name == reference or "Tracker" not in name:
                 continue
-            cells = [
-                _mean_se([r[name]["scores"][m] - r[reference]["scores"][m] for r in runs])
-                for m in ("mota", "idf1", "hota", "deta", "assa")
-            ]
-            lines.append(
-                f"{name + ' - ' + reference.split(' ')[0]:<30} "
-                + " ".join(f"{m:+.3f} ± {se:.3f}".rjust(15) for m, se in cells)
-            )
+            if reference == "objects + Tracker" and not name.startswith("learned"):
+                continue
+            cells = [_mean_se([r[name]["scores"][m] - r[reference]["scores"][m] for r in runs]) for m in metrics]
+            label = f"{name} - {reference.split(' ')[0]}{' + Tracker' if reference.endswith('Tracker') else ''}"
+            lines.append(f"{label:<36} " + " ".join(f"{m:+.3f} ± {se:.3f}".rjust(15) for m, se in cells))
+    for name in names:
+        lines.append(
+            f"  per seed {name}: "
+            + "; ".join(" ".join(f"{r[name]['scores'][m]:.3f}" for m in ("mota", "idf1", "hota")) for r in runs)
+        )
+    if all("_pq" in r for r in runs):
+        lines.append("causal per-frame PQ, test half (mean ± standard error; per seed)")
+        for name in PQ_STREAMS:
+            mean, se = _mean_se([r["_pq"][name] for r in runs])
+            per_seed = ", ".join(f"{r['_pq'][name]:.3f}" for r in runs)
+            lines.append(f"  {name:<34} {mean:.3f} ± {se:.3f}  ({per_seed})")
+        for other in ("objects causal", "SlidingDBSCAN"):
+            mean, se = _mean_se([r["_pq"]["learned causal"] - r["_pq"][other] for r in runs])
+            lines.append(f"  learned causal - {other:<17} {mean:+.3f} ± {se:.3f}")
     return "\n".join(lines)
 
 
@@ -350,7 +425,15 @@ def main(argv=None):
     parser.add_argument("--cache", default="/tmp/tracking_cache", help="folder of the tuned settings")
     parser.add_argument("--tune", action="store_true", help="only tune the clusterings (saved in --cache)")
     parser.add_argument("--n-settings", type=int, default=30, help="random settings tried per tracker")
+    parser.add_argument("--save", default=None, help="folder of each seed's rows (JSON), none by default")
+    parser.add_argument("--summary", action="store_true", help="only the tables of the rows saved in --save")
     options = parser.parse_args(argv)
+    if options.summary:
+        for preset in options.presets:
+            runs = [json.loads(p.read_text()) for p in sorted(Path(options.save).glob(f"tracking_{preset}_*.json"))]
+            if runs:
+                print(table(preset, runs))
+        return 0
     tables = []
     for preset in options.presets:
         runs = []
@@ -360,6 +443,10 @@ def main(argv=None):
             print(f"{preset} seed {seed}: tuned in {time.perf_counter() - start:.0f} s", flush=True)
             if not options.tune:
                 runs.append(measure(preset, seed, found, options))
+                if options.save:
+                    Path(options.save).mkdir(parents=True, exist_ok=True)
+                    saved = {k: v if k == "_pq" else {"scores": v["scores"]} for k, v in runs[-1].items()}
+                    (Path(options.save) / f"tracking_{preset}_{seed}.json").write_text(json.dumps(saved, default=float))
         if runs:
             tables.append(table(preset, runs))
             print(tables[-1], flush=True)

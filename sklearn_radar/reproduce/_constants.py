@@ -68,10 +68,10 @@ ALL_EXPERIMENTS = (
 DEFAULT_EXPERIMENTS = tuple(key for key in ALL_EXPERIMENTS if key != LEARNED)
 
 #: The settings the tracking step streams online (causal), by step key, in the report's order: the object
-#: experiment (when the run has it; the Tracker is tuned on its ids), then the paper's: the expert's, the best stage
-#: 1 and both stage-2 modes.  Another setting is one more key here (and its branch in
-#: ``_tracking.setting_to_track``).
-TRACKED = (OBJECTS, *(str(number) for number in (EXPERT, BEST_STAGE1, *STAGE2)))
+#: experiment (when the run has it; the Tracker is tuned on its ids), the learned grouping's causal model (when the
+#: run has the learned step), then the paper's: the expert's, the best stage 1 and both stage-2 modes.  Another
+#: setting is one more key here (and its branch in ``_tracking.setting_to_track``).
+TRACKED = (OBJECTS, LEARNED, *(str(number) for number in (EXPERT, BEST_STAGE1, *STAGE2)))
 
 #: The settings whose clusters the classification step classifies, one per line, in the report's order: the expert's,
 #: the FCS box baseline, the best stage 1 (the V1 winner) and stage 2 by predicted continuation (#1, #3, #8, #13;

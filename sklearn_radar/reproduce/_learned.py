@@ -113,6 +113,7 @@ def _causal(env, params, X_train, y_train):
         v1_test=combine_parts("v1", [p["v1"] for p in parts]),
         n_clusters_test=int(sum(p["n_clusters"] for p in parts)),
         instance_test=InstanceScores(window_s=SCORE_WINDOW_S, **{k: float(scores[k]) for k in _SCORES}),
+        model=model,
     )
     return record, model
 

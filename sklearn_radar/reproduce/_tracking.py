@@ -1,10 +1,12 @@
 """The tracking step: the run's settings streamed through the online pipeline, their ids scored over time.
 
-Each setting of :data:`~._constants.TRACKED` that the run has (the object experiment when it ran; the paper's
-settings, the run's tuned ones where their experiments ran, the paper's otherwise) is replayed scan by scan
+Each setting of :data:`~._constants.TRACKED` that the run has (the object experiment when it ran; the learned
+grouping's causal model, fitted by the learned step, when it ran; the paper's settings, the run's tuned ones where
+their experiments ran, the paper's otherwise) is replayed scan by scan
 through :class:`~sklearn_radar.online.OnlinePipeline` on every test sequence, where it lives, with a
 :class:`~sklearn_radar.online.Tracker` on its object ids.  The Tracker's few parameters are chosen on the training
-half (:data:`TRACKER_GRID`, for MOTA) on the object setting's ids; the baseline tracker
+half (:data:`TRACKER_GRID`, for MOTA) on the object setting's ids, and every setting streams with them but the learned
+grouping, whose Tracker is tuned the same way on its own stream's training-half ids; the baseline tracker
 (:class:`._baseline_tracker.NearestCentroidTracker` on SlidingDBSCAN's clusters) is tuned the same way.  The ids
 are scored per 0.5 s time window: MOTA and IDF1 (:func:`~sklearn_radar.metrics.tracking_scores`), HOTA, DetA and
 AssA (:func:`~sklearn_radar.metrics.hota_scores`) (:ref:`online-tracking`).
@@ -21,6 +23,7 @@ from sklearn.base import clone
 
 from ..experiments import SKLEARN_BASELINES, baseline_pipeline, experiment_pipeline, get_experiment, paper_params
 from ..experiments._baselines import SLIDING_BASELINE
+from ..experiments._learned import learned_pipeline
 from ..experiments._saved import setting_pipeline
 from ..metrics import tracking_scores
 from ..metrics._hota import combine_hota_counts, hota_counts
@@ -30,10 +33,10 @@ from ..online._replay import replay
 from ..online._scans import scan_order
 from ..preprocessing import FrameTransform
 from ._baseline_tracker import NearestCentroidTracker
-from ._constants import BASELINES, OBJECTS, SCORE_WINDOW_S, TRACKED, TRACKING
+from ._constants import BASELINES, LEARNED, OBJECTS, SCORE_WINDOW_S, TRACKED, TRACKING
 from ._context import Outcome
 from ._records import JsonRecord, record
-from ._tuning import search_seed, tune
+from ._tuning import native_params, search_seed, tune
 
 #: The counts of :func:`tracking_scores` that add up over sequences.
 _COUNTS = ("id_switches", "misses", "false_positives", "n_objects", "n_matches", "idtp", "idfp", "idfn", "n_windows")
@@ -92,13 +95,15 @@ class TrackingResult(JsonRecord):
     Attributes
     ----------
     number : int or None
-        The paper's experiment whose setting streams; None for another (the object experiment).
+        The paper's experiment whose setting streams; None for another (the object experiment, the learned grouping).
     method : str
     setting_source : str
         ``"tuned #13"`` or ``"fixed #1"`` (the run's setting), ``"paper's #13"`` (the experiment did not run),
-        ``"tuned for PQ"`` (the object experiment's).
+        ``"tuned for PQ"`` (the object experiment's), ``"causal, fitted on the training half"`` (the learned
+        grouping's causal model).
     params : dict
-        The setting, as pipeline parameters (stage 1's included for stage 2).
+        The setting, as pipeline parameters (stage 1's included for stage 2; the learned model's as set where they
+        differ from :func:`~sklearn_radar.experiments._learned.learned_pipeline`'s, the fitted thresholds aside).
     reported : TrackingScores
         The object ids as given with each detection when its scan was labelled.
     final : TrackingScores
@@ -180,11 +185,15 @@ class TrackingStep(JsonRecord):
         The Tracker's parameters tuned on the object setting's training ids; None when the run has no object
         experiment (the Tracker then runs at its defaults).
     baseline : BaselineTracking or None, default=None
+    learned_tracker : TunedTracker or None, default=None
+        The learned grouping's Tracker, tuned the same way on its causal model's stream over the training half (the
+        half it was fitted on); None when the run does not track the learned grouping.
     """
 
     settings: dict[str, TrackingResult]
     tracker: TunedTracker | None = None
     baseline: BaselineTracking | None = None
+    learned_tracker: TunedTracker | None = None
 
 
 @dataclasses.dataclass(frozen=True)
@@ -201,9 +210,22 @@ class TrackedSetting:
 def setting_to_track(key, needed):
     """The :class:`TrackedSetting` of :data:`TRACKED` key ``key``, or None when the run lacks it.
 
-    One branch per kind of setting: the object experiment's (only when it ran), a paper experiment's (the run's
-    or the paper's).
+    One branch per kind of setting: the object experiment's (only when it ran), the learned grouping's causal
+    model (only when the learned step ran in this run: the fitted model is not read back from a results file), a
+    paper experiment's (the run's or the paper's).
     """
+    if key == LEARNED:
+        result = needed.get(LEARNED)
+        model = None if result is None or result.causal is None else result.causal.model
+        if model is None:
+            return None
+        unset = learned_pipeline().get_params()
+        params = {
+            name: value
+            for name, value in model.get_params().items()
+            if "__" in name and name != "link__n_jobs" and value != unset[name]
+        }
+        return TrackedSetting(model, native_params(params), "causal, fitted on the training half", None, LEARNED)
     if key == OBJECTS:
         result = needed.get(OBJECTS)
         if result is None:
@@ -291,11 +313,13 @@ def _counts(truth, ids, times, hota=False):
     return found
 
 
-def tuning_parts(sequence, objects, sliding):
-    """One training sequence's counts for every candidate of each tracker: ``{"tracker": [...], "baseline": [...]}``.
+def tuning_parts(sequence, objects, sliding, learned=None):
+    """One training sequence's counts for every candidate of each tracker: ``{"tracker": [...], "baseline": [...]}``
+    (and ``"learned": [...]``).
 
     ``objects``: the pipeline whose reported object ids the Tracker follows (None: none); ``sliding``: the
-    baseline clusterer's pipeline.
+    baseline clusterer's pipeline; ``learned``: the fitted causal learned pipeline, whose Tracker is tuned apart
+    (None: none).
     """
     data = sequence.scenes.data
     truth = np.asarray(sequence.scenes.target)
@@ -305,6 +329,11 @@ def tuning_parts(sequence, objects, sliding):
     if objects is not None:
         reported = replay(OnlinePipeline(objects), data)["reported"]
         found["tracker"] = [
+            _counts(truth, run_tracker(Tracker(**c), columns, reported), times) for c in candidates(TRACKER_GRID)
+        ]
+    if learned is not None:
+        reported = replay(OnlinePipeline(learned), data)["reported"]
+        found[LEARNED] = [
             _counts(truth, run_tracker(Tracker(**c), columns, reported), times) for c in candidates(TRACKER_GRID)
         ]
     labels = np.asarray(clone(sliding).fit_predict(sequence.X))
@@ -433,18 +462,23 @@ def run_tracking(env, key, needed):
         settings.append((name, setting))
     sliding_params, sliding_source = sliding_setting(env, needed)
     sliding = baseline_pipeline(SLIDING_BASELINE).set_params(**sliding_params)
-    lead = dict(settings).get(TRACKER_TUNED_ON)
+    lead, learned = dict(settings).get(TRACKER_TUNED_ON), dict(settings).get(LEARNED)
     parts = env.sequences.map(
-        tuning_parts, env.train, None if lead is None else lead.pipeline, sliding, executor=env.executor
+        tuning_parts,
+        env.train,
+        None if lead is None else lead.pipeline,
+        sliding,
+        None if learned is None else learned.pipeline,
+        executor=env.executor,
     )
     tracker = None if lead is None else chosen_tracker(parts, "tracker", TRACKER_GRID, TRACKER_TUNED_ON)
+    learned_tracker = None if learned is None else chosen_tracker(parts, LEARNED, TRACKER_GRID, LEARNED)
     baseline_tracker = chosen_tracker(parts, "baseline", BASELINE_GRID, SLIDING_BASELINE)
     tracker_params = {} if tracker is None else tracker.params
     drawn = {}
     for name, setting in settings:
-        parts = env.sequences.map(
-            track_sequence, env.test, setting.pipeline, tracker_params, env.drawn, executor=env.executor
-        )
+        params = learned_tracker.params if name == LEARNED else tracker_params
+        parts = env.sequences.map(track_sequence, env.test, setting.pipeline, params, env.drawn, executor=env.executor)
         found[name] = combine_tracking(setting, parts)
         if not drawn:
             drawn = next(part["drawn"] for part in parts if part["drawn"] is not None)
@@ -460,7 +494,7 @@ def run_tracking(env, key, needed):
         scores=combine_scores(parts),
     )
     lines.append(f"    baseline tracker: {_said(baseline.scores)}")
-    result = TrackingStep(settings=found, tracker=tracker, baseline=baseline)
+    result = TrackingStep(settings=found, tracker=tracker, baseline=baseline, learned_tracker=learned_tracker)
     return Outcome(result, "\n".join(lines), tracks=drawn or None)
 
 

@@ -7,9 +7,11 @@ import json
 import numpy as np
 import pytest
 
+import sklearn_radar.reproduce._learned as learned_step
 from sklearn_radar.cli import main
 from sklearn_radar.datasets import load_radarscenes
 from sklearn_radar.experiments import experiment_pipeline, object_pipeline
+from sklearn_radar.experiments._learned import load_learned
 from sklearn_radar.metrics import hota_scores, tracking_scores
 from sklearn_radar.online import OnlinePipeline, Tracker
 from sklearn_radar.online._replay import replay
@@ -37,6 +39,21 @@ def tracked(tiny_folder, tmp_path_factory):
             ]
         )
     assert code == 0
+    return out
+
+
+@pytest.fixture(scope="module")
+def tracked_learned(tiny_folder, tmp_path_factory):
+    """A run of objects, the learned grouping (few boosting iterations: the plumbing, not the model) and tracking."""
+    out = tmp_path_factory.mktemp("tracking_learned") / "out"
+    patch = pytest.MonkeyPatch()
+    patch.setattr(learned_step, "LEARNED_PARAMS", {"link__max_iter": 10})
+    args = ["reproduce", "--data", str(tiny_folder), "--out", str(out), "--n-iter", "2"]
+    try:
+        with contextlib.redirect_stdout(io.StringIO()):
+            assert main([*args, "--experiments", "objects,learned,tracking"]) == 0
+    finally:
+        patch.undo()
     return out
 
 
@@ -148,6 +165,61 @@ def test_the_report_leads_with_the_object_setting_and_the_baseline(tracked):
     assert "![tracks](tracks.png)" in section and (tracked / "tracks.png").is_file()
     glance = report.split("## At a glance")[1].split("\n## ")[0]
     assert "tracking online, test half:" in glance and "the baseline tracker (SlidingDBSCAN" in glance
+
+
+def test_the_learned_grouping_streams_its_saved_causal_model_with_its_tuned_tracker(tracked_learned, tiny_folder):
+    """The causal model the learned step saved, replayed here on the test half with the Tracker tuned on its own
+    training ids: the recorded scores are its ids'; it comes second, after the object setting."""
+    results = RunResults.read(tracked_learned / "results.json")
+    settings = results.tracking.settings
+    assert list(settings) == ["objects", "learned", "1", "8", "12", "13"]
+    entry = settings["learned"]
+    assert entry.number is None and entry.method == "learned"
+    assert entry.setting_source == "causal, fitted on the training half"
+    assert entry.params["link__causal"] is True and entry.params["filter__causal"] is True
+    assert entry.params["link__max_iter"] == 10
+    assert results.tracking.tracker.tuned_on == "objects"
+    assert results.tracking.learned_tracker.tuned_on == "learned"
+    model = load_learned(tracked_learned / results.learned.causal.model_file)
+    scenes = load_radarscenes(tiny_folder)
+    tracker = Tracker(**results.tracking.learned_tracker.params)
+    final, tracks, rows = _replayed(scenes, results.meta.data.test_sequences, model, tracker)
+    for ids, found in ((final, entry.final), (tracks, entry.tracked)):
+        expected = _scores(scenes, rows, ids)
+        assert (found.idf1, found.mota, found.id_switches, found.n_objects) == pytest.approx(
+            (expected["idf1"], expected["mota"], expected["id_switches"], expected["n_objects"]), abs=1e-12
+        )
+    assert entry.tracked.hota == pytest.approx(_scores(scenes, rows, tracks)["hota"], abs=1e-12)
+
+
+def test_the_learned_tracker_is_the_best_of_its_grid_on_the_learned_stream_of_the_training_half(
+    tracked_learned, tiny_folder
+):
+    results = RunResults.read(tracked_learned / "results.json")
+    chosen = results.tracking.learned_tracker
+    model = load_learned(tracked_learned / results.learned.causal.model_file)
+    scenes = load_radarscenes(tiny_folder)
+    found = []
+    for candidate in candidates(TRACKER_GRID):
+        _, tracks, rows = _replayed(scenes, results.meta.data.train_sequences, model, Tracker(**candidate))
+        found.append(_scores(scenes, rows, tracks)["mota"])
+    assert chosen.criterion == "MOTA" and chosen.n_candidates == len(found)
+    assert chosen.train_score == pytest.approx(max(found), abs=1e-12)
+    assert chosen.params == candidates(TRACKER_GRID)[int(np.argmax(found))]
+
+
+def test_the_report_names_the_tracked_learned_grouping(tracked_learned):
+    report = (tracked_learned / "report.md").read_text()
+    section = report.split("## Beyond the paper: object tracking online")[1].split("\n## ")[0]
+    rows = [row for row in section.splitlines() if row.startswith("| ") and not row.startswith("| setting")]
+    names = [row.split("|")[1].strip() for row in rows]
+    ours = names[: next(i for i, name in enumerate(names) if name.startswith("baseline: SlidingDBSCAN"))]
+    assert ours[0].startswith("objects (tuned for PQ)")
+    assert "learned (causal, fitted on the training half)" in ours
+    assert "with a Tracker chosen the same way on that stream's training-half ids" in section
+    glance = report.split("## At a glance")[1].split("\n## ")[0]
+    line = next(line for line in glance.splitlines() if "tracking online, test half:" in line)
+    assert "learned" in line
 
 
 def test_the_tracking_table_names_what_its_count_of_objects_counts(tracked):

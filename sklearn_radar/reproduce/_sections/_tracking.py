@@ -6,6 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._constants import LEARNED
 from .._context import RunContext
 from .._results import RunResults
 from .._tracking import TrackingScores
@@ -112,8 +113,16 @@ def _tuned_lines(step):
             f"The Tracker's parameters were chosen on the training half, on the {tracker.tuned_on} setting's ids, "
             f"for {tracker.criterion} among {tracker.n_candidates} combinations of `min_hits`, `max_age` (s) and "
             f"`gate` (standard deviations), the others at their defaults: {_values(tracker.params)} (training "
-            f"{tracker.criterion} {tracker.train_score:.3f}); every setting above runs with them. `params.json` "
-            "saves them under `tracker` for `sklearn-radar stream --track`."
+            f"{tracker.criterion} {tracker.train_score:.3f}); every setting above but the learned grouping runs "
+            "with them. `params.json` saves them under `tracker` for `sklearn-radar stream --track`."
+        )
+    learned = step.learned_tracker
+    if learned is not None:
+        lines.append(
+            "The learned grouping streams its causal model (`LinkClustering(causal=True)`, fitted by the learned "
+            "step on the training half), with a Tracker chosen the same way on that stream's training-half ids "
+            f"(in-sample: the model was fitted on that half): {_values(learned.params)} (training "
+            f"{learned.criterion} {learned.train_score:.3f})."
         )
     else:
         lines.append(
@@ -136,7 +145,8 @@ def _values(params):
 
 
 def glance_line(results: RunResults):
-    """The best tracked setting (by test MOTA) beside the baseline tracker, for "At a glance"; or None."""
+    """The best tracked setting (by test MOTA), the learned grouping when tracked, the baseline tracker, for "At a
+    glance"; or None."""
     step = results.tracking
     tracked = {} if step is None else {k: r for k, r in step.settings.items() if r.tracked is not None}
     if not tracked:
@@ -147,6 +157,8 @@ def glance_line(results: RunResults):
         f"tracking online, test half: {_name(key, tracked[key])} with the Tracker (the best by test MOTA) "
         f"{_said(tracked[key].tracked)}"
     )
+    if key != LEARNED and LEARNED in tracked:
+        line += f"; {_name(LEARNED, tracked[LEARNED])} (causal) with the Tracker {_said(tracked[LEARNED].tracked)}"
     if step.baseline is not None:
         line += f"; the baseline tracker (SlidingDBSCAN + nearest centroid) {_said(step.baseline.scores)}"
     return line + "; its section has the details."
