@@ -263,7 +263,8 @@ def run_one(preset, seed, options):
         records[name] = score(Xt, labels, found, truth, classifier)
         _print(preset, seed, name, records[name], start)
     if options.learned:
-        records.update(run_learned(preset, seed, X.iloc[test], truth, X_train, y_train, train_instances))
+        n_half = len(X) - len(test)  # the training half's rows come first in X_train
+        records.update(run_learned(preset, seed, X.iloc[test], truth, X_train, y_train, train_instances, n_half))
     return records
 
 
@@ -299,24 +300,30 @@ def out_of_fold_labels(link, Z, train_instances, n_folds=2):
     return labels
 
 
-def run_learned(preset, seed, X_test, truth, X_train, y_train, train_instances):
+def run_learned(preset, seed, X_test, truth, X_train, y_train, train_instances, n_half):
     """The learned grouping classified: ``{row: record}``.
 
     ``learned_pipeline()`` (the object experiment's front at the paper's setting, then ``LinkClustering`` tuned
-    inside its fit) is fitted on the classifiers' training data with ``precluster_target``; the test half is
-    clustered once by its ``predict``.  The ClusterClassifier is trained on the training data's clusters in two
-    ways: ``out-of-fold`` (``out_of_fold_labels``: clusters of models that never saw those sequences, the kind of
-    clusters the test half gets) and ``in-sample`` (``FrozenEstimator(link)``'s own labels of its training data,
-    what ``reproduce`` trains on), each with the single window and with ``history="mean_proba"``.
+    inside its fit) is fitted on the training half (the first ``n_half`` rows of the training data) with
+    ``precluster_target``; the test half is clustered once by its ``predict``.  The ClusterClassifier is trained
+    on the training data's clusters in two ways: ``out-of-fold`` (``out_of_fold_labels`` on the training half:
+    clusters of models that never saw those sequences, the kind of clusters the test half gets) and ``in-sample``
+    (``FrozenEstimator(link)``'s own labels of its training half, what ``reproduce`` trains on), each with the
+    single window and with ``history="mean_proba"``.  The ``--extra-training`` sequences, like the object
+    setting's, train only the classifiers: the grouping fitted on the half labels them by ``predict``, out of
+    sample for both rows.
     """
     start = time.perf_counter()
-    model = learned_pipeline().fit(X_train, train_instances)
+    model = learned_pipeline().fit(X_train.iloc[:n_half], train_instances[:n_half])
     link = model[-1]
     Z = model[:-1].transform(X_train)
     Xt = model[:-1].transform(X_test)
     labels = link.predict(Xt)
     fitted = time.perf_counter()
-    oof = out_of_fold_labels(link, Z, train_instances)
+    oof = out_of_fold_labels(link, Z.iloc[:n_half], train_instances[:n_half])
+    if len(Z) > n_half:
+        extra = link.predict(Z.iloc[n_half:])
+        oof = np.concatenate([oof, np.where(extra >= 0, extra + oof.max() + 1, -1)])
     print(
         f"  {preset} seed {seed} learned grouping: fit {fitted - start:.0f} s, "
         f"out-of-fold {time.perf_counter() - fitted:.0f} s; "
