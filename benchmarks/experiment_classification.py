@@ -48,6 +48,21 @@ resolved, what ``stream --classifier`` classifies) instead of the offline ones. 
     OMP_NUM_THREADS=1 nice -n 19 python benchmarks/experiment_classification.py --history --seeds 0 1 2 3 4 \\
         --data realistic easy --tuned-dir /tmp/tuned [--extra-training 6] [--online]
 
+``--learned`` classifies instead the learned grouping (``experiments._learned.learned_pipeline()``: the object
+experiment's front at the paper's setting and ``LinkClustering`` with its defaults, its thresholds tuned inside its
+fit) fitted on the training half with ``precluster_target``, beside the tuned object setting's clusters and the
+neighbourhood point-wise classifier: each clustering's classifier with the single window and with
+``history="mean_proba"``.  The learned grouping's classifier is trained on out-of-fold clusters of the training
+half (each sequence clustered by a ``LinkClustering`` with the tuned thresholds fixed, fitted on the other
+sequences: the kind of clusters the test half gets) and, as ``reproduce`` trains it, on the fitted model's own
+clusters of its training data (``in-sample``); with ``--extra-training`` the grouping stays fitted on the training
+half and labels the extra sequences with ``predict``.  The report gives per class PQ, the class PQ / clustering
+PQ ratio, per-object macro-F1 by windows seen and the paired differences (mean +- 2 SE over seeds); the user
+guide's tables (``--runs-file`` keeps the records as they come)::
+
+    OMP_NUM_THREADS=1 nice -n 19 python benchmarks/experiment_classification.py --learned --seeds 0 1 2 3 4 \\
+        --data realistic easy --tuned-dir /tmp/tuned [--extra-training 6]
+
 ``--tuned-dir`` keeps each tuned setting in a JSON file (``tuned_<preset>_<seed>.json``) and reuses it, so a
 second run (for example before and after a change to the classifier) scores the same clusters.
 """
