@@ -336,9 +336,11 @@ def run_learned(preset, seed, X_test, truth, X_train, y_train, train_instances, 
     labels = link.predict(Xt)
     fitted = time.perf_counter()
     oof = out_of_fold_labels(link, Z.iloc[:n_half], train_instances[:n_half])
+    own = link.labels_  # what FrozenEstimator(link).predict gives for the training half
     if len(Z) > n_half:
         extra = link.predict(Z.iloc[n_half:])
         oof = np.concatenate([oof, np.where(extra >= 0, extra + oof.max() + 1, -1)])
+        own = np.concatenate([own, np.where(extra >= 0, extra + own.max() + 1, -1)])
     print(
         f"  {preset} seed {seed} learned grouping: fit {fitted - start:.0f} s, "
         f"out-of-fold {time.perf_counter() - fitted:.0f} s; "
@@ -347,7 +349,8 @@ def run_learned(preset, seed, X_test, truth, X_train, y_train, train_instances, 
         flush=True,
     )
     records = {}
-    for training, clusterer in (("out-of-fold", _GivenLabels(oof)), ("in-sample", FrozenEstimator(link))):
+    in_sample = FrozenEstimator(link) if len(Z) == n_half else _GivenLabels(own)  # predict once, not per row
+    for training, clusterer in (("out-of-fold", _GivenLabels(oof)), ("in-sample", in_sample)):
         for history, suffix in ((None, ""), ("mean_proba", ", mean proba")):
             name = f"learned ({training}){suffix}"
             start = time.perf_counter()
