@@ -48,6 +48,21 @@ resolved, what ``stream --classifier`` classifies) instead of the offline ones. 
     OMP_NUM_THREADS=1 nice -n 19 python benchmarks/experiment_classification.py --history --seeds 0 1 2 3 4 \\
         --data realistic easy --tuned-dir /tmp/tuned [--extra-training 6] [--online]
 
+``--learned`` classifies instead the learned grouping (``experiments._learned.learned_pipeline()``: the object
+experiment's front at the paper's setting and ``LinkClustering`` with its defaults, its thresholds tuned inside its
+fit) fitted on the training half with ``precluster_target``, beside the tuned object setting's clusters and the
+neighbourhood point-wise classifier: each clustering's classifier with the single window and with
+``history="mean_proba"``.  The learned grouping's classifier is trained on out-of-fold clusters of the training
+half (each sequence clustered by a ``LinkClustering`` with the tuned thresholds fixed, fitted on the other
+sequences: the kind of clusters the test half gets) and, as ``reproduce`` trains it, on the fitted model's own
+clusters of its training data (``in-sample``); with ``--extra-training`` the grouping stays fitted on the training
+half and labels the extra sequences with ``predict``.  The report gives per class PQ, the class PQ / clustering
+PQ ratio, per-object macro-F1 by windows seen and the paired differences (mean +- 2 SE over seeds); the user
+guide's tables (``--runs-file`` keeps the records as they come)::
+
+    OMP_NUM_THREADS=1 nice -n 19 python benchmarks/experiment_classification.py --learned --seeds 0 1 2 3 4 \\
+        --data realistic easy --tuned-dir /tmp/tuned [--extra-training 6]
+
 ``--tuned-dir`` keeps each tuned setting in a JSON file (``tuned_<preset>_<seed>.json``) and reuses it, so a
 second run (for example before and after a change to the classifier) scores the same clusters.
 """
@@ -57,16 +72,19 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import pickle
 import sys
 import time
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
-from sklearn.base import clone
+from sklearn.base import BaseEstimator, clone
 from sklearn.calibration import CalibratedClassifierCV
 from sklearn.ensemble import HistGradientBoostingClassifier
+from sklearn.frozen import FrozenEstimator
 from sklearn.metrics import f1_score
+from sklearn.model_selection import GroupKFold
 from sklearn.pipeline import Pipeline
 from threadpoolctl import threadpool_limits
 
@@ -84,7 +102,14 @@ from sklearn_radar.classification._targets import segment_targets
 from sklearn_radar.classification._wrapped import DEFAULT_CLASSIFIER_PARAMS, default_classifier
 from sklearn_radar.datasets import make_scenes
 from sklearn_radar.experiments import object_pipeline
-from sklearn_radar.metrics import class_errors, class_panoptic_quality, panoptic_quality, semantic_scores
+from sklearn_radar.experiments._learned import learned_pipeline
+from sklearn_radar.metrics import (
+    class_errors,
+    class_panoptic_quality,
+    panoptic_quality,
+    precluster_target,
+    semantic_scores,
+)
 from sklearn_radar.model_selection import sequence_train_test_split
 from sklearn_radar.online import OnlinePipeline
 from sklearn_radar.online._replay import replay
@@ -93,6 +118,8 @@ CLASS_NAMES = {0: "car", 1: "large vehicle", 2: "two-wheeler", 3: "pedestrian", 
 ERROR_KEYS = ("n_true", "tp", "misclassified", "missed", "n_pred", "wrong_class", "false")
 #: The single-window classifier's row of ``--history``, the one the history options are paired against.
 SINGLE = "single window"
+#: ``--learned``: the object setting's clusters, the neighbourhood point-wise baseline and the learned rows.
+OBJECTS, NEIGHBOURHOOD, LEARNED = "objects", "point (neighbourhood)", "learned (out-of-fold)"
 #: Bins of the number of windows a cluster has been seen in (this one included): ``(label, low, high)``.
 SEEN_BINS = (("1", 1, 1), ("2-3", 2, 3), ("4-7", 4, 7), ("8+", 8, np.inf))
 
@@ -119,6 +146,9 @@ def object_f1(Xt, labels, truth, classes_pred):
     for label, low, high in (("all", 1, np.inf), *SEEN_BINS):
         mine = (target >= 0) & (seen >= low) & (seen <= high)
         present = sorted(np.unique(target[mine]).tolist())  # a class absent from the bin is not scored
+        if not mine.any():  # no object in the bin (a short run): no score
+            found[label] = (float("nan"), 0)
+            continue
         score = f1_score(target[mine], predicted[mine], labels=present, average="macro", zero_division=0)
         found[label] = (float(score), int(mine.sum()))
     return found
@@ -171,6 +201,15 @@ def models(setting, options):
             for name, params in variants.items()
         }
     point = dict(classifier=learner, eps_xy=1.0, eps_t=0.25)
+    if options.learned:  # the object setting's rows the learned grouping is paired against
+        return {
+            name: Pipeline([*clone(Pipeline(front)).steps, ("classify", classify)])
+            for name, classify in (
+                (OBJECTS, ClusterClassifier(pipeline[-1], classifier=learner)),
+                (f"{OBJECTS}, mean proba", ClusterClassifier(pipeline[-1], classifier=learner, history="mean_proba")),
+                (NEIGHBOURHOOD, PointClassifier(**point, radius=options.radius, time_window=options.time_window)),
+            )
+        }
     return {
         "clusters": Pipeline(
             [*clone(Pipeline(front)).steps, ("classify", ClusterClassifier(pipeline[-1], classifier=learner))]
@@ -185,9 +224,12 @@ def models(setting, options):
     }
 
 
-def run_one(preset, seed, options):
-    """Tune, train and score every model on one data set; returns ``{model: record}``."""
-    setting = tuned_setting(preset, seed, options)
+def load_data(preset, seed, options):
+    """One data set and its split: ``(X, classes, instances, test rows, X_train, y_train, train instances)``.
+
+    The training data are the training half, plus ``--extra-training`` simulated sequences (seed + 1000); the
+    train instances are ``precluster_target`` of them (the learned grouping's target, as in ``reproduce``).
+    """
     scenes = make_scenes(
         n_sequences=options.n_sequences, duration=options.duration, difficulty=preset, random_state=seed
     )
@@ -196,16 +238,26 @@ def run_one(preset, seed, options):
     instances = np.asarray(scenes.target)
     train, test = sequence_train_test_split(groups, test_size=0.5, random_state=seed)
     X_train, y_train = X.iloc[train], classes[train]
+    train_instances = precluster_target(X, scenes.target)[train]
     if options.extra_training:  # more recordings for the classifiers only; the setting stays tuned on the half
         extra = make_scenes(
             n_sequences=options.extra_training,
             duration=options.duration,
             difficulty=preset,
             random_state=seed + 1000,
-        ).data
-        extra = extra.assign(sequence=extra["sequence"] + int(groups.max()) + 1)
-        X_train = pd.concat([X_train, extra], ignore_index=True)
-        y_train = np.concatenate([y_train, road_user_class(extra["label_id"])])
+        )
+        data = extra.data.assign(sequence=extra.data["sequence"] + int(groups.max()) + 1)
+        X_train = pd.concat([X_train, data], ignore_index=True)
+        y_train = np.concatenate([y_train, road_user_class(data["label_id"])])
+        train_instances = np.concatenate([train_instances, precluster_target(extra.data, extra.target)])
+    return X, classes, instances, test, X_train, y_train, train_instances
+
+
+def run_one(preset, seed, options):
+    """Tune, train and score every model on one data set; returns ``{model: record}``."""
+    setting = tuned_setting(preset, seed, options)
+    X, classes, instances, test, X_train, y_train, train_instances = load_data(preset, seed, options)
+    truth = (classes[test], instances[test])
     records = {}
     online = None
     if options.online:  # the final object ids of the causal replay, aliases resolved (what stream classifies)
@@ -223,40 +275,128 @@ def run_one(preset, seed, options):
         else:
             found = predict_instances(classifier, Xt)
             labels = found["instance"].to_numpy()
-        times, sequence = Xt["t"].to_numpy(), Xt["sequence"].to_numpy()
-        truth = (classes[test], instances[test])
-        predicted = (found["class"].to_numpy(), found["instance"].to_numpy())
-        scores = class_panoptic_quality(*truth, *predicted, times=times, groups=sequence)
-        agnostic_true = np.where(classes[test] >= 0, instances[test], -1)
-        agnostic = panoptic_quality(agnostic_true, predicted[1], times=times, groups=sequence).pq
-        errors = class_errors(
-            *truth, predicted[0], labels, times=times, groups=sequence, confidence=found["confidence"].to_numpy()
-        )
-        clustering = panoptic_quality(agnostic_true, labels, times=times, groups=sequence).pq
-        semantic = semantic_scores(
-            *truth, *predicted, found["confidence"].to_numpy(), times=times, groups=sequence, window=0.5
-        )
-        records[name] = {
-            "map": semantic["map"],
-            "ap": {code: semantic["per_class"].get(code, {}).get("ap", 0.0) for code in CLASS_NAMES},
-            "objects": object_f1(Xt, labels, truth, predicted[0]),
-            "pq": scores.pq,
-            "clustering_pq": clustering,
-            "per_class": {code: scores.per_class[code].pq if code in scores.per_class else 0.0 for code in CLASS_NAMES},
-            "agnostic_pq": agnostic,
-            "errors": errors,
-            "n_training_examples": int(getattr(classifier, "n_training_examples_", 0)),
-            "seconds": time.perf_counter() - start,
-        }
-        record = records[name]
-        per_class = " ".join(f"{CLASS_NAMES[c].split()[-1][:5]} {v:.2f}" for c, v in record["per_class"].items())
-        print(
-            f"  {preset} seed {seed} {name:<22} class PQ {record['pq']:.3f} agnostic PQ {agnostic:.3f} "
-            f"clustering PQ {clustering:.3f} "
-            f"[{per_class}] ({record['seconds']:.0f} s)",
-            flush=True,
-        )
+        records[name] = score(Xt, labels, found, truth, classifier)
+        _print(preset, seed, name, records[name], start)
+    if options.learned:
+        n_half = len(X) - len(test)  # the training half's rows come first in X_train
+        records.update(run_learned(preset, seed, X.iloc[test], truth, X_train, y_train, train_instances, n_half))
     return records
+
+
+class _GivenLabels(BaseEstimator):
+    """A clusterer that returns the labels it was given: the out-of-fold training clusters, for ``fit``."""
+
+    def __init__(self, labels=None):
+        self.labels = labels
+
+    def fit_predict(self, X, y=None):
+        if len(X) != len(self.labels):
+            raise ValueError(f"_GivenLabels: {len(self.labels)} labels for {len(X)} rows")
+        return np.asarray(self.labels)
+
+
+def out_of_fold_labels(link, Z, train_instances, n_folds=2):
+    """Clusters of the training rows ``Z`` by LinkClustering models that did not see them.
+
+    ``GroupKFold`` by sequence (``n_folds``, at most one per sequence): each fold is clustered by a clone of the
+    fitted ``link`` with its tuned thresholds fixed, fitted on the other folds' sequences (no tuning inside).
+    """
+    sequence = Z["sequence"].to_numpy()
+    fixed = clone(link).set_params(
+        link_threshold=link.link_threshold_,
+        objectness_threshold=link.objectness_threshold_,
+        min_cluster_size=link.min_cluster_size_,
+    )
+    labels = np.full(len(Z), -1, dtype=np.int64)
+    n_folds = min(n_folds, len(np.unique(sequence)))
+    for fit_rows, held_out in GroupKFold(n_splits=n_folds).split(Z, groups=sequence):
+        found = clone(fixed).fit(Z.iloc[fit_rows], train_instances[fit_rows]).predict(Z.iloc[held_out])
+        labels[held_out] = np.where(found >= 0, found + labels.max() + 1, -1)
+    return labels
+
+
+def run_learned(preset, seed, X_test, truth, X_train, y_train, train_instances, n_half):
+    """The learned grouping classified: ``{row: record}``.
+
+    ``learned_pipeline()`` (the object experiment's front at the paper's setting, then ``LinkClustering`` tuned
+    inside its fit) is fitted on the training half (the first ``n_half`` rows of the training data) with
+    ``precluster_target``; the test half is clustered once by its ``predict``.  The ClusterClassifier is trained
+    on the training data's clusters in two ways: ``out-of-fold`` (``out_of_fold_labels`` on the training half:
+    clusters of models that never saw those sequences, the kind of clusters the test half gets) and ``in-sample``
+    (``FrozenEstimator(link)``'s own labels of its training half, what ``reproduce`` trains on), each with the
+    single window and with ``history="mean_proba"``.  The ``--extra-training`` sequences, like the object
+    setting's, train only the classifiers: the grouping fitted on the half labels them by ``predict``, out of
+    sample for both rows.
+    """
+    start = time.perf_counter()
+    model = learned_pipeline().fit(X_train.iloc[:n_half], train_instances[:n_half])
+    link = model[-1]
+    Z = model[:-1].transform(X_train)
+    Xt = model[:-1].transform(X_test)
+    labels = link.predict(Xt)
+    fitted = time.perf_counter()
+    oof = out_of_fold_labels(link, Z.iloc[:n_half], train_instances[:n_half])
+    own = link.labels_  # what FrozenEstimator(link).predict gives for the training half
+    if len(Z) > n_half:
+        extra = link.predict(Z.iloc[n_half:])
+        oof = np.concatenate([oof, np.where(extra >= 0, extra + oof.max() + 1, -1)])
+        own = np.concatenate([own, np.where(extra >= 0, extra + own.max() + 1, -1)])
+    print(
+        f"  {preset} seed {seed} learned grouping: fit {fitted - start:.0f} s, "
+        f"out-of-fold {time.perf_counter() - fitted:.0f} s; "
+        f"thresholds link {link.link_threshold_} objectness {link.objectness_threshold_} "
+        f"min size {link.min_cluster_size_}",
+        flush=True,
+    )
+    records = {}
+    in_sample = FrozenEstimator(link) if len(Z) == n_half else _GivenLabels(own)  # predict once, not per row
+    for training, clusterer in (("out-of-fold", _GivenLabels(oof)), ("in-sample", in_sample)):
+        for history, suffix in ((None, ""), ("mean_proba", ", mean proba")):
+            name = f"learned ({training}){suffix}"
+            start = time.perf_counter()
+            classifier = ClusterClassifier(clusterer, history=history).fit(Z, y_train)
+            found = classifier.predict_instances_of(Xt, labels)
+            records[name] = score(Xt, labels, found, truth, classifier)
+            _print(preset, seed, name, records[name], start)
+    return records
+
+
+def score(Xt, labels, found, truth, classifier):
+    """The scores of one classified test half (``found``) with its clusters ``labels``."""
+    classes, instances = truth
+    times, sequence = Xt["t"].to_numpy(), Xt["sequence"].to_numpy()
+    predicted = (found["class"].to_numpy(), found["instance"].to_numpy())
+    scores = class_panoptic_quality(*truth, *predicted, times=times, groups=sequence)
+    agnostic_true = np.where(classes >= 0, instances, -1)
+    agnostic = panoptic_quality(agnostic_true, predicted[1], times=times, groups=sequence).pq
+    errors = class_errors(
+        *truth, predicted[0], labels, times=times, groups=sequence, confidence=found["confidence"].to_numpy()
+    )
+    clustering = panoptic_quality(agnostic_true, labels, times=times, groups=sequence).pq
+    semantic = semantic_scores(
+        *truth, *predicted, found["confidence"].to_numpy(), times=times, groups=sequence, window=0.5
+    )
+    return {
+        "map": semantic["map"],
+        "ap": {code: semantic["per_class"].get(code, {}).get("ap", 0.0) for code in CLASS_NAMES},
+        "objects": object_f1(Xt, labels, truth, predicted[0]),
+        "pq": scores.pq,
+        "clustering_pq": clustering,
+        "per_class": {code: scores.per_class[code].pq if code in scores.per_class else 0.0 for code in CLASS_NAMES},
+        "agnostic_pq": agnostic,
+        "errors": errors,
+        "n_training_examples": int(getattr(classifier, "n_training_examples_", 0)),
+    }
+
+
+def _print(preset, seed, name, record, start):
+    record["seconds"] = time.perf_counter() - start
+    per_class = " ".join(f"{CLASS_NAMES[c].split()[-1][:5]} {v:.2f}" for c, v in record["per_class"].items())
+    print(
+        f"  {preset} seed {seed} {name:<22} class PQ {record['pq']:.3f} agnostic PQ {record['agnostic_pq']:.3f} "
+        f"clustering PQ {record['clustering_pq']:.3f} [{per_class}] ({record['seconds']:.0f} s)",
+        flush=True,
+    )
 
 
 def _mean_se(values):
@@ -351,6 +491,64 @@ def history_report(preset, runs):
     return "\n".join(lines)
 
 
+def learned_report(preset, runs):
+    """``--learned``: per class PQ and the targets of issue #43, F1 by windows seen, paired differences."""
+    names = list(runs[0])
+    bins = ["all", *(label for label, _, _ in SEEN_BINS)]
+    lines = [f"\n{preset}: {len(runs)} seed(s), test half; mean ± 2 SE over seeds"]
+    rows = []
+    for name in names:
+        ratio = [r[name]["pq"] / max(r[name]["clustering_pq"], 1e-12) for r in runs]
+        cells = [name, _fmt2([r[name]["pq"] for r in runs]), _fmt2([r[name]["clustering_pq"] for r in runs])]
+        cells += [_fmt2(ratio), *(_fmt2([r[name]["per_class"][c] for r in runs]) for c in CLASS_NAMES)]
+        rows.append(cells)
+    header = ["clusters, classifier", "class PQ", "clustering PQ", "ratio", *CLASS_NAMES.values()]
+    lines.append(pd.DataFrame(rows, columns=header).to_string(index=False))
+    rows = [[name, *(_fmt2([r[name]["objects"][b][0] for r in runs]) for b in bins)] for name in names]
+    for name in names:
+        if f"{name}, mean proba" in names:
+            other = f"{name}, mean proba"
+            cells = [f"{other} - single"]
+            cells += [_fmt2([r[other]["objects"][b][0] - r[name]["objects"][b][0] for r in runs], True) for b in bins]
+            rows.append(cells)
+    lines.append("per-object macro-F1 by windows seen (differences paired over seeds)")
+    lines.append(pd.DataFrame(rows, columns=["classifier", *bins]).to_string(index=False))
+    counts = {b: int(np.mean([r[LEARNED]["objects"][b][1] for r in runs])) for b in bins}
+    lines.append(f"{LEARNED}: matched test segments per seed by windows seen (mean): {counts}")
+    lines.append("paired differences of class PQ (mean ± 2 SE over seeds)")
+    for first, second in (
+        (LEARNED, NEIGHBOURHOOD),
+        (LEARNED, OBJECTS),
+        (f"{LEARNED}, mean proba", f"{OBJECTS}, mean proba"),
+        ("learned (in-sample)", LEARNED),
+        (OBJECTS, NEIGHBOURHOOD),
+    ):
+        for key in ("pq", "clustering_pq"):
+            values = [r[first][key] - r[second][key] for r in runs]
+            lines.append(f"  {key}: {first} - {second}: {_fmt2(values, signed=True)}")
+    for name in (LEARNED, OBJECTS):
+        confusion = sum(
+            r[name]["errors"]["confusion"].reindex(index=list(CLASS_NAMES), columns=[-1, *CLASS_NAMES], fill_value=0)
+            for r in runs
+        )
+        confusion.index = [CLASS_NAMES[c] for c in confusion.index]
+        confusion.columns = ["background", *(CLASS_NAMES[c] for c in confusion.columns[1:])]
+        lines.append(f"{name}: matched test segments, true class (rows) x predicted class, summed over seeds")
+        lines.append(confusion.to_string())
+        places = pd.DataFrame(
+            {
+                CLASS_NAMES[c]: [
+                    sum(r[name]["errors"]["per_class"].get(c, {}).get(key, 0) for r in runs) for key in ERROR_KEYS
+                ]
+                for c in CLASS_NAMES
+            },
+            index=ERROR_KEYS,
+        ).T
+        lines.append(f"{name}: where each class's PQ goes (segments, summed over seeds)")
+        lines.append(places.to_string())
+    return "\n".join(lines)
+
+
 def perfect_clusters(preset, options):
     """Per class F1 on perfect clusters (each object's detections per 0.5 s frame) by the size of the training data.
 
@@ -439,14 +637,26 @@ def main(argv=None):
         action="store_true",
         help="the clusters' classifier with each history option (and calibrated) instead of the three models",
     )
+    parser.add_argument(
+        "--learned",
+        action="store_true",
+        help="the learned grouping (LinkClustering) classified, against the object setting's clusters and the "
+        "neighbourhood point-wise baseline",
+    )
+    parser.add_argument("--runs-file", help="keep the records of each preset in RUNS_FILE_<preset>.pkl as they come")
     options = parser.parse_args(argv)
     with threadpool_limits(1):
         for preset in options.data:
             if options.perfect_clusters:
                 print(perfect_clusters(preset, options), flush=True)
                 continue
-            runs = [run_one(preset, seed, options) for seed in options.seeds]
-            print((history_report if options.history else report)(preset, runs), flush=True)
+            runs = []
+            for seed in options.seeds:
+                runs.append(run_one(preset, seed, options))
+                if options.runs_file:  # every record so far, to report a run that was stopped part way
+                    Path(f"{options.runs_file}_{preset}.pkl").write_bytes(pickle.dumps(runs))
+            chosen = learned_report if options.learned else history_report if options.history else report
+            print(chosen(preset, runs), flush=True)
     return 0
 
 
