@@ -746,3 +746,12 @@ def test_the_header_counts_in_the_singular_for_one(tiny_report):
     results.meta.budget = dataclasses.replace(results.meta.budget, n_iter=1)
     text = "\n".join(_header.markdown(results))
     assert "1 Bayesian-optimisation iteration per tuned experiment" in text and "4 sequences" in text
+
+
+def test_the_summary_names_every_figure_the_tiny_run_drew_in_words(tiny_report):
+    from sklearn_radar.reproduce._sections._summary import FIGURE_NAMES
+
+    drawn = _typed(tiny_report).figures.drawn
+    assert drawn and set(drawn) <= set(FIGURE_NAMES)
+    glance = (tiny_report / "report.md").read_text().split("## At a glance", 1)[1].split("\n## ", 1)[0]
+    assert all(f"[{FIGURE_NAMES[name]}]({file})" in glance for name, file in drawn.items())

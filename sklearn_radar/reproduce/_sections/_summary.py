@@ -101,6 +101,7 @@ FIGURE_NAMES = {
     "scene": "Fig. 6 analogue",
     "convergence": "convergence of the searches",
     "tracks": "tracks over one test sequence",
+    "precision_recall": "precision against recall per class",
 }
 
 
