@@ -287,21 +287,25 @@ def precision_recall_figure(found):
 
     rows = {name: row for name, row in found.settings.items() if row.scores.precision_at_recall}
     classes = list(dict.fromkeys(c for row in rows.values() for c in row.scores.precision_at_recall))
-    fig, axes = plt.subplots(1, len(classes), figsize=(3.2 * len(classes), 3.6), sharey=True, squeeze=False)
+    fig, axes = plt.subplots(1, len(classes), figsize=(3.2 * len(classes), 4.4), sharey=True, squeeze=False)
     recall = np.linspace(0.0, 1.0, 101)
     styles = curve_styles(len(rows))
     for ax, name in zip(axes[0], classes, strict=True):
-        for (setting, row), (colour, line, _) in zip(rows.items(), styles, strict=True):
+        for row, (colour, line, _) in zip(rows.values(), styles, strict=True):
             precision = row.scores.precision_at_recall.get(name)
             if precision is not None:
                 ap = row.scores.per_class.get(name, {}).get("ap", float(np.mean(precision)))
-                ax.step(recall, precision, where="post", color=colour, linestyle=line, label=f"{setting} {ap:.0%}")
+                ax.step(recall, precision, where="post", color=colour, linestyle=line, label=f"{ap:.0%}")
         ax.set_title(name)
         ax.set_xlabel("recall")
         ax.set_xlim(0.0, 1.0)
         ax.set_ylim(0.0, 1.02)
         ax.legend(fontsize=6, title="AP@0.5", title_fontsize=6, loc="upper right")
     axes[0][0].set_ylabel("precision (interpolated)")
+    # The settings' long names once, below the panels; each panel's legend gives their AP in the same styles.
+    keys = [plt.Line2D([], [], color=colour, linestyle=line) for colour, line, _ in styles]
+    fig.legend(keys, list(rows), loc="lower center", ncol=min(4, len(rows)), fontsize=7, frameon=False)
+    fig.set_layout_engine("tight", rect=(0.0, 0.13, 1.0, 1.0))  # room for the settings' legend
     fig.suptitle(
         f"Precision-recall of the classified segments per class, test half ({_window(found)} s "
         "windows, IoU > 0.5; ranked by the classifier's confidence)"
