@@ -73,26 +73,7 @@ def run(preset, seed, options):
     (train, y_train), (test, y_test) = bench.load(preset, seed, options.n_sequences, options.duration)
     times, groups = test["t"].to_numpy(), test["sequence"].to_numpy()
     n_scans = test.groupby(["sequence", "sensor_id", "timestamp"]).ngroups
-    model = LinkClustering(n_jobs=options.threads)
-    start = time.perf_counter()
-    with threadpool_limits(options.threads):
-        model.fit(train, y_train)
-        fit_s = time.perf_counter() - start
-        start = time.perf_counter()
-        labels = model.predict(test)
-        predict_s = time.perf_counter() - start
-    learned = _scores("learned", labels, y_test, times, groups)
-    learned.update(
-        variant="LinkClustering",
-        cv_pq=model.cv_score_,
-        fit_s=fit_s,
-        predict_ms_per_scan=1e3 * predict_s / n_scans,
-        params={
-            "link_threshold": model.link_threshold_,
-            "objectness_threshold": model.objectness_threshold_,
-            "min_cluster_size": model.min_cluster_size_,
-        },
-    )
+    learned = _learned_record("learned", LinkClustering(n_jobs=options.threads), train, y_train, test, y_test, options)
     wanted = ("objects (stage 1)", "objects", *ablation.BASELINES)
     chosen = [v for v in ablation.variants() if v.name in wanted]
     args = argparse.Namespace(
@@ -130,9 +111,16 @@ def run(preset, seed, options):
 def run_causal(preset, seed, options):
     """The causal learned grouping's record on one preset and seed (the split of :func:`run`)."""
     (train, y_train), (test, y_test) = bench.load(preset, seed, options.n_sequences, options.duration, causal=True)
+    model = LinkClustering(causal=True, max_iter=40, n_jobs=options.threads)
+    record = _learned_record("learned_causal", model, train, y_train, test, y_test, options)
+    record.update(preset=preset, seed=seed, n_sequences=options.n_sequences, duration=options.duration)
+    return [record]
+
+
+def _learned_record(method, model, train, y_train, test, y_test, options):
+    """Fit ``model`` (a LinkClustering) on the training half, label the test half: its scores, times and thresholds."""
     times, groups = test["t"].to_numpy(), test["sequence"].to_numpy()
     n_scans = test.groupby(["sequence", "sensor_id", "timestamp"]).ngroups
-    model = LinkClustering(causal=True, max_iter=40, n_jobs=options.threads)
     start = time.perf_counter()
     with threadpool_limits(options.threads):
         model.fit(train, y_train)
@@ -140,9 +128,9 @@ def run_causal(preset, seed, options):
         start = time.perf_counter()
         labels = model.predict(test)
         predict_s = time.perf_counter() - start
-    record = _scores("learned_causal", labels, y_test, times, groups)
+    record = _scores(method, labels, y_test, times, groups)
     record.update(
-        variant="LinkClustering(causal=True)",
+        variant="LinkClustering(causal=True)" if model.causal else "LinkClustering",
         cv_pq=model.cv_score_,
         fit_s=fit_s,
         predict_ms_per_scan=1e3 * predict_s / n_scans,
@@ -151,12 +139,8 @@ def run_causal(preset, seed, options):
             "objectness_threshold": model.objectness_threshold_,
             "min_cluster_size": model.min_cluster_size_,
         },
-        preset=preset,
-        seed=seed,
-        n_sequences=options.n_sequences,
-        duration=options.duration,
     )
-    return [record]
+    return record
 
 
 def causal_summary(directory):
