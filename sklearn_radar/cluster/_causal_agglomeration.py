@@ -235,13 +235,16 @@ def _step(state, now, new_nodes, i, j, links, window, threshold):
                 heapq.heappush(heap, (-mean, min(a, c), max(a, c)))
         del total[b]
         del count[b]
+        if size[b] == 1:  # a cluster of one node is that node (numbered as it), which is still recent
+            clusters[position[b]] = a
+        else:
+            for k in range(start, len(clusters)):
+                if clusters[k] == b:
+                    clusters[k] = a
         size[a] += size[b]
         last[a] = max(last[a], last[b])
         del size[b]
         del last[b]
-        for k in range(start, len(clusters)):
-            if clusters[k] == b:
-                clusters[k] = a
     out = np.empty(len(new_nodes), dtype=np.int64)
     sizes = np.empty(len(new_nodes), dtype=np.int64)
     for k in range(len(new_nodes)):
