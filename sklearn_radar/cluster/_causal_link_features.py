@@ -209,10 +209,33 @@ def _pairs(x, y, t, node, start, radius, window, max_links):
                 near[used] = ((x[i] - x[j]) ** 2 + (y[i] - y[j]) ** 2) / (radius * radius) + dt * dt
                 used += 1
         if max_links >= 0 and used - first > max_links:  # the nearest, back in the order of i
-            nearest = np.sort(first + np.argsort(near[first:used], kind="mergesort")[:max_links])
-            found_i[first : first + max_links] = found_i[nearest]
-            used = first + max_links
+            used = _keep_nearest(found_i, near, first, used, max_links)
     return found_i[:used].copy(), found_j[:used].copy()
+
+
+@numba.njit(cache=True, nogil=True)
+def _keep_nearest(found_i, near, first, used, max_links):
+    """Keep, in place and in their order, the ``max_links`` candidates of ``first:used`` nearest in ``near``.
+
+    The first ``max_links`` of a stable sort by ``near`` (of equal ones, the earlier): a sorted buffer of the
+    best so far, then its positions back in ascending order.  Returns the new ``used``.
+    """
+    best_near = np.empty(max_links)
+    best_at = np.empty(max_links, dtype=np.int64)
+    size = 0
+    for a in range(first, used):
+        if size == max_links and not near[a] < best_near[size - 1]:
+            continue  # (a later candidate of equal distance loses to the earlier ones)
+        k = size if size < max_links else size - 1
+        while k > 0 and near[a] < best_near[k - 1]:
+            best_near[k], best_at[k] = best_near[k - 1], best_at[k - 1]
+            k -= 1
+        best_near[k], best_at[k] = near[a], a
+        size = min(size + 1, max_links)
+    best_at[:size].sort()
+    for k in range(size):
+        found_i[first + k] = found_i[best_at[k]]
+    return first + size
 
 
 #: The columns of :func:`causal_pair_features`.
