@@ -252,16 +252,18 @@ class LearnedIds:
             self.size[kept[0]] = self.size.get(kept[0], 0) + self.size.pop(lost[0], 0)
             aliases.append((us, kept[0], lost[0], "learned"))
         object_ids = np.full(len(clusters), -1, dtype=np.int64)
-        for number in np.unique(clusters[clusters >= 0]).tolist():
+        found = clusters >= 0
+        numbers, first, inverse = np.unique(clusters[found], return_index=True, return_inverse=True)
+        of_number = np.empty(len(numbers), dtype=np.int64)
+        for k, (number, size) in enumerate(zip(numbers.tolist(), sizes[found][first].tolist(), strict=True)):
             if number not in known:
                 known[number] = [self.next_id, now]
                 self.first_us[self.next_id] = us
                 self.next_id += 1
             known[number][1] = now
-        for k in np.flatnonzero(clusters >= 0).tolist():
-            object_id = known[int(clusters[k])][0]
-            object_ids[k] = object_id
-            self.size[object_id] = int(sizes[k])
+            object_id = of_number[k] = known[number][0]
+            self.size[object_id] = size  # (the rows of one cluster have its one size)
+        object_ids[found] = of_number[inverse]
         return object_ids, aliases
 
     def of(self, sequence, clusters):
