@@ -23,7 +23,8 @@ prints per preset the test PQ per method, the paired differences ``learned - obj
 
 ``--method learned_causal`` runs the causal learned grouping alone on the same data and split:
 ``LinkClustering(causal=True, max_iter=40)`` (the main job's causal model) fitted on the training half through a front
-whose filter is causal too, the test half labelled by its ``predict`` (what ``OnlinePipeline`` streams), saved as
+whose filter is causal too (``--max-links`` and ``--max-leaf-nodes`` set its ``max_links_per_detection`` and
+``max_leaf_nodes``), the test half labelled by its ``predict`` (what ``OnlinePipeline`` streams), saved as
 ``learned_causal_<preset>_seed<seed>.json``; ``--summary`` then sets it beside the saved offline rows of the same
 seeds.  The object experiment's saved rows hold its stage-2 setting only (not its stage 1), so its causal score is
 not recomputed here: the main job's learned section has it, with the sliding-window baseline.
@@ -111,7 +112,13 @@ def run(preset, seed, options):
 def run_causal(preset, seed, options):
     """The causal learned grouping's record on one preset and seed (the split of :func:`run`)."""
     (train, y_train), (test, y_test) = bench.load(preset, seed, options.n_sequences, options.duration, causal=True)
-    model = LinkClustering(causal=True, max_iter=40, n_jobs=options.threads)
+    model = LinkClustering(
+        causal=True,
+        max_iter=40,
+        max_links_per_detection=options.max_links,
+        max_leaf_nodes=options.max_leaf_nodes,
+        n_jobs=options.threads,
+    )
     record = _learned_record("learned_causal", model, train, y_train, test, y_test, options)
     record.update(preset=preset, seed=seed, n_sequences=options.n_sequences, duration=options.duration)
     return [record]
@@ -239,6 +246,15 @@ def main(argv=None):
         choices=["offline", "learned_causal"],
         default="offline",
         help="the three offline methods, or the causal learned grouping alone",
+    )
+    parser.add_argument(
+        "--max-links",
+        type=lambda text: None if text == "none" else int(text),
+        default=None,
+        help="max_links_per_detection of the causal learned grouping ('none', the default: every pair)",
+    )
+    parser.add_argument(
+        "--max-leaf-nodes", type=int, default=31, help="max_leaf_nodes of the causal learned grouping's classifiers"
     )
     options = parser.parse_args(argv)
     if not options.summary:

@@ -125,6 +125,9 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         Candidate pairs lie within this time of each other, s.
     max_iter : int, default=150
         Boosting iterations of each classifier.
+    max_leaf_nodes : int >= 2, default=31
+        Most leaves of each tree of both classifiers; smaller trees walk
+        faster scan by scan (see :ref:`online-learned`).
     max_pairs : int, default=400_000
         Training pairs per fit of the link classifier; more are subsampled at random.
     cv : int, default=5
@@ -228,6 +231,7 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         "pair_radius": [Interval(Real, 0, None, closed="neither")],
         "pair_window": [Interval(Real, 0, None, closed="left")],
         "max_iter": [Interval(Integral, 1, None, closed="left")],
+        "max_leaf_nodes": [Interval(Integral, 2, None, closed="left")],
         "max_pairs": [Interval(Integral, 1, None, closed="left")],
         "cv": [Interval(Integral, 2, None, closed="left")],
         "window": [Interval(Real, 0, None, closed="neither")],
@@ -246,6 +250,7 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         pair_radius=3.0,
         pair_window=0.25,
         max_iter=150,
+        max_leaf_nodes=31,
         max_pairs=400_000,
         cv=5,
         window=0.5,
@@ -260,6 +265,7 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         self.pair_radius = pair_radius
         self.pair_window = pair_window
         self.max_iter = max_iter
+        self.max_leaf_nodes = max_leaf_nodes
         self.max_pairs = max_pairs
         self.cv = cv
         self.window = window
@@ -269,8 +275,10 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         self.max_links_per_detection = max_links_per_detection
 
     def __setstate__(self, state):
-        # A model pickled before max_links_per_detection existed formed every candidate pair.
+        # A model pickled before max_links_per_detection existed formed every candidate pair; one pickled before
+        # max_leaf_nodes existed had trees of 31 leaves.
         state.setdefault("max_links_per_detection", None)
+        state.setdefault("max_leaf_nodes", 31)
         super().__setstate__(state)
 
     @_fit_context(prefer_skip_nested_validation=True)
@@ -384,7 +392,15 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         features = [s.features[:, detection_columns] for s in sequences]
         targets = [y[s.rows] >= 0 for s in sequences]
         self.objectness_classifier_, objectness = cross_fit(
-            features, targets, folds, self.max_iter, seeds[0], None, rng, out_of_fold=n_groups >= 2
+            features,
+            targets,
+            folds,
+            self.max_iter,
+            seeds[0],
+            None,
+            rng,
+            out_of_fold=n_groups >= 2,
+            max_leaf_nodes=self.max_leaf_nodes,
         )
         floor = min(CANDIDATE_OBJECTNESS, min(grids[1]))
         pair_x, pair_y, pairs = [], [], []
@@ -397,7 +413,15 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         pair_folds = [fold[i] for fold, (i, _) in zip(folds, pairs, strict=True)]
         self.n_training_pairs_ = int(sum(len(i) for i, _ in pairs))
         self.link_classifier_, links = cross_fit(
-            pair_x, pair_y, pair_folds, self.max_iter, seeds[1], self.max_pairs, rng, out_of_fold=tuning
+            pair_x,
+            pair_y,
+            pair_folds,
+            self.max_iter,
+            seeds[1],
+            self.max_pairs,
+            rng,
+            out_of_fold=tuning,
+            max_leaf_nodes=self.max_leaf_nodes,
         )
         if tuning and self.causal:
             setting, score = tune_causal(

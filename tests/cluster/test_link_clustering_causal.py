@@ -147,3 +147,22 @@ def test_a_model_pickled_before_max_links_per_detection_forms_every_pair(data, f
     loaded = pickle.loads(pickle.dumps(old))
     assert loaded.max_links_per_detection is None
     np.testing.assert_array_equal(loaded.predict(X), fitted.predict(X))
+
+
+def test_a_model_pickled_before_max_leaf_nodes_had_trees_of_31_leaves(data, fitted):
+    X, _ = data
+    old = clone(fitted)
+    old.__dict__.update(fitted.__dict__)
+    del old.__dict__["max_leaf_nodes"]  # as pickled by the version without the parameter
+    loaded = pickle.loads(pickle.dumps(old))
+    assert loaded.max_leaf_nodes == 31
+    assert loaded.link_classifier_.max_leaf_nodes == 31
+    np.testing.assert_array_equal(loaded.predict(X), fitted.predict(X))
+
+
+def test_max_leaf_nodes_reaches_both_classifiers(data):
+    X, y = data
+    model = LinkClustering(**{**FIXED, "max_leaf_nodes": 7}).fit(X, y)
+    for classifier in (model.objectness_classifier_, model.link_classifier_):
+        assert classifier.max_leaf_nodes == 7
+        assert max(predictor[0].get_n_leaf_nodes() for predictor in classifier._predictors) <= 7
