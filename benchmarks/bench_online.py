@@ -8,7 +8,8 @@ streams on a simulated training recording of its own (``--learned-train``
 sequences of 20 s of the realistic preset, other seeds than the stream's;
 ``--learned-max-iter`` boosting iterations, 40 as the main job's causal
 model; ``--learned-max-links`` its ``max_links_per_detection``, 16 as the
-main job's, ``none`` for every pair), trained
+main job's, ``none`` for every pair; ``--learned-max-leaf-nodes`` its
+``max_leaf_nodes``), trained
 on the pre-clustered instances as the main job trains it, thresholds
 tuned as ``LinkClustering`` tunes them; the fit time and the thresholds
 are printed.
@@ -65,7 +66,7 @@ LEARNED = 0
 LEARNED_MODEL_ENV = "SKLEARN_RADAR_BENCH_LEARNED_MODEL"
 
 
-def fit_learned(n_sequences, path, max_iter, max_links=None):
+def fit_learned(n_sequences, path, max_iter, max_links=None, max_leaf_nodes=31):
     """Fit the causal learned pipeline on simulated training sequences; save it to ``path``; print what it took."""
     import joblib
     from sklearn.pipeline import Pipeline
@@ -84,7 +85,12 @@ def fit_learned(n_sequences, path, max_iter, max_links=None):
             (
                 "link",
                 LinkClustering(
-                    causal=True, window=0.5, max_iter=max_iter, random_state=0, max_links_per_detection=max_links
+                    causal=True,
+                    window=0.5,
+                    max_iter=max_iter,
+                    random_state=0,
+                    max_links_per_detection=max_links,
+                    max_leaf_nodes=max_leaf_nodes,
                 ),
             ),
         ]
@@ -233,6 +239,9 @@ def main():
         default=16,
         help="max_links_per_detection of the learned one, 16 as the main job's causal model ('none': every pair)",
     )
+    parser.add_argument(
+        "--learned-max-leaf-nodes", type=int, default=31, help="max_leaf_nodes of the learned one's classifiers"
+    )
     parser.add_argument("--child", nargs=3, type=int, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
@@ -246,7 +255,9 @@ def main():
         import tempfile
 
         path = os.path.join(tempfile.mkdtemp(), "learned_causal.joblib")
-        fit_learned(args.learned_train, path, args.learned_max_iter, args.learned_max_links)
+        fit_learned(
+            args.learned_train, path, args.learned_max_iter, args.learned_max_links, args.learned_max_leaf_nodes
+        )
         os.environ[LEARNED_MODEL_ENV] = path
         numbers.append(LEARNED)
         args.kinds = [kind for kind in args.kinds if kind != 2]  # no stage 1 of its own
