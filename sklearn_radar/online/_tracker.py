@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import math
 from numbers import Integral, Real
 from typing import ClassVar
 
@@ -16,6 +17,8 @@ INITIAL_SPEED = 15.0
 #: A detection's Doppler is left out of an update when its residual exceeds this many standard deviations.
 DOPPLER_SIGMAS = 3.0
 _UNGATED = 1e18
+#: Tracks and links a new Tracker has room for before its arrays grow.
+_ROOM = 8
 
 
 class Tracker:
@@ -165,20 +168,26 @@ class Tracker:
         return f"{type(self).__name__}({', '.join(shown)})"
 
     def _reset(self):
-        self._state = np.zeros((0, 4))
-        self._cov = np.zeros((0, 4, 4))
-        self._ids = np.zeros(0, dtype=np.int64)  # track id per slot, increasing
-        self._hits = np.zeros(0, dtype=np.int64)
-        self._last = np.zeros(0)  # time of the last cluster, s
-        self._confirmed = np.zeros(0, dtype=bool)
-        self._links = {}  # cluster id -> (track id, time last seen, s)
+        # Tracks in slots 0 .. _n - 1 of arrays with room to spare (ids increasing with the slot)
+        self._n = 0
+        self._state = np.zeros((_ROOM, 4))
+        self._cov = np.zeros((_ROOM, 4, 4))
+        self._ids = np.zeros(_ROOM, dtype=np.int64)
+        self._hits = np.zeros(_ROOM, dtype=np.int64)
+        self._last = np.zeros(_ROOM)  # time of the last cluster, s
+        self._confirmed = np.zeros(_ROOM, dtype=bool)
+        # Links cluster id -> track id and time last seen (s), in 0 .. _n_links - 1, cluster ids increasing
+        self._n_links = 0
+        self._link_code = np.zeros(_ROOM, dtype=np.int64)
+        self._link_track = np.zeros(_ROOM, dtype=np.int64)
+        self._link_time = np.zeros(_ROOM)
         self._next_id = 0
         self._now = None
 
     @property
     def n_tracks(self):
         """int: Live tracks (tentative and confirmed)."""
-        return len(self._ids)
+        return self._n
 
     def tracks(self):
         """The live tracks: id, state and confirmation, as arrays.
@@ -189,15 +198,16 @@ class Tracker:
             ``track_id`` (int64), ``x``, ``y`` (m), ``vx``, ``vy`` (m/s) predicted to the last scan's time,
             ``hits``, ``confirmed`` and ``last_update`` (s), one entry per track.
         """
+        n = self._n
         return {
-            "track_id": self._ids.copy(),
-            "x": self._state[:, 0].copy(),
-            "y": self._state[:, 1].copy(),
-            "vx": self._state[:, 2].copy(),
-            "vy": self._state[:, 3].copy(),
-            "hits": self._hits.copy(),
-            "confirmed": self._confirmed.copy(),
-            "last_update": self._last.copy(),
+            "track_id": self._ids[:n].copy(),
+            "x": self._state[:n, 0].copy(),
+            "y": self._state[:n, 1].copy(),
+            "vx": self._state[:n, 2].copy(),
+            "vy": self._state[:n, 3].copy(),
+            "hits": self._hits[:n].copy(),
+            "confirmed": self._confirmed[:n].copy(),
+            "last_update": self._last[:n].copy(),
         }
 
     def update(self, x, y, v_r, los, t, clusters):
@@ -231,114 +241,77 @@ class Tracker:
         """
         x, y, v_r, los, clusters = _read(x, y, v_r, los, clusters)
         t = float(t)
-        if not np.isfinite(t):
+        if not math.isfinite(t):
             raise ValueError(f"Tracker.update: t must be finite, got {t}")
         if self._now is not None and t <= self._now:
             raise ValueError(f"Tracker.update: the scan at t={t} s is not later than the previous one ({self._now} s)")
         if self._now is not None:
-            kernels.predict(self._state, self._cov, len(self._ids), t - self._now, self.acceleration**2)
             self._end_tracks(t)
         self._now = t
-        slot = self._associate(x, y, v_r, los, t, clusters)
-        r_pos, r_vr = self.position_noise**2, self.doppler_noise**2
-        count = kernels.update(self._state, self._cov, slot, x, y, v_r, los, r_pos, r_vr, DOPPLER_SIGMAS)
-        updated = count > 0
-        self._hits[updated] += 1
-        self._last[updated] = t
-        self._confirmed |= self._hits >= self.min_hits
-        if self.noise_radius is not None and self._confirmed.any():
-            noise = np.flatnonzero(clusters < 0)
-            if len(noise):
-                slot[noise] = kernels.nearest_agreeing(
-                    x, y, v_r, los, noise, self._state, self._confirmed, self.noise_radius, self.doppler_gate
-                )
-        track_id = np.full(len(x), -1, dtype=np.int64)
-        shown = slot >= 0
-        shown[shown] = self._confirmed[slot[shown]]
-        track_id[shown] = self._ids[slot[shown]]
-        return track_id
+        member, of_cluster = self._associate(x, y, v_r, los, t, clusters)
+        noise_radius = -1.0 if self.noise_radius is None else float(self.noise_radius)
+        params = (self.position_noise**2, self.doppler_noise**2, DOPPLER_SIGMAS, self.min_hits, self.doppler_gate)
+        arrays = (self._state, self._cov, self._ids, self._hits, self._last, self._confirmed)
+        return kernels.finish(*arrays, self._n, member, of_cluster, x, y, v_r, los, t, noise_radius, params)
 
     def _end_tracks(self, t):
-        """Drop the tracks without a cluster for more than ``max_age``, and the links to them."""
-        alive = t - self._last <= self.max_age
-        if alive.all():
-            return
-        for name in ("_state", "_cov", "_ids", "_hits", "_last", "_confirmed"):
-            setattr(self, name, getattr(self, name)[alive])
-        oldest = t - self.max_age
-        self._links = {c: link for c, link in self._links.items() if link[1] >= oldest}
-
-    def _slots(self, track_ids):
-        """Slot of each live track id (-1 for an ended one, or for -1)."""
-        if len(self._ids) == 0:
-            return np.full(len(track_ids), -1, dtype=np.int64)
-        at = np.minimum(np.searchsorted(self._ids, track_ids), len(self._ids) - 1)
-        return np.where(self._ids[at] == track_ids, at, -1)
+        """Predict the tracks to ``t``; drop those without a cluster for over ``max_age``, and the links to them."""
+        arrays = (self._state, self._cov, self._ids, self._hits, self._last, self._confirmed)
+        n = kernels.advance(*arrays, self._n, t - self._now, self.acceleration**2, t, self.max_age)
+        if n < self._n:
+            links = (self._link_code, self._link_track, self._link_time)
+            self._n_links = kernels.drop_links(*links, self._n_links, t - self.max_age)
+        self._n = n
 
     def _associate(self, x, y, v_r, los, t, clusters):
-        """Track slot of every clustered detection (new tracks added), -1 for noise."""
-        slot = np.full(len(x), -1, dtype=np.int64)
-        clustered = np.flatnonzero(clusters >= 0)
-        if len(clustered) == 0:
-            return slot
-        codes, member = np.unique(clusters[clustered], return_inverse=True)
-        member = member.ravel()
-        n = len(codes)
-        links = self._links
-        linked = np.array([links[c][0] if c in links else -1 for c in codes.tolist()], dtype=np.int64)
-        of_cluster = self._slots(linked)
-        free = np.flatnonzero(of_cluster < 0)
-        if len(free) and len(self._ids):
-            count = np.bincount(member, minlength=n).astype(np.float64)
-            cx = np.bincount(member, x[clustered], minlength=n)[free] / count[free]
-            cy = np.bincount(member, y[clustered], minlength=n)[free] / count[free]
-            cost = kernels.centroid_distances(cx, cy, self._state, self._cov, self.position_noise**2)
-            inside = cost <= self.gate**2
-            if self._confirmed.any():
-                local = np.full(n, -1, dtype=np.int64)
-                local[free] = np.arange(len(free))
-                misfit = kernels.doppler_misfit(v_r[clustered], los[clustered], local[member], len(free), self._state)
-                inside &= ~self._confirmed | (misfit <= self.doppler_gate)
-            taken = np.zeros(len(self._ids), dtype=bool)
-            taken[of_cluster[of_cluster >= 0]] = True
-            open_cost = np.where(inside & ~taken, cost, _UNGATED)
+        """Cluster of every detection (-1 for noise) and track slot of every cluster (new tracks added)."""
+        links = (self._link_code, self._link_track, self._n_links)
+        codes, member, cx, cy, of_cluster = kernels.group(clusters, x, y, *links, self._ids, self._n)
+        n_codes = len(codes)
+        if n_codes == 0:
+            return member, of_cluster
+        n = self._n
+        if n and (of_cluster < 0).any():
+            free, cost, inside, open_cost = kernels.gate(
+                cx, cy, of_cluster, member, v_r, los, self._state, self._cov, self._confirmed, n,
+                self.position_noise**2, self.gate**2, self.doppler_gate, _UNGATED,
+            )  # fmt: skip
             rows, cols = linear_sum_assignment(open_cost)
-            hit = open_cost[rows, cols] < _UNGATED
-            of_cluster[free[rows[hit]]] = cols[hit]
-            left = np.flatnonzero(of_cluster[free] < 0)
-            if len(left):  # a split cluster joins the confirmed track it is gated to
-                joinable = np.where(inside[left] & self._confirmed, cost[left], np.inf)
-                best = np.argmin(joinable, axis=1)
-                ok = np.isfinite(joinable[np.arange(len(left)), best])
-                of_cluster[free[left[ok]]] = best[ok]
-        new = np.flatnonzero(of_cluster < 0)
-        if len(new):
-            of_cluster[new] = self._new_tracks(x[clustered], y[clustered], member, new, n)
-        for code, k in zip(codes.tolist(), of_cluster.tolist(), strict=True):
-            links[code] = (int(self._ids[k]), t)
-        slot[clustered] = of_cluster[member]
-        return slot
+            kernels.assign(rows, cols, open_cost, cost, inside, self._confirmed, free, of_cluster, _UNGATED)
+        if (of_cluster < 0).any():
+            self._reserve_tracks(n + n_codes)
+            arrays = (self._state, self._cov, self._ids, self._hits, self._last, self._confirmed)
+            speed_var = INITIAL_SPEED**2
+            self._n = kernels.start_tracks(
+                *arrays, n, of_cluster, cx, cy, self._next_id, self.position_noise**2, speed_var
+            )
+            self._next_id += self._n - n
+        self._reserve_links(self._n_links + n_codes)
+        links = (self._link_code, self._link_track, self._link_time)
+        self._n_links = kernels.store_links(*links, self._n_links, codes, self._ids[of_cluster], t)
+        return member, of_cluster
 
-    def _new_tracks(self, x, y, member, new, n):
-        """Start a tentative track at the centroid of each cluster in ``new``; their slots."""
-        count = np.bincount(member, minlength=n).astype(np.float64)
-        cx = np.bincount(member, x, minlength=n)[new] / count[new]
-        cy = np.bincount(member, y, minlength=n)[new] / count[new]
-        k = len(new)
-        state = np.zeros((k, 4))
-        state[:, 0], state[:, 1] = cx, cy
-        cov = np.zeros((k, 4, 4))
-        cov[:, 0, 0] = cov[:, 1, 1] = self.position_noise**2
-        cov[:, 2, 2] = cov[:, 3, 3] = INITIAL_SPEED**2
-        first = len(self._ids)
-        self._state = np.concatenate([self._state, state])
-        self._cov = np.concatenate([self._cov, cov])
-        self._ids = np.concatenate([self._ids, np.arange(self._next_id, self._next_id + k)])
-        self._next_id += k
-        self._hits = np.concatenate([self._hits, np.zeros(k, dtype=np.int64)])
-        self._last = np.concatenate([self._last, np.full(k, np.nan)])
-        self._confirmed = np.concatenate([self._confirmed, np.zeros(k, dtype=bool)])
-        return np.arange(first, first + k)
+    def _reserve_tracks(self, size):
+        """Room for ``size`` tracks (twice as much when growing, the live ones kept)."""
+        if size <= len(self._ids):
+            return
+        room = max(size, 2 * len(self._ids))
+        for name in ("_state", "_cov", "_ids", "_hits", "_last", "_confirmed"):
+            old = getattr(self, name)
+            new = np.zeros((room, *old.shape[1:]), dtype=old.dtype)
+            new[: self._n] = old[: self._n]
+            setattr(self, name, new)
+
+    def _reserve_links(self, size):
+        """Room for ``size`` links (twice as much when growing, the current ones kept)."""
+        if size <= len(self._link_code):
+            return
+        room = max(size, 2 * len(self._link_code))
+        for name in ("_link_code", "_link_track", "_link_time"):
+            old = getattr(self, name)
+            new = np.zeros(room, dtype=old.dtype)
+            new[: self._n_links] = old[: self._n_links]
+            setattr(self, name, new)
 
 
 def sequence_frame(c, x, y, frame):
@@ -362,9 +335,9 @@ def _read(x, y, v_r, los, clusters):
     for name, values in zip((*names, "clusters"), (*columns, clusters), strict=True):
         if len(values) != n:
             raise ValueError(f"Tracker.update: {name!r} has {len(values)} values, 'x' has {n}")
-    for name, values in zip(names, columns, strict=True):
-        if not np.isfinite(values).all():
-            raise ValueError(f"Tracker.update: {name!r} holds values that are not finite")
+    bad = kernels.first_not_finite(*columns)
+    if bad >= 0:
+        raise ValueError(f"Tracker.update: {names[bad]!r} holds values that are not finite")
     if clusters.dtype.kind not in "iu":
         if not (np.isfinite(clusters).all() and (clusters == np.round(clusters)).all()):
             raise ValueError("Tracker.update: 'clusters' must hold integer ids (-1 for noise)")

@@ -162,3 +162,238 @@ def nearest_agreeing(x, y, v_r, los, rows, state, eligible, radius, doppler_gate
                 best = d2
                 out[j] = k
     return out
+
+
+@numba.njit(cache=True, nogil=True)
+def all_finite(values):
+    """Whether every value of a 1-D array is finite (no NaN, no infinity)."""
+    for i in range(values.shape[0]):
+        if not np.isfinite(values[i]):
+            return False
+    return True
+
+
+@numba.njit(cache=True, nogil=True)
+def first_not_finite(x, y, v_r, los):
+    """Index of the first of the four columns holding a value that is not finite, -1 if none."""
+    if not all_finite(x):
+        return 0
+    if not all_finite(y):
+        return 1
+    if not all_finite(v_r):
+        return 2
+    if not all_finite(los):
+        return 3
+    return -1
+
+
+@numba.njit(cache=True, nogil=True)
+def advance(state, cov, ids, hits, last, confirmed, n, dt, q, t, max_age):
+    """Predict the first ``n`` tracks ``dt`` s ahead, then drop those without a cluster for more than ``max_age`` s.
+
+    The kept tracks move down in place, in their order; returns their number.
+    """
+    predict(state, cov, n, dt, q)
+    kept = 0
+    for k in range(n):
+        if not (t - last[k] <= max_age):
+            continue
+        if kept != k:
+            state[kept] = state[k]
+            cov[kept] = cov[k]
+            ids[kept] = ids[k]
+            hits[kept] = hits[k]
+            last[kept] = last[k]
+            confirmed[kept] = confirmed[k]
+        kept += 1
+    return kept
+
+
+@numba.njit(cache=True, nogil=True)
+def drop_links(code, track, time, n_links, oldest):
+    """Keep the first ``n_links`` links seen at ``oldest`` s or later, in place and in order; returns their number."""
+    kept = 0
+    for j in range(n_links):
+        if time[j] >= oldest:
+            code[kept], track[kept], time[kept] = code[j], track[j], time[j]
+            kept += 1
+    return kept
+
+
+@numba.njit(cache=True, nogil=True)
+def group(clusters, x, y, link_code, link_track, n_links, ids, n):
+    """The clusters of a scan: their ids (increasing), each detection's cluster (-1: noise), centroids, linked slots.
+
+    ``link_code[:n_links]`` (increasing) are the cluster ids seen before and ``link_track`` their track ids;
+    ``ids[:n]`` (increasing) the live tracks' ids.  Returns ``codes``, ``member``, ``cx``, ``cy`` (m, the mean
+    of each cluster's detections, summed in row order) and ``of_cluster``: the slot of the live track a cluster
+    id is linked to, -1 for none.
+    """
+    n_rows = clusters.shape[0]
+    values = np.empty(n_rows, dtype=np.int64)
+    m = 0
+    for i in range(n_rows):
+        if clusters[i] >= 0:
+            values[m] = clusters[i]
+            m += 1
+    values = np.sort(values[:m])
+    codes = np.empty(m, dtype=np.int64)
+    n_codes = 0
+    for j in range(m):
+        if n_codes == 0 or values[j] != codes[n_codes - 1]:
+            codes[n_codes] = values[j]
+            n_codes += 1
+    codes = codes[:n_codes]
+    member = np.full(n_rows, -1, dtype=np.int64)
+    count = np.zeros(n_codes)
+    cx = np.zeros(n_codes)
+    cy = np.zeros(n_codes)
+    for i in range(n_rows):
+        if clusters[i] >= 0:
+            j = np.searchsorted(codes, clusters[i])
+            member[i] = j
+            count[j] += 1.0
+            cx[j] += x[i]
+            cy[j] += y[i]
+    of_cluster = np.full(n_codes, -1, dtype=np.int64)
+    for j in range(n_codes):
+        cx[j] /= count[j]
+        cy[j] /= count[j]
+        at = np.searchsorted(link_code[:n_links], codes[j])
+        if at < n_links and link_code[at] == codes[j]:
+            slot = np.searchsorted(ids[:n], link_track[at])
+            if slot < n and ids[slot] == link_track[at]:
+                of_cluster[j] = slot
+    return codes, member, cx, cy, of_cluster
+
+
+@numba.njit(cache=True, nogil=True)
+def gate(cx, cy, of_cluster, member, v_r, los, state, cov, confirmed, n, r_pos, gate2, doppler_gate, ungated):
+    """Gating of the clusters without a track (``free``) against the first ``n`` tracks.
+
+    Returns ``free``, the squared Mahalanobis distances ``cost`` (free clusters x tracks), ``inside`` (within
+    ``gate2`` and, for a confirmed track, a mean Doppler residual within ``doppler_gate``) and the assignment
+    cost: ``cost`` inside the gate of a track no linked cluster took, ``ungated`` elsewhere.
+    """
+    free = np.flatnonzero(of_cluster < 0)
+    cost = centroid_distances(cx[free], cy[free], state[:n], cov[:n], r_pos)
+    inside = cost <= gate2
+    if confirmed[:n].any():
+        local = np.full(of_cluster.shape[0], -1, dtype=np.int64)
+        local[free] = np.arange(free.shape[0])
+        row_local = np.full(member.shape[0], -1, dtype=np.int64)
+        for i in range(member.shape[0]):
+            if member[i] >= 0:
+                row_local[i] = local[member[i]]
+        misfit = doppler_misfit(v_r, los, row_local, free.shape[0], state[:n])
+        for a in range(free.shape[0]):
+            for k in range(n):
+                inside[a, k] = inside[a, k] and ((not confirmed[k]) or misfit[a, k] <= doppler_gate)
+    taken = np.zeros(n, dtype=np.bool_)
+    for j in range(of_cluster.shape[0]):
+        if of_cluster[j] >= 0:
+            taken[of_cluster[j]] = True
+    open_cost = np.full(cost.shape, ungated)
+    for a in range(free.shape[0]):
+        for k in range(n):
+            if inside[a, k] and not taken[k]:
+                open_cost[a, k] = cost[a, k]
+    return free, cost, inside, open_cost
+
+
+@numba.njit(cache=True, nogil=True)
+def assign(rows, cols, open_cost, cost, inside, confirmed, free, of_cluster, ungated):
+    """Give the free clusters their assigned tracks (pairs within the gate); a cluster left over joins the
+    confirmed track within whose gate it is nearest, if any (a split cluster).  In place on ``of_cluster``."""
+    for a in range(rows.shape[0]):
+        if open_cost[rows[a], cols[a]] < ungated:
+            of_cluster[free[rows[a]]] = cols[a]
+    for a in range(free.shape[0]):
+        if of_cluster[free[a]] >= 0:
+            continue
+        best, best_cost = -1, np.inf
+        for k in range(cost.shape[1]):
+            if inside[a, k] and confirmed[k] and cost[a, k] < best_cost:
+                best, best_cost = k, cost[a, k]
+        if best >= 0:
+            of_cluster[free[a]] = best
+
+
+@numba.njit(cache=True, nogil=True)
+def start_tracks(state, cov, ids, hits, last, confirmed, n, of_cluster, cx, cy, next_id, r_pos, speed_var):
+    """A tentative track at the centroid of each cluster without one (``of_cluster`` -1), in the slots from
+    ``n`` on, with ids from ``next_id`` on, in cluster order; ``of_cluster`` gets their slots.  Returns the new n."""
+    for j in range(of_cluster.shape[0]):
+        if of_cluster[j] >= 0:
+            continue
+        state[n] = 0.0
+        state[n, 0] = cx[j]
+        state[n, 1] = cy[j]
+        cov[n] = 0.0
+        cov[n, 0, 0] = cov[n, 1, 1] = r_pos
+        cov[n, 2, 2] = cov[n, 3, 3] = speed_var
+        ids[n] = next_id
+        next_id += 1
+        hits[n] = 0
+        last[n] = np.nan
+        confirmed[n] = False
+        of_cluster[j] = n
+        n += 1
+    return n
+
+
+@numba.njit(cache=True, nogil=True)
+def store_links(code, track, time, n_links, codes, track_ids, t):
+    """Link each of ``codes`` (increasing) to its track id at time ``t``: the sorted links ``code[:n_links]``
+    (room for all of ``codes`` after them) merged in place.  Returns the new number of links."""
+    n_new = 0
+    for j in range(codes.shape[0]):
+        at = np.searchsorted(code[:n_links], codes[j])
+        if at == n_links or code[at] != codes[j]:
+            n_new += 1
+    i, j, write = n_links - 1, codes.shape[0] - 1, n_links + n_new - 1
+    while j >= 0:
+        if i >= 0 and code[i] > codes[j]:
+            code[write], track[write], time[write] = code[i], track[i], time[i]
+            i -= 1
+        else:
+            if i >= 0 and code[i] == codes[j]:
+                i -= 1
+            code[write], track[write], time[write] = codes[j], track_ids[j], t
+            j -= 1
+        write -= 1
+    return n_links + n_new
+
+
+@numba.njit(cache=True, nogil=True)
+def finish(state, cov, ids, hits, last, confirmed, n, member, of_cluster, x, y, v_r, los, t, noise_radius, params):
+    """Kalman update of the tracks with their detections, hits and confirmation, noise ids; the track id per row.
+
+    ``params``: ``r_pos``, ``r_vr``, ``doppler_sigmas``, ``min_hits``, ``doppler_gate``; ``noise_radius`` < 0:
+    noise stays -1.
+    """
+    r_pos, r_vr, doppler_sigmas, min_hits, doppler_gate = params
+    n_rows = member.shape[0]
+    slot = np.full(n_rows, -1, dtype=np.int64)
+    n_noise = 0
+    for i in range(n_rows):
+        if member[i] >= 0:
+            slot[i] = of_cluster[member[i]]
+        else:
+            n_noise += 1
+    count = update(state[:n], cov[:n], slot, x, y, v_r, los, r_pos, r_vr, doppler_sigmas)
+    any_confirmed = False
+    for k in range(n):
+        if count[k] > 0:
+            hits[k] += 1
+            last[k] = t
+        confirmed[k] |= hits[k] >= min_hits
+        any_confirmed |= confirmed[k]
+    if noise_radius >= 0.0 and any_confirmed and n_noise:
+        noise = np.flatnonzero(member < 0)
+        slot[noise] = nearest_agreeing(x, y, v_r, los, noise, state[:n], confirmed[:n], noise_radius, doppler_gate)
+    track_id = np.full(n_rows, -1, dtype=np.int64)
+    for i in range(n_rows):
+        if slot[i] >= 0 and confirmed[slot[i]]:
+            track_id[i] = ids[slot[i]]
+    return track_id
