@@ -266,26 +266,26 @@ class Tracker:
     def _associate(self, x, y, v_r, los, t, clusters):
         """Cluster of every detection (-1 for noise) and track slot of every cluster (new tracks added)."""
         links = (self._link_code, self._link_track, self._n_links)
-        codes, member, cx, cy, of_cluster = kernels.group(clusters, x, y, *links, self._ids, self._n)
+        codes, member, cx, cy, of_cluster, n_free = kernels.group(clusters, x, y, *links, self._ids, self._n)
         n_codes = len(codes)
         if n_codes == 0:
             return member, of_cluster
         n = self._n
-        if n and (of_cluster < 0).any():
+        if n and n_free:
             free, cost, inside, open_cost = kernels.gate(
                 cx, cy, of_cluster, member, v_r, los, self._state, self._cov, self._confirmed, n,
                 self.position_noise**2, self.gate**2, self.doppler_gate, _UNGATED,
             )  # fmt: skip
             rows, cols = linear_sum_assignment(open_cost)
-            kernels.assign(rows, cols, open_cost, cost, inside, self._confirmed, free, of_cluster, _UNGATED)
-        if (of_cluster < 0).any():
-            self._reserve_tracks(n + n_codes)
+            n_free = kernels.assign(rows, cols, open_cost, cost, inside, self._confirmed, free, of_cluster, _UNGATED)
+        if n_free:
+            self._reserve_tracks(n + n_free)
             arrays = (self._state, self._cov, self._ids, self._hits, self._last, self._confirmed)
             speed_var = INITIAL_SPEED**2
             self._n = kernels.start_tracks(
                 *arrays, n, of_cluster, cx, cy, self._next_id, self.position_noise**2, speed_var
             )
-            self._next_id += self._n - n
+            self._next_id += n_free
         self._reserve_links(self._n_links + n_codes)
         links = (self._link_code, self._link_track, self._link_time)
         self._n_links = kernels.store_links(*links, self._n_links, codes, self._ids[of_cluster], t)
@@ -332,9 +332,10 @@ def _read(x, y, v_r, los, clusters):
     columns = [np.ascontiguousarray(np.ravel(value), dtype=np.float64) for value in (x, y, v_r, los)]
     clusters = np.ravel(clusters)
     n = len(columns[0])
-    for name, values in zip((*names, "clusters"), (*columns, clusters), strict=True):
-        if len(values) != n:
-            raise ValueError(f"Tracker.update: {name!r} has {len(values)} values, 'x' has {n}")
+    if not len(columns[1]) == len(columns[2]) == len(columns[3]) == len(clusters) == n:
+        for name, values in zip((*names, "clusters"), (*columns, clusters), strict=True):
+            if len(values) != n:
+                raise ValueError(f"Tracker.update: {name!r} has {len(values)} values, 'x' has {n}")
     bad = kernels.first_not_finite(*columns)
     if bad >= 0:
         raise ValueError(f"Tracker.update: {names[bad]!r} holds values that are not finite")

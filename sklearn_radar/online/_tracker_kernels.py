@@ -226,8 +226,8 @@ def group(clusters, x, y, link_code, link_track, n_links, ids, n):
 
     ``link_code[:n_links]`` (increasing) are the cluster ids seen before and ``link_track`` their track ids;
     ``ids[:n]`` (increasing) the live tracks' ids.  Returns ``codes``, ``member``, ``cx``, ``cy`` (m, the mean
-    of each cluster's detections, summed in row order) and ``of_cluster``: the slot of the live track a cluster
-    id is linked to, -1 for none.
+    of each cluster's detections, summed in row order), ``of_cluster``: the slot of the live track a cluster
+    id is linked to, -1 for none, and the number of clusters without one.
     """
     n_rows = clusters.shape[0]
     values = np.empty(n_rows, dtype=np.int64)
@@ -256,6 +256,7 @@ def group(clusters, x, y, link_code, link_track, n_links, ids, n):
             cx[j] += x[i]
             cy[j] += y[i]
     of_cluster = np.full(n_codes, -1, dtype=np.int64)
+    n_free = n_codes
     for j in range(n_codes):
         cx[j] /= count[j]
         cy[j] /= count[j]
@@ -264,7 +265,8 @@ def group(clusters, x, y, link_code, link_track, n_links, ids, n):
             slot = np.searchsorted(ids[:n], link_track[at])
             if slot < n and ids[slot] == link_track[at]:
                 of_cluster[j] = slot
-    return codes, member, cx, cy, of_cluster
+                n_free -= 1
+    return codes, member, cx, cy, of_cluster, n_free
 
 
 @numba.njit(cache=True, nogil=True)
@@ -304,10 +306,12 @@ def gate(cx, cy, of_cluster, member, v_r, los, state, cov, confirmed, n, r_pos, 
 @numba.njit(cache=True, nogil=True)
 def assign(rows, cols, open_cost, cost, inside, confirmed, free, of_cluster, ungated):
     """Give the free clusters their assigned tracks (pairs within the gate); a cluster left over joins the
-    confirmed track within whose gate it is nearest, if any (a split cluster).  In place on ``of_cluster``."""
+    confirmed track within whose gate it is nearest, if any (a split cluster).  In place on ``of_cluster``;
+    returns the number of free clusters still without a track."""
     for a in range(rows.shape[0]):
         if open_cost[rows[a], cols[a]] < ungated:
             of_cluster[free[rows[a]]] = cols[a]
+    n_left = 0
     for a in range(free.shape[0]):
         if of_cluster[free[a]] >= 0:
             continue
@@ -317,6 +321,9 @@ def assign(rows, cols, open_cost, cost, inside, confirmed, free, of_cluster, ung
                 best, best_cost = k, cost[a, k]
         if best >= 0:
             of_cluster[free[a]] = best
+        else:
+            n_left += 1
+    return n_left
 
 
 @numba.njit(cache=True, nogil=True)
