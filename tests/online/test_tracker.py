@@ -90,6 +90,25 @@ def test_occlusion_shorter_than_max_age_keeps_the_id_and_longer_ends_it():
         assert set(ids[10:]) == {expected}
 
 
+def test_many_tracks_and_cluster_ids_keep_their_ids_as_the_tracker_grows():
+    # 20 still objects 10 m apart with lasting cluster ids, then 20 more with a new cluster id every scan: more
+    # tracks and links than a new Tracker has room for, so its arrays grow while tracks are live
+    tracker = Tracker(min_hits=1)
+    first = [(10.0 * k, 0.0) for k in range(20)]
+    second = [(10.0 * k, 50.0) for k in range(20)]
+    for scan in range(8):
+        centres = first + (second if scan >= 4 else [])
+        objects = [(centre, (0.0, 0.0), k if k < 20 else 1000 * scan + k) for k, centre in enumerate(centres)]
+        ids = [one_id(found) for found in feed(tracker, 0.05 * scan, objects)]
+        assert ids == list(range(len(centres)))
+    assert tracker.n_tracks == 40
+    track = tracker.tracks()
+    np.testing.assert_array_equal(track["track_id"], np.arange(40))
+    np.testing.assert_allclose(track["x"], [x for x, _ in first + second], atol=1e-9)
+    np.testing.assert_allclose(track["y"], [y + 1 / 6 for _, y in first + second], atol=1e-9)  # the centroid
+    np.testing.assert_array_equal(track["hits"], [8] * 20 + [4] * 20)
+
+
 def test_split_cluster_joins_its_track():
     tracker = Tracker(min_hits=2)
     for k in range(6):
