@@ -248,11 +248,18 @@ class Tracker:
         if self._now is not None:
             self._end_tracks(t)
         self._now = t
+        # The rows in one order of their values: the sums (centroids, Doppler updates) and so the ids do not depend
+        # on the order the rows came in (rows equal in every column are interchangeable).
+        order = np.lexsort((los, v_r, y, x, clusters))
+        x, y, v_r, los, clusters = x[order], y[order], v_r[order], los[order], clusters[order]
         member, of_cluster = self._associate(x, y, v_r, los, t, clusters)
         noise_radius = -1.0 if self.noise_radius is None else float(self.noise_radius)
         params = (self.position_noise**2, self.doppler_noise**2, DOPPLER_SIGMAS, self.min_hits, self.doppler_gate)
         arrays = (self._state, self._cov, self._ids, self._hits, self._last, self._confirmed)
-        return kernels.finish(*arrays, self._n, member, of_cluster, x, y, v_r, los, t, noise_radius, params)
+        found = kernels.finish(*arrays, self._n, member, of_cluster, x, y, v_r, los, t, noise_radius, params)
+        track_id = np.empty_like(found)
+        track_id[order] = found
+        return track_id
 
     def _end_tracks(self, t):
         """Predict the tracks to ``t``; drop those without a cluster for over ``max_age``, and the links to them."""
