@@ -64,7 +64,6 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).parent))
 
 from ablation_object_level import run_one, variants
-from scipy.optimize import linear_sum_assignment
 from sklearn.base import clone
 
 from sklearn_radar import FrameTransform
@@ -76,6 +75,7 @@ from sklearn_radar.model_selection import sequence_train_test_split
 from sklearn_radar.online import OnlinePipeline, Tracker
 from sklearn_radar.online._replay import replay
 from sklearn_radar.online._scans import scan_order
+from sklearn_radar.reproduce._baseline_tracker import NearestCentroidTracker as BaselineTracker
 
 PRESETS = ("realistic", "radarscenes", "easy")
 #: The learned step's causal model (``reproduce/_learned.py``: LEARNED_CAUSAL_PARAMS, the window, causal front).
@@ -112,54 +112,11 @@ def scenes_of(preset, seed, options):
     return scenes, train, test
 
 
-class NearestCentroidTracker:
-    """The baseline tracker a user would write: each scan's clusters to the tracks' last centroids, Hungarian method.
-
-    No motion model and no Doppler: a track is where its last cluster was.  A cluster within ``gate`` metres of a
-    track's last centroid may be assigned to it (one cluster per track, the assignment of least total distance);
-    any other cluster starts a tentative track.  The confirmation and deletion rule are the Tracker's:
-    confirmed after ``min_hits`` scans with a cluster, ended after ``max_age`` s without one.
-    """
-
-    def __init__(self, gate=2.0, min_hits=3, max_age=0.5):
-        self.gate, self.min_hits, self.max_age = gate, min_hits, max_age
-        self.xy = np.zeros((0, 2))
-        self.ids = np.zeros(0, dtype=np.int64)
-        self.hits = np.zeros(0, dtype=np.int64)
-        self.last = np.zeros(0)
-        self.next_id = 0
+class NearestCentroidTracker(BaselineTracker):
+    """The main job's baseline tracker (nearest centroid, Hungarian method), called as the Tracker is called."""
 
     def update(self, x, y, v_r, los, t, clusters):
-        alive = t - self.last <= self.max_age
-        self.xy, self.ids, self.hits, self.last = self.xy[alive], self.ids[alive], self.hits[alive], self.last[alive]
-        out = np.full(len(x), -1, dtype=np.int64)
-        rows = np.flatnonzero(clusters >= 0)
-        if len(rows) == 0:
-            return out
-        codes, member = np.unique(clusters[rows], return_inverse=True)
-        count = np.bincount(member)
-        centroid = np.c_[np.bincount(member, x[rows]), np.bincount(member, y[rows])] / count[:, None]
-        slot = np.full(len(codes), -1)
-        if len(self.ids):
-            distance = np.linalg.norm(centroid[:, None, :] - self.xy[None, :, :], axis=2)
-            cost = np.where(distance <= self.gate, distance, 1e9)
-            r, c = linear_sum_assignment(cost)
-            ok = cost[r, c] < 1e9
-            slot[r[ok]] = c[ok]
-        new = np.flatnonzero(slot < 0)
-        if len(new):
-            slot[new] = len(self.ids) + np.arange(len(new))
-            self.xy = np.r_[self.xy, centroid[new]]
-            self.ids = np.r_[self.ids, self.next_id + np.arange(len(new))]
-            self.next_id += len(new)
-            self.hits = np.r_[self.hits, np.zeros(len(new), dtype=np.int64)]
-            self.last = np.r_[self.last, np.zeros(len(new))]
-        self.xy[slot] = centroid
-        self.hits[slot] += 1
-        self.last[slot] = t
-        shown = np.where(self.hits[slot] >= self.min_hits, self.ids[slot], -1)
-        out[rows] = shown[member]
-        return out
+        return super().update(x, y, t, clusters)
 
 
 def fixed_frame(data):
