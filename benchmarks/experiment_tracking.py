@@ -31,10 +31,10 @@ Rows of the table, per preset (mean over seeds ± standard error; paired differe
 * ``learned causal + Tracker``: the Tracker on those ids, its parameters tuned on the training half's learned ids
   the same way as ``objects + Tracker`` (those ids are in-sample: the model was fitted on that half);
 * ``learned causal + objects' Tracker``: the Tracker at ``objects + Tracker``'s setting (what the main job does);
-* ``SlidingDBSCAN + nearest``: the baseline a user would write (:class:`NearestCentroidTracker` below):
-  SlidingDBSCAN's clusters of each scan associated to the tracks' last centroids with the Hungarian method, a gate
-  in metres, the same confirmation and deletion rule.  It is a class of this script, not of the library: it is the
-  comparison point (no motion model, no Doppler), not a tracker to recommend.
+* ``SlidingDBSCAN + nearest``: the baseline a user would write (the main job's baseline tracker,
+  ``reproduce/_baseline_tracker.py``): SlidingDBSCAN's clusters of each scan associated to the tracks' last centroids
+  with the Hungarian method, a gate in metres, the same confirmation and deletion rule.  It lives with the runner,
+  not in the library: it is the comparison point (no motion model, no Doppler), not a tracker to recommend.
 
 Besides, per seed, the causal per-frame PQ (``panoptic_quality`` on the streamed final ids, 0.5 s windows, against
 the pre-clustered target, as ``experiment_learned.py`` scores) of the learned stream, the object setting's stream and
