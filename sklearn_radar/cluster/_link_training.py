@@ -182,6 +182,14 @@ def cross_fit(features, targets, folds, max_iter, seed, max_rows, rng, *, out_of
     return model, np.split(proba, np.cumsum([len(t) for t in targets])[:-1]) if targets else []
 
 
+def _panoptic_quality_of(c, y, window):
+    """The tuning's objective: labels -> their panoptic quality against ``y`` in frames of ``window`` s."""
+    from ..metrics import panoptic_quality  # metrics imports the cluster package: a late import
+
+    groups = np.zeros(len(y)) if c["sequence"] is None else c["sequence"]
+    return lambda labels: panoptic_quality(y, labels, times=c["t"], groups=groups, window=window).pq
+
+
 def tune(sequences, objectness, pairs, links, grids, c, y, window):
     """The (link, objectness, min size) setting of ``grids`` with the best panoptic quality, and that quality.
 
@@ -211,10 +219,7 @@ def tune(sequences, objectness, pairs, links, grids, c, y, window):
     score : float
         Its panoptic quality.
     """
-    from ..metrics import panoptic_quality  # metrics imports the cluster package: a late import
-
-    n_rows = len(y)
-    groups = np.zeros(n_rows) if c["sequence"] is None else c["sequence"]
+    n_rows, pq = len(y), _panoptic_quality_of(c, y, window)
     link_grid, objectness_grid, size_grid = grids
     best, best_score = None, -1.0
     for gate in objectness_grid:
@@ -229,8 +234,7 @@ def tune(sequences, objectness, pairs, links, grids, c, y, window):
                 local = np.where(node, roots_at(len(s.rows), *merged, threshold), -1)
                 roots_to_rows(s.rows, local, roots)
             for size in size_grid:
-                labels = drop_small_clusters(roots, size)
-                score = panoptic_quality(y, labels, times=c["t"], groups=groups, window=window).pq
+                score = pq(drop_small_clusters(roots, size))
                 if score > best_score:
                     best, best_score = (threshold, gate, size), score
     return best, best_score
@@ -254,10 +258,7 @@ def tune_causal(sequences, objectness, pairs, links, grids, c, y, window, pair_w
     score : float
         Its panoptic quality.
     """
-    from ..metrics import panoptic_quality  # as in tune
-
-    n_rows = len(y)
-    groups = np.zeros(n_rows) if c["sequence"] is None else c["sequence"]
+    n_rows, pq = len(y), _panoptic_quality_of(c, y, window)
     link_grid, objectness_grid, size_grid = grids
     best, best_score = None, -1.0
     for gate in objectness_grid:
@@ -273,7 +274,7 @@ def tune_causal(sequences, objectness, pairs, links, grids, c, y, window, pair_w
                 roots = np.full(n_rows, -1, dtype=np.int64)
                 for s, (local, sizes) in zip(sequences, merged, strict=True):
                     roots_to_rows(s.rows, confirmed_roots(local, sizes, size), roots)
-                score = panoptic_quality(y, roots, times=c["t"], groups=groups, window=window).pq
+                score = pq(roots)
                 if score > best_score:
                     best, best_score = (threshold, gate, size), score
     return best, best_score
