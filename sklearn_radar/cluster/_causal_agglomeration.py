@@ -36,14 +36,13 @@ import numpy as np
 from numba import types
 from numba.typed import Dict, List
 
-_NEIGHBOURS = types.DictType(types.int64, types.float64)
-_COUNTS = types.DictType(types.int64, types.int64)
+_EVIDENCE = types.Tuple((types.float64, types.int64))  # (sum of P(link), number of pairs)
+_NEIGHBOURS = types.DictType(types.int64, _EVIDENCE)
 
 
 @numba.njit(cache=True, nogil=True)
 def _new_state():
-    total = Dict.empty(key_type=types.int64, value_type=_NEIGHBOURS)  # cluster -> {cluster: sum of P(link)}
-    count = Dict.empty(key_type=types.int64, value_type=_COUNTS)  # cluster -> {cluster: number of pairs}
+    evidence = Dict.empty(key_type=types.int64, value_type=_NEIGHBOURS)  # cluster -> {cluster: (sum, count)}
     size = Dict.empty(key_type=types.int64, value_type=types.int64)  # live cluster -> its nodes so far
     last = Dict.empty(key_type=types.int64, value_type=types.float64)  # live cluster -> time of its last node, s
     position = Dict.empty(key_type=types.int64, value_type=types.int64)  # recent node -> its place in the lists
@@ -51,7 +50,7 @@ def _new_state():
     clusters = List.empty_list(types.int64)  # ... their clusters now ...
     times = List.empty_list(types.float64)  # ... and their times, s
     head = np.zeros(1, dtype=np.int64)
-    return total, count, size, last, position, nodes, clusters, times, head
+    return evidence, size, last, position, nodes, clusters, times, head
 
 
 def new_state():
@@ -128,15 +127,13 @@ def _step_entry(args):
 
 @numba.njit(cache=True, nogil=True)
 def _step(state, now, new_nodes, i, j, links, window, threshold):
-    total, count, size, last, position, nodes, clusters, times, head = state
+    evidence, size, last, position, nodes, clusters, times, head = state
     # Retire the clusters that no new pair can reach, and forget the nodes that no new pair can end at.
     retired = [c for c in last.keys() if not now - last[c] <= window]
     for c in retired:
-        for other in total[c].keys():
-            del total[other][c]
-            del count[other][c]
-        del total[c]
-        del count[c]
+        for other in evidence[c].keys():
+            del evidence[other][c]
+        del evidence[c]
         del size[c]
         del last[c]
     start = head[0]
@@ -157,8 +154,7 @@ def _step(state, now, new_nodes, i, j, links, window, threshold):
         start = 0
     head[0] = start
     for node in new_nodes:
-        total[node] = Dict.empty(key_type=types.int64, value_type=types.float64)
-        count[node] = Dict.empty(key_type=types.int64, value_type=types.int64)
+        evidence[node] = Dict.empty(key_type=types.int64, value_type=_EVIDENCE)
         size[node] = 1
         last[node] = now
         position[node] = len(nodes)
@@ -190,13 +186,10 @@ def _step(state, now, new_nodes, i, j, links, window, threshold):
                 sums[slot] += links[e]
                 counts[slot] += 1
             e += 1
-        to_b, counts_b = total[b], count[b]
+        to_b = evidence[b]
         for q in range(found):
             a = distinct[q]
-            to_b[a] = sums[q]
-            total[a][b] = sums[q]
-            counts_b[a] = counts[q]
-            count[a][b] = counts[q]
+            to_b[a] = evidence[a][b] = (sums[q], counts[q])
             mean = sums[q] / counts[q]
             if mean > threshold:
                 heap.append((-mean, min(a, b), max(a, b)))
@@ -205,36 +198,31 @@ def _step(state, now, new_nodes, i, j, links, window, threshold):
     survivor = List.empty_list(types.int64)
     while len(heap):
         negative, a, b = heapq.heappop(heap)
-        if a not in size or b not in size or b not in total[a]:
+        if a not in size or b not in size:
             continue
-        if total[a][b] / count[a][b] != -negative:
+        of_a = evidence[a]
+        if b not in of_a:
+            continue
+        s, k = of_a[b]
+        if s / k != -negative:
             continue  # stale: the link changed since
         # b (the younger) joins a.
         child.append(b)
         survivor.append(a)
-        del total[a][b]
-        del count[a][b]
-        del total[b][a]
-        del count[b][a]
-        for c in list(total[b].keys()):
-            s, k = total[b][c], count[b][c]
-            del total[c][b]
-            del count[c][b]
-            if c in total[a]:
-                total[a][c] += s
-                total[c][a] += s
-                count[a][c] += k
-                count[c][a] += k
-            else:
-                total[a][c] = s
-                total[c][a] = s
-                count[a][c] = k
-                count[c][a] = k
-            mean = total[a][c] / count[a][c]
+        of_b = evidence[b]
+        del of_a[b]
+        del of_b[a]
+        for c, (s, k) in of_b.items():
+            of_c = evidence[c]
+            del of_c[b]
+            if c in of_a:
+                s_a, k_a = of_a[c]
+                s, k = s_a + s, k_a + k
+            of_a[c] = of_c[a] = (s, k)
+            mean = s / k
             if mean > threshold:
                 heapq.heappush(heap, (-mean, min(a, c), max(a, c)))
-        del total[b]
-        del count[b]
+        del evidence[b]
         if size[b] == 1:  # a cluster of one node is that node (numbered as it), which is still recent
             clusters[position[b]] = a
         else:
