@@ -73,7 +73,7 @@ from sklearn_radar.cluster import LinkClustering  # noqa: E402
 from sklearn_radar.cluster import _link_clustering as lc  # noqa: E402
 from sklearn_radar.cluster._agglomeration import mean_link_merges, roots_at  # noqa: E402
 from sklearn_radar.cluster._link_features import DETECTION_FEATURES, PAIR_FEATURES, pairs_within  # noqa: E402
-from sklearn_radar.cluster._link_training import fold_of_groups, positive_proba  # noqa: E402
+from sklearn_radar.cluster._link_training import fold_of_groups, positive_proba, tune  # noqa: E402
 from sklearn_radar.metrics import panoptic_quality  # noqa: E402
 
 RESULTS = HERE / "results"
@@ -201,32 +201,6 @@ MERGES = {
     "mean-link, old grids": mean_link_merges,
     "average linkage": average_link_merges,
 }
-
-
-def tune_merges(sequences, objectness, pairs, links, grids, c, y, window, merges_fn):
-    """``_link_training.tune`` with the merges of ``merges_fn`` (the library's loop, the grouping swapped)."""
-    n_rows = len(y)
-    groups = np.zeros(n_rows) if c["sequence"] is None else c["sequence"]
-    link_grid, objectness_grid, size_grid = grids
-    best, best_score = None, -1.0
-    for gate in objectness_grid:
-        merges = []
-        for s, p, (i, j), link in zip(sequences, objectness, pairs, links, strict=True):
-            node = p > gate
-            both = node[i] & node[j]
-            merges.append((node, merges_fn(len(s.rows), i[both], j[both], link[both], min(link_grid))))
-        for threshold in link_grid:
-            roots = np.full(n_rows, -1, dtype=np.int64)
-            for s, (node, merged) in zip(sequences, merges, strict=True):
-                local = np.where(node, roots_at(len(s.rows), *merged, threshold), -1)
-                roots_to_rows(s.rows, local, roots)
-            for size in size_grid:
-                score = panoptic_quality(
-                    y, drop_small_clusters(roots, size), times=c["t"], groups=groups, window=window
-                ).pq
-                if score > best_score:
-                    best, best_score = (threshold, gate, size), score
-    return best, best_score
 
 
 def label_merges(model, test_parts, n_rows, setting, merges_fn):
@@ -381,7 +355,7 @@ def run_designs(model, seen, fit_s, test, y_test, times, groups, designs=DESIGNS
         elif design == "average linkage":  # its links are diluted by the pairs that are no candidates: lower ones
             design_grids = (AVERAGE_LINK_GRID, grids[1], grids[2])
         start = time.perf_counter()
-        setting, score = tune_merges(sequences, objectness, pairs, links, design_grids, c, y, window, MERGES[design])
+        setting, score = tune(sequences, objectness, pairs, links, design_grids, c, y, window, MERGES[design])
         tune_s = time.perf_counter() - start
         labels = label_merges(model, parts, len(y_test), setting, MERGES[design])
         if design == DEFAULT:

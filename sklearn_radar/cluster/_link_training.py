@@ -190,7 +190,7 @@ def _panoptic_quality_of(c, y, window):
     return lambda labels: panoptic_quality(y, labels, times=c["t"], groups=groups, window=window).pq
 
 
-def tune(sequences, objectness, pairs, links, grids, c, y, window):
+def tune(sequences, objectness, pairs, links, grids, c, y, window, merges_of=mean_link_merges):
     """The (link, objectness, min size) setting of ``grids`` with the best panoptic quality, and that quality.
 
     Parameters
@@ -211,6 +211,8 @@ def tune(sequences, objectness, pairs, links, grids, c, y, window):
         Ground-truth instance of every row.
     window : float
         Frame of the panoptic quality, s.
+    merges_of : callable, default=mean_link_merges
+        The agglomeration, in the form of :func:`~._agglomeration.mean_link_merges` (a benchmark swaps it).
 
     Returns
     -------
@@ -227,7 +229,7 @@ def tune(sequences, objectness, pairs, links, grids, c, y, window):
         for s, p, (i, j), link in zip(sequences, objectness, pairs, links, strict=True):
             node = p > gate
             both = node[i] & node[j]
-            merges.append((node, mean_link_merges(len(s.rows), i[both], j[both], link[both], min(link_grid))))
+            merges.append((node, merges_of(len(s.rows), i[both], j[both], link[both], min(link_grid))))
         for threshold in link_grid:
             roots = np.full(n_rows, -1, dtype=np.int64)
             for s, (node, merged) in zip(sequences, merges, strict=True):
