@@ -58,36 +58,23 @@ def run_learned(env, key, needed):
     tables = env.sequences.map(training_table, env.train, executor=env.executor)
     X_train = pd.concat([X for X, _ in tables], ignore_index=True)
     y_train = np.concatenate([y for _, y in tables])
-    fit_start = time.perf_counter()
-    model.fit(X_train, y_train)
-    fit_s = time.perf_counter() - fit_start
-    parts = env.sequences.map(predicted_sequence, env.test, model, executor=env.executor)
-    scores = combine_instance_parts([p["instance"] for p in parts])
+    fields, parts = _fitted(env, model, X_train, y_train)
     errors = {LEARNED_NAME: _errors(parts)}
     for name, pipeline in _compared(needed):
         errors[name] = _errors(env.sequences.map(refitted_sequence, env.test, pipeline, executor=env.executor))
     causal, causal_model = _causal(env, params, X_train, y_train)
-    link = model[-1]
     result = LearnedResult(
         params=native_params({k: v for k, v in model.get_params().items() if _is_setting(k)}),
         model_file=LEARNED_FILE,
-        link_threshold=link.link_threshold_,
-        objectness_threshold=link.objectness_threshold_,
-        min_cluster_size=link.min_cluster_size_,
-        cv_pq=link.cv_score_,
-        n_training_pairs=link.n_training_pairs_,
-        fit_wall_time_s=fit_s,
-        v1_test=combine_parts("v1", [p["v1"] for p in parts]),
-        n_clusters_test=int(sum(p["n_clusters"] for p in parts)),
-        instance_test=InstanceScores(window_s=SCORE_WINDOW_S, **{k: float(scores[k]) for k in _SCORES}),
+        n_training_pairs=model[-1].n_training_pairs_,
         errors=errors,
         wall_time_s=time.perf_counter() - start,
         causal=causal,
-        model=model,
+        **fields,
     )
     summary = (
         f"    learned: test PQ {result.instance_test.pq:.3f} offline, {causal.instance_test.pq:.3f} causal (fitted in "
-        f"{fit_s:.1f} s and {causal.fit_wall_time_s:.1f} s), "
+        f"{result.fit_wall_time_s:.1f} s and {causal.fit_wall_time_s:.1f} s), "
         f"missed segments {errors[LEARNED_NAME].missed} of {errors[LEARNED_NAME].n_true} offline"
     )
     return Outcome(result, summary, models={LEARNED_FILE: model, LEARNED_CAUSAL_FILE: causal_model})
@@ -97,25 +84,30 @@ def _causal(env, params, X_train, y_train):
     """The causal learned pipeline (its filter causal too) fitted on the training half, and its record with the causal
     test scores: its ``predict``, which the stream's final ids equal."""
     model = learned_pipeline({**LEARNED_CAUSAL_PARAMS, **params, "link__causal": True, "filter__causal": True})
+    fields, _ = _fitted(env, model, X_train, y_train)
+    return LearnedCausalResult(model_file=LEARNED_CAUSAL_FILE, **fields), model
+
+
+def _fitted(env, model, X_train, y_train):
+    """Fit ``model`` on the training half and label the test half: the fields both records share, and the parts."""
     fit_start = time.perf_counter()
     model.fit(X_train, y_train)
     fit_s = time.perf_counter() - fit_start
     parts = env.sequences.map(predicted_sequence, env.test, model, executor=env.executor)
     scores = combine_instance_parts([p["instance"] for p in parts])
     link = model[-1]
-    record = LearnedCausalResult(
-        model_file=LEARNED_CAUSAL_FILE,
-        link_threshold=link.link_threshold_,
-        objectness_threshold=link.objectness_threshold_,
-        min_cluster_size=link.min_cluster_size_,
-        cv_pq=link.cv_score_,
-        fit_wall_time_s=fit_s,
-        v1_test=combine_parts("v1", [p["v1"] for p in parts]),
-        n_clusters_test=int(sum(p["n_clusters"] for p in parts)),
-        instance_test=InstanceScores(window_s=SCORE_WINDOW_S, **{k: float(scores[k]) for k in _SCORES}),
-        model=model,
-    )
-    return record, model
+    fields = {
+        "link_threshold": link.link_threshold_,
+        "objectness_threshold": link.objectness_threshold_,
+        "min_cluster_size": link.min_cluster_size_,
+        "cv_pq": link.cv_score_,
+        "fit_wall_time_s": fit_s,
+        "v1_test": combine_parts("v1", [p["v1"] for p in parts]),
+        "n_clusters_test": int(sum(p["n_clusters"] for p in parts)),
+        "instance_test": InstanceScores(window_s=SCORE_WINDOW_S, **{k: float(scores[k]) for k in _SCORES}),
+        "model": model,
+    }
+    return fields, parts
 
 
 def _is_setting(name):
