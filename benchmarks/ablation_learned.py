@@ -444,12 +444,6 @@ def run_seed(preset, seed, phases, options):
 # ------------------------------------------------------------------------------------------ summary
 
 
-def _mean_2se(values):
-    values = np.asarray(values, dtype=np.float64)
-    se = values.std(ddof=1) / math.sqrt(len(values)) if len(values) > 1 else float("nan")
-    return f"{values.mean():+.3f} ± {2 * se:.3f}"
-
-
 def summary(directory):
     rows = []
     for path in sorted(directory.glob("ablation_learned_*.json")):
@@ -477,7 +471,7 @@ def summary(directory):
                 continue
             both = pq[list(dict.fromkeys([DEFAULT, method]))].dropna()
             fit = part[part.method == method].fit_s.mean()
-            difference = _mean_2se(both[method] - both[DEFAULT]) if method != DEFAULT else ""
+            difference = experiment._mean_2se(both[method] - both[DEFAULT]) if method != DEFAULT else ""
             print(
                 f"{method:<26} {len(both):>5} {both[method].mean():6.3f} {recall.loc[both.index, method].mean():6.3f} "
                 f"{fit:6.0f}  {difference}"
@@ -486,8 +480,8 @@ def summary(directory):
             both = pq[[DEFAULT, "objects", "baseline"]].dropna()
             best = np.maximum(both.objects, both.baseline)
             print(
-                f"{DEFAULT} - objects: {_mean_2se(both[DEFAULT] - both.objects)}; {DEFAULT} - max(objects, baseline): "
-                f"{_mean_2se(both[DEFAULT] - best)} ({len(both)} seeds)"
+                f"{DEFAULT} - objects: {experiment._mean_2se(both[DEFAULT] - both.objects)}; {DEFAULT} - max(objects, baseline): "
+                f"{experiment._mean_2se(both[DEFAULT] - best)} ({len(both)} seeds)"
             )
         missed = {m: _missed(rows, preset, m, default.index) for m in (DEFAULT, "old grids, refit", "objects")}
         missed = {m: v for m, v in missed.items() if v is not None}
@@ -518,7 +512,7 @@ def rst_table(table):
             both = pq[list(dict.fromkeys([DEFAULT, method]))].dropna()
             cell = f"{both[method].mean():.3f}"
             if method != DEFAULT:
-                cell += f" ({_mean_2se(both[method] - both[DEFAULT])})"
+                cell += f" ({experiment._mean_2se(both[method] - both[DEFAULT])})"
             if len(both) < len(pq[DEFAULT].dropna()):
                 cell += f" [{len(both)} seeds]"
             cells.append(cell)
