@@ -66,6 +66,7 @@ sys.path.insert(0, str(HERE))
 
 import bench_link_clustering as bench  # noqa: E402
 import experiment_learned as experiment  # noqa: E402
+from experiment_learned import _mean_2se  # noqa: E402
 
 from sklearn_radar._labels import consecutive_labels, drop_small_clusters, roots_to_rows  # noqa: E402
 from sklearn_radar._validation import read_columns  # noqa: E402
@@ -449,6 +450,8 @@ def summary(directory):
     for path in sorted(directory.glob("ablation_learned_*.json")):
         rows.extend(json.loads(path.read_text()))
     for path in sorted(directory.glob("learned_*_seed*.json")):
+        if path.name.startswith("learned_causal_"):
+            continue  # (the causal rows are experiment_learned's, not the offline ones this table pairs with)
         for r in json.loads(path.read_text()):
             name = {"learned": "old grids, refit", "objects": "objects", "baseline": "baseline"}[r["method"]]
             rows.append({**r, "method": name})
@@ -471,7 +474,7 @@ def summary(directory):
                 continue
             both = pq[list(dict.fromkeys([DEFAULT, method]))].dropna()
             fit = part[part.method == method].fit_s.mean()
-            difference = experiment._mean_2se(both[method] - both[DEFAULT]) if method != DEFAULT else ""
+            difference = _mean_2se(both[method] - both[DEFAULT]) if method != DEFAULT else ""
             print(
                 f"{method:<26} {len(both):>5} {both[method].mean():6.3f} {recall.loc[both.index, method].mean():6.3f} "
                 f"{fit:6.0f}  {difference}"
@@ -480,8 +483,8 @@ def summary(directory):
             both = pq[[DEFAULT, "objects", "baseline"]].dropna()
             best = np.maximum(both.objects, both.baseline)
             print(
-                f"{DEFAULT} - objects: {experiment._mean_2se(both[DEFAULT] - both.objects)}; {DEFAULT} - max(objects, baseline): "
-                f"{experiment._mean_2se(both[DEFAULT] - best)} ({len(both)} seeds)"
+                f"{DEFAULT} - objects: {_mean_2se(both[DEFAULT] - both.objects)}; {DEFAULT} - max(objects, baseline): "
+                f"{_mean_2se(both[DEFAULT] - best)} ({len(both)} seeds)"
             )
         missed = {m: _missed(rows, preset, m, default.index) for m in (DEFAULT, "old grids, refit", "objects")}
         missed = {m: v for m, v in missed.items() if v is not None}
@@ -512,7 +515,7 @@ def rst_table(table):
             both = pq[list(dict.fromkeys([DEFAULT, method]))].dropna()
             cell = f"{both[method].mean():.3f}"
             if method != DEFAULT:
-                cell += f" ({experiment._mean_2se(both[method] - both[DEFAULT])})"
+                cell += f" ({_mean_2se(both[method] - both[DEFAULT])})"
             if len(both) < len(pq[DEFAULT].dropna()):
                 cell += f" [{len(both)} seeds]"
             cells.append(cell)
