@@ -44,15 +44,23 @@ def keep_new(x, y, t, v_r, first_new, radius2, before, limits, min_neighbors):
     ``t`` is sorted (s); ``v_r`` (m/s) holds the new points' velocities only.
     A point j counts for i when ``t_i - before <= t_j <= t_i``,
     ``(x_j - x_i)^2 + (y_j - y_i)^2 <= radius2`` (m^2) and ``j != i``: the
-    offline causal count (its cap changes no decision of Eq. 1).  The
-    decision is :func:`removed_by_eq1` (its cost: :ref:`online-speed`).
+    offline causal count (its cap changes no decision of Eq. 1); the count
+    of a point stops once it reaches the number past which no rule of Eq. 1
+    removes it.  The decision is :func:`removed_by_eq1` (its cost:
+    :ref:`online-speed`).
     """
     low = np.searchsorted(t, t[first_new] - before)
     keep = np.empty(len(t) - first_new, dtype=np.bool_)
     for k in range(len(keep)):
-        xi, yi = x[first_new + k], y[first_new + k]
+        xi, yi, speed = x[first_new + k], y[first_new + k], abs(v_r[k])
+        enough = 1  # neighbours past which no rule of Eq. 1 removes this point
+        for rule in range(len(limits)):
+            if speed < limits[rule] and min_neighbors[rule] > enough:
+                enough = min_neighbors[rule]
         count = -1  # each point is within 0 m of itself
         for j in range(low, len(t)):
             count += (x[j] - xi) ** 2 + (y[j] - yi) ** 2 <= radius2
-        keep[k] = not _removed_by_eq1(abs(v_r[k]), count, limits, min_neighbors)
+            if count >= enough:
+                break  # (before the point itself is met, count is one short: the decision stands all the more)
+        keep[k] = not _removed_by_eq1(speed, count, limits, min_neighbors)
     return keep
