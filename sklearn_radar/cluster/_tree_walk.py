@@ -17,7 +17,8 @@ P(class 1) is its logistic function.
 The rows of a batch walk a tree in lockstep, one level at a time for as
 many levels as the tree's deepest leaf, each leaf being its own child: the
 rows' steps are independent of each other, so the processor overlaps them
-instead of waiting on one row's chain of loads and mispredicted branches.  Classifiers that this walk does not
+instead of waiting on one row's chain of loads and mispredicted branches.  A batch without NaN, the usual case,
+walks with one comparison per step.  Classifiers that this walk does not
 cover (categorical splits, more than two classes, a structure of private
 attributes that differs from scikit-learn 1.6-1.9's) give None, and the
 caller keeps ``predict_proba``.
@@ -211,14 +212,30 @@ def _walk(X, feature, threshold, missing_go_right, children, value, offset, dept
     n = X.shape[0]
     raw = np.full(n, baseline)
     node = np.empty(n, dtype=np.int32)  # (32-bit rows and features: fewer bytes loaded per step)
+    finite = not _has_nan(X)
     for tree in range(len(depth)):  # tree by tree (its nodes stay in cache), each row's sum in the trees' order
         node[:] = offset[tree]
-        for _ in range(depth[tree]):  # level by level, the rows in lockstep (a leaf is its own child)
-            for row in range(n):
-                k = node[row]
-                x = X[row, feature[k]]
-                right = (x > threshold[k]) | ((x != x) & missing_go_right[k])
-                node[row] = children[k, np.int32(right)]
+        if finite:  # (no NaN: one comparison per step; the branch is taken once per tree)
+            for _ in range(depth[tree]):  # level by level, the rows in lockstep (a leaf is its own child)
+                for row in range(n):
+                    k = node[row]
+                    node[row] = children[k, np.int32(X[row, feature[k]] > threshold[k])]
+        else:
+            for _ in range(depth[tree]):
+                for row in range(n):
+                    k = node[row]
+                    x = X[row, feature[k]]
+                    right = (x > threshold[k]) | ((x != x) & missing_go_right[k])
+                    node[row] = children[k, np.int32(right)]
         for row in range(n):
             raw[row] += value[node[row]]
     return 1.0 / (1.0 + np.exp(-raw))
+
+
+@numba.njit(cache=True, nogil=True)
+def _has_nan(X):
+    for row in range(X.shape[0]):
+        for column in range(X.shape[1]):
+            if X[row, column] != X[row, column]:
+                return True
+    return False

@@ -25,9 +25,14 @@ def _data(n, n_features, seed, nan_fraction=0.1):
 
 
 def _same_as_sklearn(classifier, X):
+    """The walk equals predict_proba on X and on its rows without NaN (a batch without NaN walks another loop)."""
     compiled = compile_boosting(classifier)
     assert compiled is not None
-    np.testing.assert_allclose(boosting_proba(compiled, X), classifier.predict_proba(X)[:, 1], rtol=0, atol=1e-12)
+    finite = X[~np.isnan(X).any(axis=1)]
+    assert len(finite)
+    for batch in (X, finite):
+        expected = classifier.predict_proba(batch)[:, 1]
+        np.testing.assert_allclose(boosting_proba(compiled, batch), expected, rtol=0, atol=1e-12)
 
 
 @pytest.mark.parametrize(
