@@ -162,6 +162,7 @@ def test_the_report_leads_with_the_object_setting_and_the_baseline(tracked):
     assert baseline < first_paper
     assert "(tuned #13)" in section and "(paper's #8)" in section
     assert "most of their clusters are static background" in section
+    assert "on the objects setting's ids" in section and "The run has no object experiment" not in section
     assert "![tracks](tracks.png)" in section and (tracked / "tracks.png").is_file()
     glance = report.split("## At a glance")[1].split("\n## ")[0]
     assert "tracking online, test half:" in glance and "the baseline tracker (SlidingDBSCAN" in glance
@@ -278,3 +279,18 @@ def test_results_without_tracking_still_load():
         results = RunResults.read(path)
         assert results.tracking is None
         assert _tracking.markdown(results) == []
+
+
+def test_the_tuning_sentence_says_defaults_only_when_no_tracker_was_tuned():
+    from types import SimpleNamespace
+
+    from sklearn_radar.reproduce._sections._tracking import _tuned_lines
+
+    tuned = SimpleNamespace(
+        tuned_on="objects", criterion="MOTA", n_candidates=12, params={"min_hits": 8}, train_score=0.1
+    )
+    learned = SimpleNamespace(criterion="MOTA", params={"min_hits": 3}, train_score=0.2)
+    untuned = _tuned_lines(SimpleNamespace(tracker=None, learned_tracker=learned, baseline=None))[0]
+    assert "The run has no object experiment" in untuned and "min_hits=3" in untuned
+    both = _tuned_lines(SimpleNamespace(tracker=tuned, learned_tracker=None, baseline=None))[0]
+    assert "on the objects setting's ids" in both and "The run has no object experiment" not in both

@@ -116,6 +116,11 @@ def _tuned_lines(step):
             f"{tracker.criterion} {tracker.train_score:.3f}); every setting above but the learned grouping runs "
             "with them. `params.json` saves them under `tracker` for `sklearn-radar stream --track`."
         )
+    else:
+        lines.append(
+            "The run has no object experiment, on whose ids the Tracker is tuned: it ran at its defaults "
+            "(`--experiments objects,tracking` tunes it)."
+        )
     learned = step.learned_tracker
     if learned is not None:
         lines.append(
@@ -123,11 +128,6 @@ def _tuned_lines(step):
             "step on the training half), with a Tracker chosen the same way on that stream's training-half ids "
             f"(in-sample: the model was fitted on that half): {_values(learned.params)} (training "
             f"{learned.criterion} {learned.train_score:.3f})."
-        )
-    else:
-        lines.append(
-            "The run has no object experiment, on whose ids the Tracker is tuned: it ran at its defaults "
-            "(`--experiments objects,tracking` tunes it)."
         )
     baseline = step.baseline
     if baseline is not None:
