@@ -108,7 +108,8 @@ def test_baselines_tuned_for_another_objective_are_not_set_beside_the_object_exp
     pq_run = dataclasses.replace(v1_run, meta=dataclasses.replace(results.meta, objective="pq"))
     section = "\n".join(_objects.markdown(pq_run))
     assert "| offline baseline | past and future | PQ | 0.116 |" in section and _objects.NOT_COMPARED not in section
-    assert "against 0.116 for offline baseline, also tuned for PQ" in "\n".join(_summary.markdown(pq_run))
+    glance = "\n".join(_summary.markdown(pq_run))
+    assert "against 0.116 for offline baseline, also tuned for PQ (one run: no verdict)" in glance
 
 
 def test_the_baselines_beside_the_object_experiment_are_chosen_by_cv_score_not_test_score():
@@ -127,3 +128,12 @@ def test_the_baselines_beside_the_object_experiment_are_chosen_by_cv_score_not_t
     }
     offline, causal = _best_baselines(SimpleNamespace(baselines=baselines))
     assert offline[0] == "per sequence A" and causal[0] == f"window ({CAUSAL_MARK}) D"
+
+
+def test_the_glance_verdict_on_the_object_experiment_against_a_baseline_names_its_direction():
+    from sklearn_radar.reproduce._sections._objects import _said
+
+    assert _said([0.5], [0.6]) == "one run: no verdict"
+    assert _said([0.50, 0.60, 0.55], [0.40, 0.49, 0.45]) == "3 repeats: higher beyond 2 standard errors"
+    assert _said([0.40, 0.49, 0.45], [0.50, 0.60, 0.55]) == "3 repeats: lower beyond 2 standard errors"
+    assert _said([0.50, 0.40, 0.45], [0.45, 0.45, 0.45]) == "3 repeats: within the noise"

@@ -89,9 +89,7 @@ def glance_line(results: RunResults):
         part = f"{values_cell(pq, 'pq')} {mode}"
         if baseline is not None:
             theirs = repeated_scores(baseline[1], "pq")
-            n = min(len(pq), len(theirs))
-            said = paired_verdict(np.subtract(pq[:n], theirs[:n]))[0]
-            part += f" against {values_cell(theirs, 'pq')} for {baseline[0]}, also tuned for PQ (higher: {said})"
+            part += f" against {values_cell(theirs, 'pq')} for {baseline[0]}, also tuned for PQ ({_said(pq, theirs)})"
         parts.append(part)
     apart = (
         " (not set beside the baselines, which this run tuned for V1: `--objective pq` compares them)"
@@ -102,6 +100,18 @@ def glance_line(results: RunResults):
         f"the framework set up for objects, tuned for PQ: test PQ {'; '.join(parts)}{apart}; its section has the "
         "details."
     )
+
+
+def _said(ours, theirs):
+    """The paired verdict on "ours is higher" in a few words: one run gives none."""
+    n = min(len(ours), len(theirs))
+    if n < 2:
+        return "one run: no verdict"
+    said = paired_verdict(np.subtract(ours[:n], theirs[:n]))[0]
+    where = {HOLDS: "higher", DOES_NOT_HOLD: "lower"}.get(said)
+    if where is None:
+        return f"{n} repeats: within the noise"
+    return f"{n} repeats: {where} beyond {N_STANDARD_ERRORS:g} standard errors"
 
 
 def _best_baselines(results: RunResults):
