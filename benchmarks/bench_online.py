@@ -9,7 +9,7 @@ sequences of 20 s of the realistic preset, other seeds than the stream's;
 ``--learned-max-iter`` boosting iterations, 40 as the main job's causal
 model; ``--learned-max-links`` its ``max_links_per_detection``, 16 as the
 main job's, ``none`` for every pair; ``--learned-max-leaf-nodes`` its
-``max_leaf_nodes``), trained
+``max_leaf_nodes``, ``--learned-max-depth`` its ``max_depth``), trained
 on the pre-clustered instances as the main job trains it, thresholds
 tuned as ``LinkClustering`` tunes them; the fit time and the thresholds
 are printed.
@@ -66,7 +66,7 @@ LEARNED = 0
 LEARNED_MODEL_ENV = "SKLEARN_RADAR_BENCH_LEARNED_MODEL"
 
 
-def fit_learned(n_sequences, path, max_iter, max_links=None, max_leaf_nodes=31):
+def fit_learned(n_sequences, path, max_iter, max_links=None, max_leaf_nodes=31, max_depth=None):
     """Fit the causal learned pipeline on simulated training sequences; save it to ``path``; print what it took."""
     import joblib
     from sklearn.pipeline import Pipeline
@@ -91,6 +91,7 @@ def fit_learned(n_sequences, path, max_iter, max_links=None, max_leaf_nodes=31):
                     random_state=0,
                     max_links_per_detection=max_links,
                     max_leaf_nodes=max_leaf_nodes,
+                    max_depth=max_depth,
                 ),
             ),
         ]
@@ -242,6 +243,12 @@ def main():
     parser.add_argument(
         "--learned-max-leaf-nodes", type=int, default=31, help="max_leaf_nodes of the learned one's classifiers"
     )
+    parser.add_argument(
+        "--learned-max-depth",
+        type=lambda text: None if text == "none" else int(text),
+        default=None,
+        help="max_depth of the learned one's classifiers ('none', the default: as deep as the leaves allow)",
+    )
     parser.add_argument("--child", nargs=3, type=int, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
@@ -256,7 +263,12 @@ def main():
 
         path = os.path.join(tempfile.mkdtemp(), "learned_causal.joblib")
         fit_learned(
-            args.learned_train, path, args.learned_max_iter, args.learned_max_links, args.learned_max_leaf_nodes
+            args.learned_train,
+            path,
+            args.learned_max_iter,
+            args.learned_max_links,
+            args.learned_max_leaf_nodes,
+            args.learned_max_depth,
         )
         os.environ[LEARNED_MODEL_ENV] = path
         numbers.append(LEARNED)

@@ -23,8 +23,9 @@ prints per preset the test PQ per method, the paired differences ``learned - obj
 
 ``--method learned_causal`` runs the causal learned grouping alone on the same data and split:
 ``LinkClustering(causal=True, max_iter=40)`` (the main job's causal model) fitted on the training half through a front
-whose filter is causal too (``--max-links`` and ``--max-leaf-nodes`` set its ``max_links_per_detection`` and
-``max_leaf_nodes``), the test half labelled by its ``predict`` (what ``OnlinePipeline`` streams), saved as
+whose filter is causal too (``--max-links``, ``--max-leaf-nodes`` and ``--max-depth`` set
+its ``max_links_per_detection``, ``max_leaf_nodes`` and ``max_depth``), the test half labelled by its ``predict``
+(what ``OnlinePipeline`` streams), saved as
 ``learned_causal_<preset>_seed<seed>.json``; ``--summary`` then sets it beside the saved offline rows of the same
 seeds.  The object experiment's saved rows hold its stage-2 setting only (not its stage 1), so its causal score is
 not recomputed here: the main job's learned section has it, with the sliding-window baseline.
@@ -117,6 +118,7 @@ def run_causal(preset, seed, options):
         max_iter=40,
         max_links_per_detection=options.max_links,
         max_leaf_nodes=options.max_leaf_nodes,
+        max_depth=options.max_depth,
         n_jobs=options.threads,
     )
     record = _learned_record("learned_causal", model, train, y_train, test, y_test, options)
@@ -255,6 +257,12 @@ def main(argv=None):
     )
     parser.add_argument(
         "--max-leaf-nodes", type=int, default=31, help="max_leaf_nodes of the causal learned grouping's classifiers"
+    )
+    parser.add_argument(
+        "--max-depth",
+        type=lambda text: None if text == "none" else int(text),
+        default=None,
+        help="max_depth of the causal learned grouping's classifiers ('none', the default: as the leaves allow)",
     )
     options = parser.parse_args(argv)
     if not options.summary:

@@ -128,6 +128,10 @@ class LinkClustering(ClusterMixin, BaseEstimator):
     max_leaf_nodes : int >= 2, default=31
         Most leaves of each tree of both classifiers; smaller trees walk
         faster scan by scan (see :ref:`online-learned`).
+    max_depth : int >= 1 or None, default=None
+        Most splits from the root of each tree of both classifiers to a leaf
+        (None: as many as ``max_leaf_nodes`` allows); a scan's rows walk a
+        tree as many levels as its deepest leaf (see :ref:`online-learned`).
     max_pairs : int, default=400_000
         Training pairs per fit of the link classifier; more are subsampled at random.
     cv : int, default=5
@@ -232,6 +236,7 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         "pair_window": [Interval(Real, 0, None, closed="left")],
         "max_iter": [Interval(Integral, 1, None, closed="left")],
         "max_leaf_nodes": [Interval(Integral, 2, None, closed="left")],
+        "max_depth": [None, Interval(Integral, 1, None, closed="left")],
         "max_pairs": [Interval(Integral, 1, None, closed="left")],
         "cv": [Interval(Integral, 2, None, closed="left")],
         "window": [Interval(Real, 0, None, closed="neither")],
@@ -251,6 +256,7 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         pair_window=0.25,
         max_iter=150,
         max_leaf_nodes=31,
+        max_depth=None,
         max_pairs=400_000,
         cv=5,
         window=0.5,
@@ -266,6 +272,7 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         self.pair_window = pair_window
         self.max_iter = max_iter
         self.max_leaf_nodes = max_leaf_nodes
+        self.max_depth = max_depth
         self.max_pairs = max_pairs
         self.cv = cv
         self.window = window
@@ -276,9 +283,10 @@ class LinkClustering(ClusterMixin, BaseEstimator):
 
     def __setstate__(self, state):
         # A model pickled before max_links_per_detection existed formed every candidate pair; one pickled before
-        # max_leaf_nodes existed had trees of 31 leaves.
+        # max_leaf_nodes (max_depth) existed had trees of 31 leaves (of any depth).
         state.setdefault("max_links_per_detection", None)
         state.setdefault("max_leaf_nodes", 31)
+        state.setdefault("max_depth", None)
         super().__setstate__(state)
 
     @_fit_context(prefer_skip_nested_validation=True)
@@ -389,6 +397,7 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         folds = fold_of_groups(groups, self.cv) if n_groups >= 2 else [np.zeros(len(g), np.int64) for g in groups]
         seeds = rng.randint(np.iinfo(np.int32).max, size=2)
         # Objectness: out-of-fold probabilities of the training detections (what the pairs and the tuning see).
+        tree = {"max_leaf_nodes": self.max_leaf_nodes, "max_depth": self.max_depth}
         features = [s.features[:, detection_columns] for s in sequences]
         targets = [y[s.rows] >= 0 for s in sequences]
         self.objectness_classifier_, objectness = cross_fit(
@@ -400,7 +409,7 @@ class LinkClustering(ClusterMixin, BaseEstimator):
             None,
             rng,
             out_of_fold=n_groups >= 2,
-            max_leaf_nodes=self.max_leaf_nodes,
+            tree=tree,
         )
         floor = min(CANDIDATE_OBJECTNESS, min(grids[1]))
         pair_x, pair_y, pairs = [], [], []
@@ -421,7 +430,7 @@ class LinkClustering(ClusterMixin, BaseEstimator):
             self.max_pairs,
             rng,
             out_of_fold=tuning,
-            max_leaf_nodes=self.max_leaf_nodes,
+            tree=tree,
         )
         if tuning and self.causal:
             setting, score = tune_causal(

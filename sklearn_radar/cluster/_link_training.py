@@ -24,7 +24,7 @@ WALK_ROWS = 4096
 _COMPILED = weakref.WeakKeyDictionary()
 
 
-def binary_classifier(max_iter, seed, early_stopping, max_leaf_nodes=31):
+def binary_classifier(max_iter, seed, early_stopping, max_leaf_nodes=31, max_depth=None):
     """The classifier of objectness and links: histogram gradient boosting.
 
     Parameters
@@ -37,6 +37,8 @@ def binary_classifier(max_iter, seed, early_stopping, max_leaf_nodes=31):
         Stop when the loss on a 10 % hold-out has not improved for 10 iterations.
     max_leaf_nodes : int, default=31
         The most leaves of each tree.
+    max_depth : int or None, default=None
+        The most splits from a tree's root to a leaf (None: as many as the leaves allow).
 
     Returns
     -------
@@ -50,18 +52,19 @@ def binary_classifier(max_iter, seed, early_stopping, max_leaf_nodes=31):
         max_iter=max_iter,
         learning_rate=0.1,
         max_leaf_nodes=max_leaf_nodes,
+        max_depth=max_depth,
         early_stopping=early_stopping,
         random_state=seed,
     )
 
 
-def _fit(X, y, max_iter, seed, max_leaf_nodes=31):
+def _fit(X, y, max_iter, seed, tree):
     """A fitted classifier of the boolean ``y``; the constant P(True) when ``y`` holds one class or none."""
     n_true = int(np.count_nonzero(y))
     if n_true in (0, len(y)):
         return float(y[0]) if len(y) else 0.0
     early = len(y) > EARLY_STOPPING_ROWS and min(n_true, len(y) - n_true) >= EARLY_STOPPING_CLASS_ROWS
-    return binary_classifier(max_iter, seed, early, max_leaf_nodes).fit(X, y)
+    return binary_classifier(max_iter, seed, early, **tree).fit(X, y)
 
 
 def positive_proba(model, X):
@@ -130,7 +133,7 @@ def fold_of_groups(groups, cv):
     return np.split(fold, np.cumsum([len(g) for g in groups])[:-1])
 
 
-def cross_fit(features, targets, folds, max_iter, seed, max_rows, rng, *, out_of_fold, max_leaf_nodes=31):
+def cross_fit(features, targets, folds, max_iter, seed, max_rows, rng, *, out_of_fold, tree=None):
     """A classifier fitted on every sequence's rows, and its out-of-fold probabilities of them.
 
     Parameters
@@ -152,8 +155,9 @@ def cross_fit(features, targets, folds, max_iter, seed, max_rows, rng, *, out_of
     out_of_fold : bool
         True: the probabilities of each fold come from a classifier fitted on the other folds.  False: from the
         final classifier (in-sample).
-    max_leaf_nodes : int, default=31
-        The most leaves of each tree.
+    tree : dict, default=None
+        The trees' size, as keyword arguments of :func:`binary_classifier` (``max_leaf_nodes``, ``max_depth``);
+        None: its defaults.
 
     Returns
     -------
@@ -169,7 +173,7 @@ def cross_fit(features, targets, folds, max_iter, seed, max_rows, rng, *, out_of
     def fit(rows):
         if max_rows is not None and len(rows) > max_rows:
             rows = rows[np.sort(rng.choice(len(rows), max_rows, replace=False))]
-        return _fit(X[rows], y[rows], max_iter, seed, max_leaf_nodes)
+        return _fit(X[rows], y[rows], max_iter, seed, tree or {})
 
     proba = np.empty(len(y))
     if out_of_fold:

@@ -149,14 +149,14 @@ def test_a_model_pickled_before_max_links_per_detection_forms_every_pair(data, f
     np.testing.assert_array_equal(loaded.predict(X), fitted.predict(X))
 
 
-def test_a_model_pickled_before_max_leaf_nodes_had_trees_of_31_leaves(data, fitted):
+def test_a_model_pickled_before_max_leaf_nodes_had_trees_of_31_leaves_and_any_depth(data, fitted):
     X, _ = data
     old = clone(fitted)
     old.__dict__.update(fitted.__dict__)
-    del old.__dict__["max_leaf_nodes"]  # as pickled by the version without the parameter
+    del old.__dict__["max_leaf_nodes"], old.__dict__["max_depth"]  # as pickled by the version without them
     loaded = pickle.loads(pickle.dumps(old))
-    assert loaded.max_leaf_nodes == 31
-    assert loaded.link_classifier_.max_leaf_nodes == 31
+    assert loaded.max_leaf_nodes == 31 and loaded.max_depth is None
+    assert loaded.link_classifier_.max_leaf_nodes == 31 and loaded.link_classifier_.max_depth is None
     np.testing.assert_array_equal(loaded.predict(X), fitted.predict(X))
 
 
@@ -166,3 +166,13 @@ def test_max_leaf_nodes_reaches_both_classifiers(data):
     for classifier in (model.objectness_classifier_, model.link_classifier_):
         assert classifier.max_leaf_nodes == 7
         assert max(predictor[0].get_n_leaf_nodes() for predictor in classifier._predictors) <= 7
+
+
+def test_max_depth_reaches_both_classifiers(data):
+    X, y = data
+    model = LinkClustering(**{**FIXED, "max_depth": 3}).fit(X, y)
+    for classifier in (model.objectness_classifier_, model.link_classifier_):
+        assert classifier.max_depth == 3
+        assert max(predictor[0].get_max_depth() for predictor in classifier._predictors) <= 3
+    unlimited = LinkClustering(**FIXED).fit(X, y).link_classifier_
+    assert max(predictor[0].get_max_depth() for predictor in unlimited._predictors) > 3  # the cap bites here
