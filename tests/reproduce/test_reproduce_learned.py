@@ -147,13 +147,7 @@ def test_cluster_applies_the_saved_model_to_the_run_s_test_labels(learned_run, t
     with contextlib.redirect_stdout(io.StringIO()) as said:
         assert main([*args, "--experiment", "learned"]) == 0
     assert "applied experiment 'learned'" in said.getvalue()
-    predictions = json.loads(out.read_text())["predictions"]
-    for number in results["meta"]["data"]["test_sequences"]:
-        X, _, data = _sequence_table(tiny_folder, number)
-        expected = model.predict(X)
-        applied = np.array([predictions[u][1] for u in data["uuid"]])
-        assert np.array_equal(applied >= 0, expected >= 0)
-        assert adjusted_rand_score(expected[expected >= 0], applied[applied >= 0]) == pytest.approx(1.0)
+    _assert_predictions_are_the_models(out, model, results, tiny_folder)
 
 
 def test_stream_runs_the_causal_model(learned_run, tiny_folder, tmp_path):
@@ -169,13 +163,7 @@ def test_stream_runs_the_causal_model(learned_run, tiny_folder, tmp_path):
     args = ["stream", "--data", str(tiny_folder), "--params", str(learned_run / "params.json"), "--out", str(out)]
     with contextlib.redirect_stdout(io.StringIO()):
         assert main([*args, "--experiment", "learned"]) == 0
-    predictions = json.loads(out.read_text())["predictions"]
-    for number in results["meta"]["data"]["test_sequences"]:
-        X, _, data = _sequence_table(tiny_folder, number)
-        expected = model.predict(X)
-        streamed = np.array([predictions[u][1] for u in data["uuid"]])
-        assert np.array_equal(streamed >= 0, expected >= 0)
-        assert adjusted_rand_score(expected[expected >= 0], streamed[streamed >= 0]) == pytest.approx(1.0)
+    _assert_predictions_are_the_models(out, model, results, tiny_folder)
 
 
 def test_stream_of_a_learned_entry_without_a_causal_model_names_it(learned_run, tiny_folder, tmp_path, capsys):
@@ -221,3 +209,14 @@ def test_a_classifier_file_is_not_a_learned_model(tmp_path):
     save_classifier(model.fit(scenes.data, road_user_class(scenes.data["label_id"])), tmp_path / "c.joblib")
     with pytest.raises(ValueError, match=r"c\.joblib: must hold a fitted LinkClustering .*ending in ClusterClassifier"):
         load_learned(tmp_path / "c.joblib")
+
+
+def _assert_predictions_are_the_models(out, model, results, folder):
+    """The predictions file ``out`` clusters each test sequence as ``model.predict`` does (the same partition)."""
+    predictions = json.loads(out.read_text())["predictions"]
+    for number in results["meta"]["data"]["test_sequences"]:
+        X, _, data = _sequence_table(folder, number)
+        expected = model.predict(X)
+        found = np.array([predictions[u][1] for u in data["uuid"]])
+        assert np.array_equal(found >= 0, expected >= 0)
+        assert adjusted_rand_score(expected[expected >= 0], found[found >= 0]) == pytest.approx(1.0)
