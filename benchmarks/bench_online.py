@@ -6,10 +6,11 @@ Run: ``python benchmarks/bench_online.py [--minutes 10] [--experiments 1 8 12 13
 frame transform and the filter, row ``learned``), fitted once before the
 streams on a simulated training recording of its own (``--learned-train``
 sequences of 20 s of the realistic preset, other seeds than the stream's;
-``--learned-max-iter`` boosting iterations, 40 as the main job's causal
-model; ``--learned-max-links`` its ``max_links_per_detection``, 16 as the
-main job's, ``none`` for every pair; ``--learned-max-leaf-nodes`` its
-``max_leaf_nodes``, ``--learned-max-depth`` its ``max_depth``), trained
+``--learned-max-iter`` boosting iterations, ``--learned-max-links`` its
+``max_links_per_detection`` (``none`` for every pair),
+``--learned-max-depth`` its ``max_depth``, by default those of the main
+job's causal model (``LEARNED_CAUSAL_PARAMS``: 40, 16, 6);
+``--learned-max-leaf-nodes`` its ``max_leaf_nodes``), trained
 on the pre-clustered instances as the main job trains it, thresholds
 tuned as ``LinkClustering`` tunes them; the fit time and the thresholds
 are printed.
@@ -221,6 +222,8 @@ def run(number, minutes, objects, one_minute=False):
 
 
 def main():
+    from sklearn_radar.reproduce._learned import LEARNED_CAUSAL_PARAMS as MAIN_JOB
+
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--minutes", type=int, default=10)
     parser.add_argument("--experiments", type=int, nargs="*", default=[1, 8, 12, 13])
@@ -233,12 +236,17 @@ def main():
     )
     parser.add_argument("--learned", action="store_true", help="add the learned grouping (causal LinkClustering)")
     parser.add_argument("--learned-train", type=int, default=4, help="training sequences (20 s) of the learned one")
-    parser.add_argument("--learned-max-iter", type=int, default=40, help="boosting iterations of the learned one")
+    parser.add_argument(
+        "--learned-max-iter",
+        type=int,
+        default=MAIN_JOB["link__max_iter"],
+        help="boosting iterations of the learned one (default: the main job's causal model's)",
+    )
     parser.add_argument(
         "--learned-max-links",
         type=lambda value: None if value == "none" else int(value),
-        default=16,
-        help="max_links_per_detection of the learned one, 16 as the main job's causal model ('none': every pair)",
+        default=MAIN_JOB["link__max_links_per_detection"],
+        help="max_links_per_detection of the learned one (default: the main job's; 'none': every pair)",
     )
     parser.add_argument(
         "--learned-max-leaf-nodes", type=int, default=31, help="max_leaf_nodes of the learned one's classifiers"
@@ -246,8 +254,8 @@ def main():
     parser.add_argument(
         "--learned-max-depth",
         type=lambda text: None if text == "none" else int(text),
-        default=None,
-        help="max_depth of the learned one's classifiers ('none', the default: as deep as the leaves allow)",
+        default=MAIN_JOB["link__max_depth"],
+        help="max_depth of the learned one's classifiers (default: the main job's; 'none': as the leaves allow)",
     )
     parser.add_argument("--child", nargs=3, type=int, help=argparse.SUPPRESS)
     args = parser.parse_args()
