@@ -30,6 +30,9 @@ Rows of the table, per preset (mean over seeds ± standard error; paired differe
   ``OnlinePipeline``, its ids as reported at each scan;
 * ``learned causal + Tracker``: the Tracker on those ids, its parameters tuned on the training half's learned ids
   the same way as ``objects + Tracker`` (those ids are in-sample: the model was fitted on that half);
+* ``learned causal + Tracker, out-of-fold``: the same Tracker on the same test ids, its parameters tuned instead on
+  out-of-fold ids of the training half: each training sequence streamed by a model fitted on the other training
+  sequences (like the test half, ids of a model that never saw the sequence; one sequence fewer to learn from);
 * ``learned causal + objects' Tracker``: the Tracker at ``objects + Tracker``'s setting (what the main job does);
 * ``SlidingDBSCAN + nearest``: the baseline a user would write (the main job's baseline tracker,
   ``reproduce/_baseline_tracker.py``): SlidingDBSCAN's clusters of each scan associated to the tracks' last centroids
@@ -76,10 +79,11 @@ from sklearn_radar.online import OnlinePipeline, Tracker
 from sklearn_radar.online._replay import replay
 from sklearn_radar.online._scans import scan_order
 from sklearn_radar.reproduce._baseline_tracker import NearestCentroidTracker as BaselineTracker
+from sklearn_radar.reproduce._learned import LEARNED_CAUSAL_PARAMS
 
 PRESETS = ("realistic", "radarscenes", "easy")
 #: The learned step's causal model (``reproduce/_learned.py``: LEARNED_CAUSAL_PARAMS, the window, causal front).
-LEARNED_CAUSAL = {"link__max_iter": 40, "link__window": 0.5, "link__causal": True, "filter__causal": True}
+LEARNED_CAUSAL = {**LEARNED_CAUSAL_PARAMS, "link__window": 0.5, "link__causal": True, "filter__causal": True}
 #: The label columns, which the learned model is not given.
 LABEL_COLUMNS = ("uuid", "track_id", "label_id")
 OBJECTS, SLIDING = "objects causal", "SlidingDBSCAN"
@@ -141,6 +145,11 @@ def streamed(preset, seed, tuned, options):
     start = time.perf_counter()
     learned.fit(inputs.iloc[train].reset_index(drop=True), instances[train])
     print(f"  {preset} seed {seed}: learned causal model fitted in {time.perf_counter() - start:.0f} s", flush=True)
+    out_of_fold = {}  # training sequence -> the model fitted on the other training sequences
+    for sequence in np.unique(scenes.groups[train]):
+        others = train[scenes.groups[train] != sequence]
+        if len(others):
+            out_of_fold[sequence] = clone(learned).fit(inputs.iloc[others].reset_index(drop=True), instances[others])
     halves = {}
     for half, rows in (("train", train), ("test", test)):
         parts = []
@@ -159,6 +168,9 @@ def streamed(preset, seed, tuned, options):
                 learned=learned_ids["reported"],
                 learned_final=learned_ids["object_ids"],
             )
+            if half == "train":  # the ids of a model that did not see this sequence (what the test half gets)
+                model = out_of_fold.get(sequence, learned)
+                part["learned_oof"] = replay(OnlinePipeline(model), data)["reported"]
             part["truth"] = scenes.target[rows[scenes.groups[rows] == sequence]]
             part["instances"] = instances[rows[scenes.groups[rows] == sequence]]
             parts.append(part)
@@ -258,11 +270,18 @@ def tuned_tracker(parts, make, clusters, space, n, seed):
     return best
 
 
-#: The tracked forms measured: name -> (tracker class, search space, cluster ids fed).
+#: The tracked forms measured: name -> (tracker class, search space, cluster ids fed[, the training half's ids the
+#: tracker is tuned on, when not those]).
 FORMS = {
     "objects + Tracker": (Tracker, TRACKER_SPACE, lambda p: p["reported"]),
     "objects + Tracker, noise": (Tracker, NOISE_SPACE, lambda p: p["reported"]),
     "learned causal + Tracker": (Tracker, TRACKER_SPACE, lambda p: p["learned"]),
+    "learned causal + Tracker, out-of-fold": (
+        Tracker,
+        TRACKER_SPACE,
+        lambda p: p["learned"],
+        lambda p: p["learned_oof"],
+    ),
     "SlidingDBSCAN + nearest": (NearestCentroidTracker, BASELINE_SPACE, lambda p: p["sliding"]),
 }
 #: The streams whose causal per-frame PQ is measured: name -> their final ids (or labels) on a part.
@@ -299,9 +318,10 @@ def measure(preset, seed, tuned, options):
         "oracle: cluster majority": {"scores": scores(test, np.concatenate([majority(p) for p in test]))},
         "learned causal (reported)": {"scores": scores(test, np.concatenate([p["learned"] for p in test]))},
     }
-    for name, (kind, space, clusters) in FORMS.items():
+    for name, (kind, space, clusters, *tuned_on) in FORMS.items():
         start = time.perf_counter()
-        train_mota, setting = tuned_tracker(train, kind, clusters, space, options.n_settings, seed)
+        train_clusters = tuned_on[0] if tuned_on else clusters
+        train_mota, setting = tuned_tracker(train, kind, train_clusters, space, options.n_settings, seed)
         test_ids = track(test, lambda kind=kind, setting=setting: kind(**setting), clusters)
         rows[name] = {"scores": scores(test, test_ids), "setting": setting, "train_mota": train_mota}
         rows[name]["seconds"] = time.perf_counter() - start
@@ -345,14 +365,17 @@ def table(preset, runs):
     for name in names:
         cells = [_mean_se([r[name]["scores"][m] for r in runs]) for m in metrics]
         lines.append(f"{name:<36} " + " ".join(f"{m:.3f} ± {se:.3f}".rjust(15) for m, se in cells))
-    for reference in ("objects (reported)", "SlidingDBSCAN + nearest", "objects + Tracker"):
+    for reference in ("objects (reported)", "SlidingDBSCAN + nearest", "objects + Tracker", "learned causal + Tracker"):
         for name in names:
-            if name == reference or "Tracker" not in name:
+            if name == reference or "Tracker" not in name or reference not in runs[0]:
                 continue
             if reference == "objects + Tracker" and not name.startswith("learned"):
                 continue
+            if reference == "learned causal + Tracker" and not name.endswith("out-of-fold"):
+                continue
             cells = [_mean_se([r[name]["scores"][m] - r[reference]["scores"][m] for r in runs]) for m in metrics]
-            label = f"{name} - {reference.split(' ')[0]}{' + Tracker' if reference.endswith('Tracker') else ''}"
+            short = "in-sample" if reference.startswith("learned") else reference.split(" ")[0]
+            label = f"{name} - {short}{' + Tracker' if reference.endswith('Tracker') else ''}"
             lines.append(f"{label:<36} " + " ".join(f"{m:+.3f} ± {se:.3f}".rjust(15) for m, se in cells))
     for name in names:
         lines.append(
@@ -407,7 +430,8 @@ def main(argv=None):
         if runs:
             tables.append(table(preset, runs))
             print(tables[-1], flush=True)
-    print("\n".join(tables))
+    if len(tables) > 1:  # every preset's again, together
+        print("\n".join(tables))
     return 0
 
 
