@@ -396,8 +396,8 @@ class LinkClustering(ClusterMixin, BaseEstimator):
             )
         folds = fold_of_groups(groups, self.cv) if n_groups >= 2 else [np.zeros(len(g), np.int64) for g in groups]
         seeds = rng.randint(np.iinfo(np.int32).max, size=2)
+        tree = {"max_leaf_nodes": self.max_leaf_nodes, "max_depth": self.max_depth}  # both classifiers' trees
         # Objectness: out-of-fold probabilities of the training detections (what the pairs and the tuning see).
-        tree = {"max_leaf_nodes": self.max_leaf_nodes, "max_depth": self.max_depth}
         features = [s.features[:, detection_columns] for s in sequences]
         targets = [y[s.rows] >= 0 for s in sequences]
         self.objectness_classifier_, objectness = cross_fit(
