@@ -106,7 +106,10 @@ class ClusterClassifier(BaseEstimator):
         unknown velocity as missing (why 30 boosting iterations:
         :ref:`User Guide <classification-cost>`).  A classifier that
         cannot take NaN needs an imputer in front
-        (``make_pipeline(SimpleImputer(), ...)``).
+        (``make_pipeline(SimpleImputer(), ...)``).  With scikit-learn's
+        metadata routing enabled, a classifier whose ``fit`` asks for
+        ``groups`` (``CalibratedClassifierCV(cv=GroupKFold())``) gets each
+        training segment's sequence as its group.
     window : float or None, default=0.5
         Length of the time windows a cluster is cut into, s, > 0; windows
         start at each sequence's first detection.  The default, 500 ms, is
@@ -251,7 +254,12 @@ class ClusterClassifier(BaseEstimator):
         learn = targets != IGNORED
         self.feature_names_ = np.asarray(table.columns[3:], dtype=object)
         self.classifier_ = fit_classifier(
-            self.classifier, table.to_numpy(dtype=np.float64)[learn, 3:], targets[learn], self.feature_names_, self
+            self.classifier,
+            table.to_numpy(dtype=np.float64)[learn, 3:],
+            targets[learn],
+            self.feature_names_,
+            self,
+            groups=table["sequence"].to_numpy()[learn],
         )
         self.classes_ = np.union1d([BACKGROUND], np.asarray(self.classifier_.classes_, dtype=np.int64))
         self.n_training_examples_ = int(learn.sum())

@@ -73,7 +73,9 @@ class PointClassifier(BaseEstimator):
         Classifies the detections' feature rows (cloned).  None means a
         :class:`~sklearn.ensemble.HistGradientBoostingClassifier` with
         ``max_iter=30`` and ``random_state=0``, the default of
-        :class:`ClusterClassifier`.
+        :class:`ClusterClassifier`.  With scikit-learn's metadata routing
+        enabled, a classifier whose ``fit`` asks for ``groups`` gets each
+        training detection's sequence as its group.
     eps_xy : float, default=1.0
         Distance in x-y within which two detections of one class join one
         instance, m, > 0.
@@ -174,7 +176,10 @@ class PointClassifier(BaseEstimator):
         classes = check_class_target(y, len(c["x"]), type(self).__name__)
         features, self.feature_names_ = self._features(c)
         learn = _kept(c) & (classes != IGNORED)
-        self.classifier_ = fit_classifier(self.classifier, features[learn], classes[learn], self.feature_names_, self)
+        groups = None if c["sequence"] is None else c["sequence"][learn]
+        self.classifier_ = fit_classifier(
+            self.classifier, features[learn], classes[learn], self.feature_names_, self, groups=groups
+        )
         self.classes_ = np.union1d([BACKGROUND], np.asarray(self.classifier_.classes_, dtype=np.int64))
         self.n_training_examples_ = int(np.count_nonzero(learn))
         return self

@@ -7,6 +7,7 @@ import warnings
 
 import numpy as np
 import pandas as pd
+from sklearn import get_config
 from sklearn.base import clone
 from sklearn.dummy import DummyClassifier
 from sklearn.ensemble import HistGradientBoostingClassifier
@@ -84,12 +85,15 @@ def instance_column_of(X, name, where):
     return values
 
 
-def fit_classifier(classifier, features, targets, feature_names, owner):
+def fit_classifier(classifier, features, targets, feature_names, owner, groups=None):
     """A fitted clone of ``classifier`` (default: :func:`default_classifier`) on the rows ``features``.
 
     With fewer than two classes among ``targets`` no classifier can learn:
     a :class:`~sklearn.dummy.DummyClassifier` predicts the one class (background
-    when there is no row), with a UserWarning.
+    when there is no row), with a UserWarning.  ``groups`` (one per row, e.g.
+    its sequence) goes to the classifier's ``fit`` when scikit-learn's
+    metadata routing is enabled and the classifier asks for ``groups`` (a
+    ``CalibratedClassifierCV(cv=GroupKFold())``, a grouped search).
     """
     table = pd.DataFrame(features, columns=feature_names)
     present = np.unique(targets)
@@ -104,7 +108,19 @@ def fit_classifier(classifier, features, targets, feature_names, owner):
         if not len(targets):
             table, targets = pd.DataFrame(np.zeros((1, len(feature_names))), columns=feature_names), [BACKGROUND]
         return DummyClassifier(strategy="constant", constant=constant).fit(table, targets)
-    return (default_classifier() if classifier is None else clone(classifier)).fit(table, targets)
+    model = default_classifier() if classifier is None else clone(classifier)
+    return model.fit(table, targets, **_routed_groups(model, groups))
+
+
+def _routed_groups(model, groups):
+    """``{"groups": groups}`` when metadata routing is on and ``model.fit`` consumes groups, else ``{}``."""
+    if groups is None or not get_config()["enable_metadata_routing"]:
+        return {}
+    try:
+        wanted = model.get_metadata_routing().consumes("fit", ["groups"])
+    except AttributeError:  # not a scikit-learn estimator: it says nothing about routing
+        return {}
+    return {"groups": np.asarray(groups)} if wanted else {}
 
 
 def class_proba(classifier, features, feature_names, classes):

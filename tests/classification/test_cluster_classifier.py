@@ -95,6 +95,43 @@ def test_fitted_on_the_features_and_the_iou_targets_of_the_segments():
     assert model.classes_.tolist() == [-1, 0]
 
 
+class GroupRecording(Recording):
+    """Recording, and the groups its fit is given (it asks for them when metadata routing is on)."""
+
+    def fit(self, X, y, groups=None):
+        self.groups_ = None if groups is None else np.asarray(groups)
+        return super().fit(X, y)
+
+
+def test_a_classifier_asking_for_groups_gets_each_segments_sequence_when_routing_is_on():
+    import sklearn
+
+    X = _detections()
+    y = road_user_class(X["label_id"])
+    with sklearn.config_context(enable_metadata_routing=True):
+        asking = GroupRecording().set_fit_request(groups=True)
+        model = ClusterClassifier(Given(LABELS), asking, window=0.5).fit(X, y)
+        assert model.classifier_.groups_.tolist() == [1, 1, 1, 1, 2]  # the segments' sequences, in segment order
+        not_asking = ClusterClassifier(Given(LABELS), GroupRecording(), window=0.5).fit(X, y)
+        assert not_asking.classifier_.groups_ is None
+    off = ClusterClassifier(Given(LABELS), GroupRecording(), window=0.5).fit(X, y)  # routing off: no groups
+    assert off.classifier_.groups_ is None
+
+
+def test_a_grouped_calibration_splits_by_sequence(scenes):
+    import sklearn
+    from sklearn.calibration import CalibratedClassifierCV
+
+    train, _ = scenes
+    y = road_user_class(train.data["label_id"])
+    calibrated = CalibratedClassifierCV(HistGradientBoostingClassifier(max_iter=5), cv=GroupKFold(2))
+    with pytest.raises(ValueError, match="groups"):  # without the sequences GroupKFold cannot split
+        _pipeline(classifier=calibrated).fit(train.data, y)
+    with sklearn.config_context(enable_metadata_routing=True):
+        model = _pipeline(classifier=calibrated).fit(train.data, y)
+    assert len(model[-1].classifier_.calibrated_classifiers_) == 2
+
+
 def test_whole_clusters_without_windows():
     # window=None: the car's two clusters each hold part of the car (3 and 2 of 5): only the first matches.
     X = _detections()

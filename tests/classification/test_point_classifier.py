@@ -101,6 +101,27 @@ def test_trained_on_the_kept_detections_of_known_classes():
     np.testing.assert_allclose(model.predict_proba(X)[2], [1.0, 0.0])
 
 
+class GroupedMovingIsPedestrian(MovingIsPedestrian):
+    """Also remembers the groups its fit is given (asked for when metadata routing is on)."""
+
+    def fit(self, X, y, groups=None):
+        self.groups_ = None if groups is None else np.asarray(groups)
+        return super().fit(X, y)
+
+
+def test_a_classifier_asking_for_groups_gets_each_detections_sequence_when_routing_is_on():
+    import sklearn
+
+    X = pd.DataFrame(
+        {"x": [0.0, 1.0, 2.0, 3.0], "y": 0.0, "v_r": [2.0, 0.0, 1.0, 3.0], "t": 0.0, "sequence": [4, 4, 5, 5]}
+    )
+    with sklearn.config_context(enable_metadata_routing=True):
+        asking = GroupedMovingIsPedestrian().set_fit_request(groups=True)
+        model = PointClassifier(asking).fit(X, [3, -1, -2, 3])
+    assert model.classifier_.groups_.tolist() == [4, 4, 5]  # the ignored detection (-2) is left out
+    assert PointClassifier(GroupedMovingIsPedestrian()).fit(X, [3, -1, -2, 3]).classifier_.groups_ is None
+
+
 @pytest.fixture(scope="module")
 def scenes():
     return make_scenes(n_sequences=3, duration=8.0, random_state=21), make_scenes(1, duration=8.0, random_state=22)
