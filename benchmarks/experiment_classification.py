@@ -39,7 +39,8 @@ and seed at 10 iterations)::
 
 ``--history`` trains, instead of the three models, the clusters' classifier with each ``history`` option of
 ``ClusterClassifier`` (None: the single window; ``"mean_proba"``; ``"features"``) and with an isotonic
-``CalibratedClassifierCV`` learner (cv=3 over the training segments), and reports class PQ, mAP@0.5 and the
+``CalibratedClassifierCV`` learner (one fold per training sequence, ``LeaveOneGroupOut``, the sequences routed to it
+by scikit-learn's metadata routing: no object's segments in two folds), and reports class PQ, mAP@0.5 and the
 per-object macro-F1 (the test segments matched to an annotated road user, by the windows their cluster has been
 seen in: 1, 2-3, 4-7, 8+), with the paired differences to the single window (mean +- 2 SE over seeds); with
 ``--online`` the test half's clusters are the final object ids of ``OnlinePipeline``'s causal replay (aliases
@@ -79,12 +80,13 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+import sklearn
 from sklearn.base import BaseEstimator, clone
 from sklearn.calibration import CalibratedClassifierCV
 from sklearn.ensemble import HistGradientBoostingClassifier
 from sklearn.frozen import FrozenEstimator
 from sklearn.metrics import f1_score
-from sklearn.model_selection import GroupKFold
+from sklearn.model_selection import GroupKFold, LeaveOneGroupOut
 from sklearn.pipeline import Pipeline
 from threadpoolctl import threadpool_limits
 
@@ -188,7 +190,8 @@ def models(setting, options):
     if options.class_weight:
         learner = HistGradientBoostingClassifier(**DEFAULT_CLASSIFIER_PARAMS, class_weight=options.class_weight)
     if options.history:
-        calibrated = CalibratedClassifierCV(default_classifier(), method="isotonic", cv=3)
+        folds = LeaveOneGroupOut()  # a segment's fold is its sequence's (routed: see main), no object in two
+        calibrated = CalibratedClassifierCV(default_classifier(), method="isotonic", cv=folds)
         variants = {
             SINGLE: {},
             "history: mean proba": {"history": "mean_proba"},
@@ -645,6 +648,8 @@ def main(argv=None):
     )
     parser.add_argument("--runs-file", help="keep the records of each preset in RUNS_FILE_<preset>.pkl as they come")
     options = parser.parse_args(argv)
+    if options.history:  # the calibrated learners' folds are the training sequences, which routing hands them
+        sklearn.set_config(enable_metadata_routing=True)
     with threadpool_limits(1):
         for preset in options.data:
             if options.perfect_clusters:
