@@ -279,7 +279,7 @@ def learned_update(online, state, sequence, us, c, work, keep, objects):
     windows, ``c`` the raw columns and ``work`` the working ones.
     """
     from ._pipeline import ScanResult
-    from ._tracker import sequence_frame
+    from ._tracker import followed_ids, sequence_frame
 
     stream, ids = online._learned, online._learned_ids
     t = work["t"]
@@ -310,7 +310,8 @@ def learned_update(online, state, sequence, us, c, work, keep, objects):
     )
     if state.tracker is not None:
         x_seq, y_seq, los_seq = sequence_frame(c, work["x"], work["y"], online._frame.frame)
-        result.track_id = state.tracker.update(x_seq, y_seq, work["v_r"], los_seq, t[0], object_ids)
+        followed = followed_ids(object_ids, result.confirmed, learned=True)
+        result.track_id = state.tracker.update(x_seq, y_seq, work["v_r"], los_seq, t[0], followed)
     if ids.dropped.get(sequence):  # forget the first times that the object list no longer needs
         listed = state.objects.records
         for object_id in ids.dropped[sequence]:

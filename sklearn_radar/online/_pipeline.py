@@ -18,7 +18,7 @@ from ._filter import FilterWindow
 from ._learned_stream import LearnedIds, LearnedStream, check_learned, learned_update
 from ._merger import MergeWindow
 from ._objects import ObjectIds, ObjectList, ObjectTable, empty_object_list, object_figures
-from ._tracker import Tracker, sequence_frame
+from ._tracker import Tracker, followed_ids, sequence_frame
 
 #: The raw columns a scan must hold (the detection table's, see :mod:`sklearn_radar._schema`).
 SCAN_COLUMNS = tuple(name for name in RAW_LAYOUT.columns if name != "sequence")
@@ -350,7 +350,8 @@ class OnlinePipeline:
         )
         if state.tracker is not None:
             x_seq, y_seq, los_seq = sequence_frame(c, x, y, self._frame.frame)
-            result.track_id = state.tracker.update(x_seq, y_seq, v_r, los_seq, t[0], object_ids)
+            followed = followed_ids(object_ids, result.confirmed, learned=False)
+            result.track_id = state.tracker.update(x_seq, y_seq, v_r, los_seq, t[0], followed)
         self._ids.forget(state.merge.gone)
         return result
 

@@ -9,6 +9,7 @@ import pandas as pd
 
 from .._labels import drop_small_clusters
 from ._scans import scan_order
+from ._tracker import followed_ids
 
 
 def replay(online, data, objects=False):
@@ -18,12 +19,12 @@ def replay(online, data, objects=False):
     -------
     replayed : dict
         ``labels`` (stage 1), ``reported`` (the object ids as given at each scan), ``confirmed`` (as given at
-        each scan), ``object_ids`` (final: every alias resolved to its surviving id, and with stage 2's
-        ``min_cluster_size`` the causal confirmation rule applied to them, as the causal pipeline does; with the
-        learned grouping, the detections confirmed when they came), ``keep``,
-        ``latency`` and ``cpu`` (wall and thread CPU time per scan, s), ``aliases``, ``objects`` (a
-        DataFrame, or None) and ``track_id`` (the tracker's id of each detection as given at its scan; None
-        without a tracker).
+        each scan), ``followed`` (the ids a tracker of the pipeline follows at each scan), ``object_ids``
+        (final: every alias resolved to its surviving id, and with stage 2's ``min_cluster_size`` the causal
+        confirmation rule applied to them, as the causal pipeline does; with the learned grouping, the detections
+        confirmed when they came), ``keep``, ``latency`` and ``cpu`` (wall and thread CPU time per scan, s),
+        ``aliases``, ``objects`` (a DataFrame, or None) and ``track_id`` (the tracker's id of each detection as
+        given at its scan; None without a tracker).
     """
     columns = {name: data[name].to_numpy() for name in data.columns if name not in ("uuid", "track_id")}
     n = len(data)
@@ -58,6 +59,7 @@ def replay(online, data, objects=False):
         "labels": labels,
         "reported": reported,
         "confirmed": confirmed,
+        "followed": followed_ids(reported, confirmed, online.learned),
         "object_ids": final,
         "keep": keep,
         "latency": np.array(latency),

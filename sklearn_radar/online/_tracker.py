@@ -321,6 +321,15 @@ class Tracker:
             setattr(self, name, new)
 
 
+def followed_ids(object_ids, confirmed, learned):
+    """The object ids a pipeline's Tracker follows at a scan, -1 for none.
+
+    Every object id; with the learned grouping the confirmed ones only (clusters with ``min_cluster_size``
+    detections, those its offline ``predict`` keeps: the others are often a few detections of static clutter).
+    """
+    return np.where(confirmed, object_ids, -1) if learned else object_ids
+
+
 def sequence_frame(c, x, y, frame):
     """x, y (m) and the line of sight (rad) in the sequence frame, from raw columns ``c`` and the working x, y.
 

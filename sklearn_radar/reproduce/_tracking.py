@@ -317,7 +317,7 @@ def tuning_parts(sequence, objects, sliding, learned=None):
     """One training sequence's counts for every candidate of each tracker: ``{"tracker": [...], "baseline": [...]}``
     (and ``"learned": [...]``).
 
-    ``objects``: the pipeline whose reported object ids the Tracker follows (None: none); ``sliding``: the
+    ``objects``: the pipeline whose object ids the Tracker follows (None: none); ``sliding``: the
     baseline clusterer's pipeline; ``learned``: the fitted causal learned pipeline, whose Tracker is tuned apart
     (None: none).
     """
@@ -326,16 +326,12 @@ def tuning_parts(sequence, objects, sliding, learned=None):
     times = data["timestamp"].to_numpy(dtype=np.float64) * 1e-6
     columns = fixed_frame(data)
     found = {}
-    if objects is not None:
-        reported = replay(OnlinePipeline(objects), data)["reported"]
-        found["tracker"] = [
-            _counts(truth, run_tracker(Tracker(**c), columns, reported), times) for c in candidates(TRACKER_GRID)
-        ]
-    if learned is not None:
-        reported = replay(OnlinePipeline(learned), data)["reported"]
-        found[LEARNED] = [
-            _counts(truth, run_tracker(Tracker(**c), columns, reported), times) for c in candidates(TRACKER_GRID)
-        ]
+    for key, pipeline in (("tracker", objects), (LEARNED, learned)):
+        if pipeline is not None:  # the ids the pipeline's own Tracker follows
+            followed = replay(OnlinePipeline(pipeline), data)["followed"]
+            found[key] = [
+                _counts(truth, run_tracker(Tracker(**c), columns, followed), times) for c in candidates(TRACKER_GRID)
+            ]
     labels = np.asarray(clone(sliding).fit_predict(sequence.X))
     found["baseline"] = [
         _counts(truth, run_tracker(NearestCentroidTracker(**c), columns, labels), times)

@@ -100,12 +100,15 @@ def test_object_list_and_tracker(fitted, recording):
     )
     online = OnlinePipeline(fitted, tracker=Tracker())
     columns = {name: one[name].to_numpy() for name in one.columns if name not in ("uuid", "track_id")}
-    tracked = 0
+    tracked = unconfirmed = 0
     for stamp in np.unique(columns["timestamp"]):
         rows = columns["timestamp"] == stamp
         result = online.update({name: values[rows] for name, values in columns.items()}, objects=False)
         tracked += int((result.track_id >= 0).sum())
-    assert tracked > 0
+        unconfirmed += int(((result.object_ids >= 0) & ~result.confirmed).sum())
+        # The Tracker follows the confirmed clusters only (the offline predict's): no track on the others.
+        assert not np.any((result.track_id >= 0) & ~result.confirmed)
+    assert tracked > 0 and unconfirmed > 0
 
 
 def test_memory_stays_bounded(fitted):

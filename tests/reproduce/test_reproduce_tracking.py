@@ -253,6 +253,22 @@ def test_the_offline_tracker_feed_is_the_online_pipelines(tiny_folder):
     np.testing.assert_array_equal(offline, online["track_id"])
 
 
+def test_the_offline_tracker_feed_of_the_learned_grouping_is_the_online_pipelines(tracked_learned, tiny_folder):
+    """With the learned grouping the Tracker follows the confirmed clusters only; the tuning feeds it the same."""
+    results = RunResults.read(tracked_learned / "results.json")
+    model = load_learned(tracked_learned / results.learned.causal.model_file)
+    scenes = load_radarscenes(tiny_folder)
+    rows = np.flatnonzero(scenes.data["sequence"].to_numpy() == scenes.data["sequence"].iloc[0])
+    data = scenes.data.iloc[rows].reset_index(drop=True)
+    params = {"min_hits": 2, "max_age": 1.0, "gate": 5.0}
+    online = replay(OnlinePipeline(model, tracker=Tracker(**params)), data)
+    assert np.any((online["reported"] >= 0) & ~online["confirmed"])  # some clusters are not followed
+    np.testing.assert_array_equal(online["followed"], np.where(online["confirmed"], online["reported"], -1))
+    offline = run_tracker(Tracker(**params), fixed_frame(data), online["followed"])
+    assert (online["track_id"] >= 0).any()
+    np.testing.assert_array_equal(offline, online["track_id"])
+
+
 def test_the_baseline_tracker_follows_two_objects_and_confirms_after_min_hits():
     tracker = NearestCentroidTracker(gate=1.0, min_hits=2, max_age=0.5)
     x0 = np.array([0.0, 0.2, 10.0, 10.2])
