@@ -166,6 +166,7 @@ def streamed(preset, seed, tuned, options):
                 sliding=clone(sliding).fit(work)[-1].labels_,
                 sequence=np.full(len(data), sequence),
                 learned=learned_ids["reported"],
+                learned_confirmed=np.where(learned_ids["confirmed"], learned_ids["reported"], -1),
                 learned_final=learned_ids["object_ids"],
             )
             if half == "train":  # the ids of a model that did not see this sequence (what the test half gets)
@@ -275,6 +276,7 @@ def tuned_tracker(parts, make, clusters, space, n, seed):
 FORMS = {
     "objects + Tracker": (Tracker, TRACKER_SPACE, lambda p: p["reported"]),
     "objects + Tracker, noise": (Tracker, NOISE_SPACE, lambda p: p["reported"]),
+    "objects, confirmed + Tracker": (Tracker, TRACKER_SPACE, lambda p: np.where(p["confirmed"], p["reported"], -1)),
     "learned causal + Tracker": (Tracker, TRACKER_SPACE, lambda p: p["learned"]),
     "learned causal + Tracker, out-of-fold": (
         Tracker,
@@ -282,6 +284,7 @@ FORMS = {
         lambda p: p["learned"],
         lambda p: p["learned_oof"],
     ),
+    "learned causal, confirmed + Tracker": (Tracker, TRACKER_SPACE, lambda p: p["learned_confirmed"]),
     "SlidingDBSCAN + nearest": (NearestCentroidTracker, BASELINE_SPACE, lambda p: p["sliding"]),
 }
 #: The streams whose causal per-frame PQ is measured: name -> their final ids (or labels) on a part.

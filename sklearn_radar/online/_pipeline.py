@@ -149,7 +149,8 @@ class OnlinePipeline:
     tracker : Tracker or None, default=None
         Tracks the objects from scan to scan (a fresh copy per sequence):
         :attr:`ScanResult.track_id` gives its track ids, from the object ids
-        of every scan (in the sequence frame).  None: no tracking.
+        of every scan (in the sequence frame; with the learned grouping, of
+        its confirmed clusters only).  None: no tracking.
 
     Attributes
     ----------
