@@ -33,6 +33,9 @@ Rows of the table, per preset (mean over seeds ± standard error; paired differe
 * ``learned causal + Tracker, out-of-fold``: the same Tracker on the same test ids, its parameters tuned instead on
   out-of-fold ids of the training half: each training sequence streamed by a model fitted on the other training
   sequences (like the test half, ids of a model that never saw the sequence; one sequence fewer to learn from);
+* ``objects, confirmed + Tracker`` and ``learned causal, confirmed + Tracker``: the Tracker fed only the detections
+  whose cluster is confirmed at their scan (``min_cluster_size`` reached; what ``OnlinePipeline`` feeds its Tracker
+  with the learned grouping), tuned the same way;
 * ``learned causal + objects' Tracker``: the Tracker at ``objects + Tracker``'s setting (what the main job does);
 * ``SlidingDBSCAN + nearest``: the baseline a user would write (the main job's baseline tracker,
   ``reproduce/_baseline_tracker.py``): SlidingDBSCAN's clusters of each scan associated to the tracks' last centroids
