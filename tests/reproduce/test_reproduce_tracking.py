@@ -218,6 +218,7 @@ def test_the_report_names_the_tracked_learned_grouping(tracked_learned):
     assert ours[0].startswith("objects (tuned for PQ)")
     assert "learned (causal, fitted on the training half)" in ours
     assert "with a Tracker chosen the same way on that stream's training-half ids" in section
+    assert "the Tracker follows its confirmed clusters only" in section
     glance = report.split("## At a glance")[1].split("\n## ")[0]
     line = next(line for line in glance.splitlines() if "tracking online, test half:" in line)
     assert "learned" in line

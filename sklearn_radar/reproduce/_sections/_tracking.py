@@ -126,7 +126,8 @@ def _tuned_lines(step):
         lines.append(
             "The learned grouping streams its causal model (`LinkClustering(causal=True)`, fitted by the learned "
             "step on the training half), with a Tracker chosen the same way on that stream's training-half ids "
-            f"(in-sample: the model was fitted on that half): {_values(learned.params)} (training "
+            "(in-sample: the model was fitted on that half); the Tracker follows its confirmed clusters only, those "
+            f"the offline model keeps: {_values(learned.params)} (training "
             f"{learned.criterion} {learned.train_score:.3f})."
         )
     baseline = step.baseline
