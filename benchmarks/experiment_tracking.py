@@ -35,7 +35,7 @@ Rows of the table, per preset (mean over seeds ± standard error; paired differe
   sequences (like the test half, ids of a model that never saw the sequence; one sequence fewer to learn from);
 * ``objects, confirmed + Tracker`` and ``learned causal, confirmed + Tracker``: the Tracker fed only the detections
   whose cluster is confirmed at their scan (``min_cluster_size`` reached; what ``OnlinePipeline`` feeds its Tracker
-  with the learned grouping), tuned the same way;
+  with the learned grouping), tuned the same way (``..., noise``: with ``noise_radius`` tuned too);
 * ``learned causal + objects' Tracker``: the Tracker at ``objects + Tracker``'s setting (what the main job does);
 * ``SlidingDBSCAN + nearest``: the baseline a user would write (the main job's baseline tracker,
   ``reproduce/_baseline_tracker.py``): SlidingDBSCAN's clusters of each scan associated to the tracks' last centroids
@@ -288,6 +288,7 @@ FORMS = {
         lambda p: p["learned_oof"],
     ),
     "learned causal, confirmed + Tracker": (Tracker, TRACKER_SPACE, lambda p: p["learned_confirmed"]),
+    "learned causal, confirmed + Tracker, noise": (Tracker, NOISE_SPACE, lambda p: p["learned_confirmed"]),
     "SlidingDBSCAN + nearest": (NearestCentroidTracker, BASELINE_SPACE, lambda p: p["sliding"]),
 }
 #: The streams whose causal per-frame PQ is measured: name -> their final ids (or labels) on a part.
