@@ -169,11 +169,11 @@ def streamed(preset, seed, tuned, options):
                 sliding=clone(sliding).fit(work)[-1].labels_,
                 sequence=np.full(len(data), sequence),
                 learned=learned_ids["reported"],
-                learned_confirmed=np.where(learned_ids["confirmed"], learned_ids["reported"], -1),
+                learned_confirmed=learned_ids["followed"],  # what the pipeline's own Tracker follows
                 learned_final=learned_ids["object_ids"],
             )
-            if half == "train":  # the ids of a model that did not see this sequence (what the test half gets)
-                model = out_of_fold.get(sequence, learned)
+            if half == "train":  # the ids of a model that did not see this sequence (what the test half gets;
+                model = out_of_fold.get(sequence, learned)  # a lone training sequence has none: the final model's)
                 part["learned_oof"] = replay(OnlinePipeline(model), data)["reported"]
             part["truth"] = scenes.target[rows[scenes.groups[rows] == sequence]]
             part["instances"] = instances[rows[scenes.groups[rows] == sequence]]
