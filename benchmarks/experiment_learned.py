@@ -22,12 +22,13 @@ prints per preset the test PQ per method, the paired differences ``learned - obj
 ``benchmarks/results/learned_rows.csv`` (one row per preset, seed and method).
 
 ``--method learned_causal`` runs the causal learned grouping alone on the same data and split:
-``LinkClustering(causal=True, max_iter=40)`` (the main job's causal model) fitted on the training half through a front
-whose filter is causal too (``--max-links``, ``--max-leaf-nodes`` and ``--max-depth`` set
-its ``max_links_per_detection``, ``max_leaf_nodes`` and ``max_depth``), the test half labelled by its ``predict``
-(what ``OnlinePipeline`` streams), saved as
-``learned_causal_<preset>_seed<seed>.json``; ``--summary`` then sets it beside the saved offline rows of the same
-seeds.  The object experiment's saved rows hold its stage-2 setting only (not its stage 1), so its causal score is
+``LinkClustering(causal=True)`` with the main job's causal boosting iterations fitted on the training half through a
+front whose filter is causal too (``--max-links``, ``--max-leaf-nodes`` and ``--max-depth`` set its
+``max_links_per_detection``, ``max_leaf_nodes`` and ``max_depth``; by default every pair, 31 leaves and any depth,
+where the main job's model has 16 links and depth 6: ``--max-links 16 --max-depth 6`` is it), the test half labelled
+by its ``predict`` (what ``OnlinePipeline`` streams), saved as ``learned_causal_<preset>_seed<seed>.json``;
+``--summary`` then sets it beside the saved offline rows of the same seeds.  The object experiment's saved rows hold
+its stage-2 setting only (not its stage 1), so its causal score is
 not recomputed here: the main job's learned section has it, with the sliding-window baseline.
 
 Run (one core, niced; several minutes per preset and seed on a busy 2-core machine)::
@@ -59,6 +60,7 @@ import bench_link_clustering as bench  # noqa: E402
 from sklearn_radar.cluster import LinkClustering  # noqa: E402
 from sklearn_radar.metrics import instance_errors, panoptic_quality  # noqa: E402
 from sklearn_radar.metrics._errors import FALSE_CAUSES, MISSED_CAUSES  # noqa: E402
+from sklearn_radar.reproduce._learned import LEARNED_CAUSAL_PARAMS  # noqa: E402
 
 RESULTS = HERE / "results"
 METHODS = ("learned", "objects", "baseline")
@@ -115,7 +117,7 @@ def run_causal(preset, seed, options):
     (train, y_train), (test, y_test) = bench.load(preset, seed, options.n_sequences, options.duration, causal=True)
     model = LinkClustering(
         causal=True,
-        max_iter=40,
+        max_iter=LEARNED_CAUSAL_PARAMS["link__max_iter"],
         max_links_per_detection=options.max_links,
         max_leaf_nodes=options.max_leaf_nodes,
         max_depth=options.max_depth,
