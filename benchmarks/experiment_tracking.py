@@ -51,6 +51,10 @@ Run (about an hour per preset and 3 seeds on 2 shared cores)::
     OMP_NUM_THREADS=1 nice -n 19 python benchmarks/experiment_tracking.py --tune --data realistic --seeds 0 1 2
     OMP_NUM_THREADS=1 nice -n 19 python benchmarks/experiment_tracking.py --data realistic --seeds 0 1 2
 
+``--pq-only`` measures the causal PQ alone (no trackers, no out-of-fold models, the training half not streamed);
+``--without-sliding`` neither tunes nor streams SlidingDBSCAN (its tuning is most of a seed's time).  Tuned
+settings are cached per preset and seed only: give data of another size its own ``--cache``.
+
 ``--save FOLDER`` writes each seed's rows as ``tracking_<preset>_<seed>.json`` (seeds may then run as separate
 processes); ``--summary --save FOLDER`` prints the tables of the saved rows.
 """
@@ -101,7 +105,7 @@ def tune(preset, seed, options):
     out = _cache_file(options.cache, preset, seed)
     if out.exists():
         return json.loads(out.read_text())
-    wanted = {f"{OBJECTS} (stage 1)", OBJECTS, SLIDING}
+    wanted = {f"{OBJECTS} (stage 1)", OBJECTS} | (set() if options.without_sliding else {SLIDING})
     chosen = [v for v in variants() if v.name in wanted]
     found = run_one(preset, seed, chosen, options)
     saved = {name: {k: v for k, v in record.items() if k != "bounds"} for name, record in found.items()}
@@ -141,7 +145,7 @@ def streamed(preset, seed, tuned, options):
         2, stage1_params=tuned[f"{OBJECTS} (stage 1)"]["params"], params=tuned[OBJECTS]["params"], causal=True
     )
     sliding_variant = next(v for v in variants() if v.name == SLIDING)
-    sliding = clone(sliding_variant.searched).set_params(**tuned[SLIDING]["params"])
+    sliding = None if SLIDING not in tuned else clone(sliding_variant.searched).set_params(**tuned[SLIDING]["params"])
     instances = precluster_target(scenes.data, scenes.target)
     inputs = scenes.data[[c for c in scenes.data.columns if c not in LABEL_COLUMNS]]
     learned = learned_pipeline({**LEARNED_CAUSAL, "link__random_state": seed, "link__n_jobs": 1})
@@ -149,24 +153,29 @@ def streamed(preset, seed, tuned, options):
     learned.fit(inputs.iloc[train].reset_index(drop=True), instances[train])
     print(f"  {preset} seed {seed}: learned causal model fitted in {time.perf_counter() - start:.0f} s", flush=True)
     out_of_fold = {}  # training sequence -> the model fitted on the other training sequences
-    for sequence in np.unique(scenes.groups[train]):
+    for sequence in [] if options.pq_only else np.unique(scenes.groups[train]):
         others = train[scenes.groups[train] != sequence]
         if len(others):
             out_of_fold[sequence] = clone(learned).fit(inputs.iloc[others].reset_index(drop=True), instances[others])
     halves = {}
     for half, rows in (("train", train), ("test", test)):
+        if options.pq_only and half == "train":  # the trackers' tuning is all it serves
+            continue
         parts = []
         for sequence in np.unique(scenes.groups[rows]):
             data = scenes.data.iloc[rows[scenes.groups[rows] == sequence]].reset_index(drop=True)
             replayed = replay(OnlinePipeline(objects), data)
             learned_ids = replay(OnlinePipeline(learned), data)
-            work = clone(sliding_variant.stage0).fit_transform(data)
             part = fixed_frame(data)
             part.update(
                 reported=replayed["reported"],
                 confirmed=replayed["confirmed"],
                 final=replayed["object_ids"],
-                sliding=clone(sliding).fit(work)[-1].labels_,
+                sliding=(
+                    np.full(len(data), -1)  # not measured (--without-sliding)
+                    if sliding is None
+                    else clone(sliding).fit(clone(sliding_variant.stage0).fit_transform(data))[-1].labels_
+                ),
                 sequence=np.full(len(data), sequence),
                 learned=learned_ids["reported"],
                 learned_confirmed=learned_ids["followed"],  # what the pipeline's own Tracker follows
@@ -299,8 +308,9 @@ PQ_STREAMS = {
 }
 
 
-def causal_pq(parts):
-    """Per-frame PQ (0.5 s windows) of each of :data:`PQ_STREAMS` on ``parts``, against the pre-clustered target."""
+def causal_pq(parts, without=()):
+    """Per-frame PQ (0.5 s windows) of each of :data:`PQ_STREAMS` but ``without`` on ``parts``, against the
+    pre-clustered target."""
     target = np.concatenate([p["instances"] for p in parts])
     times = np.concatenate([p["t"] for p in parts])
     groups = np.concatenate([p["sequence"] for p in parts])
@@ -309,13 +319,19 @@ def causal_pq(parts):
             panoptic_quality(target, np.concatenate([ids(p) for p in parts]), times=times, groups=groups, window=0.5).pq
         )
         for name, ids in PQ_STREAMS.items()
+        if name not in without
     }
 
 
 def measure(preset, seed, tuned, options):
     """Every row's test scores (and the trackers' settings) for one data set."""
     halves = streamed(preset, seed, tuned, options)
-    train, test = halves["train"], halves["test"]
+    test = halves["test"]
+    if options.pq_only:
+        pq = causal_pq(test, without=(SLIDING,) if options.without_sliding else ())
+        print(f"  {preset} seed {seed} causal PQ, test half: " + ", ".join(f"{k} {v:.3f}" for k, v in pq.items()))
+        return {"_pq": pq}
+    train = halves["train"]
     reported = np.concatenate([p["reported"] for p in test])
     truth = np.concatenate([p["truth"] for p in test])
     rows = {
@@ -368,7 +384,8 @@ def table(preset, runs):
     names = [name for name in runs[0] if name != "_pq"]
     metrics = ("mota", "idf1", "hota", "deta", "assa")
     lines = [f"\n{preset}: {len(runs)} seed(s), test half; mean ± standard error over seeds"]
-    lines.append(f"{'':<36} " + " ".join(f"{m:>15}" for m in ("MOTA", "IDF1", "HOTA", "DetA", "AssA")))
+    if names:  # not --pq-only
+        lines.append(f"{'':<36} " + " ".join(f"{m:>15}" for m in ("MOTA", "IDF1", "HOTA", "DetA", "AssA")))
     for name in names:
         cells = [_mean_se([r[name]["scores"][m] for r in runs]) for m in metrics]
         lines.append(f"{name:<36} " + " ".join(f"{m:.3f} ± {se:.3f}".rjust(15) for m, se in cells))
@@ -391,11 +408,12 @@ def table(preset, runs):
         )
     if all("_pq" in r for r in runs):
         lines.append("causal per-frame PQ, test half (mean ± standard error; per seed)")
-        for name in PQ_STREAMS:
+        measured = [name for name in PQ_STREAMS if all(name in r["_pq"] for r in runs)]
+        for name in measured:
             mean, se = _mean_se([r["_pq"][name] for r in runs])
             per_seed = ", ".join(f"{r['_pq'][name]:.3f}" for r in runs)
             lines.append(f"  {name:<34} {mean:.3f} ± {se:.3f}  ({per_seed})")
-        for other in ("objects causal", "SlidingDBSCAN"):
+        for other in [name for name in measured if name != "learned causal"]:
             mean, se = _mean_se([r["_pq"]["learned causal"] - r["_pq"][other] for r in runs])
             lines.append(f"  learned causal - {other:<17} {mean:+.3f} ± {se:.3f}")
     return "\n".join(lines)
@@ -414,6 +432,10 @@ def main(argv=None):
     parser.add_argument("--n-settings", type=int, default=30, help="random settings tried per tracker")
     parser.add_argument("--save", default=None, help="folder of each seed's rows (JSON), none by default")
     parser.add_argument("--summary", action="store_true", help="only the tables of the rows saved in --save")
+    parser.add_argument(
+        "--pq-only", action="store_true", help="only the causal PQ of the streams (no trackers, no training half)"
+    )
+    parser.add_argument("--without-sliding", action="store_true", help="neither tune nor stream SlidingDBSCAN")
     options = parser.parse_args(argv)
     if options.summary:
         for preset in options.presets:
