@@ -35,7 +35,8 @@ Rows of the table, per preset (mean over seeds ± standard error; paired differe
   sequences (like the test half, ids of a model that never saw the sequence; one sequence fewer to learn from);
 * ``objects, confirmed + Tracker`` and ``learned causal, confirmed + Tracker``: the Tracker fed only the detections
   whose cluster is confirmed at their scan (``min_cluster_size`` reached; what ``OnlinePipeline`` feeds its Tracker
-  with the learned grouping), tuned the same way (``..., noise``: with ``noise_radius`` tuned too);
+  with the learned grouping), tuned the same way (``..., noise``: with ``noise_radius`` tuned too; ``..., out-of-fold``:
+  tuned on the out-of-fold models' confirmed ids of the training half);
 * ``learned causal + objects' Tracker``: the Tracker at ``objects + Tracker``'s setting (what the main job does);
 * ``SlidingDBSCAN + nearest``: the baseline a user would write (the main job's baseline tracker,
   ``reproduce/_baseline_tracker.py``): SlidingDBSCAN's clusters of each scan associated to the tracks' last centroids
@@ -54,6 +55,8 @@ Run (about an hour per preset and 3 seeds on 2 shared cores)::
 ``--pq-only`` measures the causal PQ alone (no trackers, no out-of-fold models, the training half not streamed);
 ``--without-sliding`` neither tunes nor streams SlidingDBSCAN (its tuning is most of a seed's time).  Tuned
 settings are cached per preset and seed only: give data of another size its own ``--cache``.
+
+``--learned-param link__pair_window=0.5`` (repeatable) fits a variant of the main job's causal model.
 
 ``--save FOLDER`` writes each seed's rows as ``tracking_<preset>_<seed>.json`` (seeds may then run as separate
 processes); ``--summary --save FOLDER`` prints the tables of the saved rows.
@@ -148,7 +151,8 @@ def streamed(preset, seed, tuned, options):
     sliding = None if SLIDING not in tuned else clone(sliding_variant.searched).set_params(**tuned[SLIDING]["params"])
     instances = precluster_target(scenes.data, scenes.target)
     inputs = scenes.data[[c for c in scenes.data.columns if c not in LABEL_COLUMNS]]
-    learned = learned_pipeline({**LEARNED_CAUSAL, "link__random_state": seed, "link__n_jobs": 1})
+    changed = dict(options.learned_params or ())  # --learned-param: a variant of the main job's model
+    learned = learned_pipeline({**LEARNED_CAUSAL, "link__random_state": seed, "link__n_jobs": 1, **changed})
     start = time.perf_counter()
     learned.fit(inputs.iloc[train].reset_index(drop=True), instances[train])
     print(f"  {preset} seed {seed}: learned causal model fitted in {time.perf_counter() - start:.0f} s", flush=True)
@@ -183,7 +187,8 @@ def streamed(preset, seed, tuned, options):
             )
             if half == "train":  # the ids of a model that did not see this sequence (what the test half gets;
                 model = out_of_fold.get(sequence, learned)  # a lone training sequence has none: the final model's)
-                part["learned_oof"] = replay(OnlinePipeline(model), data)["reported"]
+                replayed_oof = replay(OnlinePipeline(model), data)
+                part["learned_oof"], part["learned_oof_followed"] = replayed_oof["reported"], replayed_oof["followed"]
             part["truth"] = scenes.target[rows[scenes.groups[rows] == sequence]]
             part["instances"] = instances[rows[scenes.groups[rows] == sequence]]
             parts.append(part)
@@ -298,6 +303,12 @@ FORMS = {
     ),
     "learned causal, confirmed + Tracker": (Tracker, TRACKER_SPACE, lambda p: p["learned_confirmed"]),
     "learned causal, confirmed + Tracker, noise": (Tracker, NOISE_SPACE, lambda p: p["learned_confirmed"]),
+    "learned causal, confirmed + Tracker, out-of-fold": (
+        Tracker,
+        TRACKER_SPACE,
+        lambda p: p["learned_confirmed"],
+        lambda p: p["learned_oof_followed"],
+    ),
     "SlidingDBSCAN + nearest": (NearestCentroidTracker, BASELINE_SPACE, lambda p: p["sliding"]),
 }
 #: The streams whose causal per-frame PQ is measured: name -> their final ids (or labels) on a part.
@@ -389,13 +400,20 @@ def table(preset, runs):
     for name in names:
         cells = [_mean_se([r[name]["scores"][m] for r in runs]) for m in metrics]
         lines.append(f"{name:<36} " + " ".join(f"{m:.3f} ± {se:.3f}".rjust(15) for m, se in cells))
-    for reference in ("objects (reported)", "SlidingDBSCAN + nearest", "objects + Tracker", "learned causal + Tracker"):
+    references = (
+        "objects (reported)",
+        "SlidingDBSCAN + nearest",
+        "objects + Tracker",
+        "learned causal + Tracker",
+        "learned causal, confirmed + Tracker",
+    )
+    for reference in references:
         for name in names:
             if name == reference or "Tracker" not in name or reference not in runs[0]:
                 continue
             if reference == "objects + Tracker" and not name.startswith("learned"):
                 continue
-            if reference == "learned causal + Tracker" and not name.endswith("out-of-fold"):
+            if reference.startswith("learned") and name != f"{reference}, out-of-fold":  # tuned on which ids
                 continue
             cells = [_mean_se([r[name]["scores"][m] - r[reference]["scores"][m] for r in runs]) for m in metrics]
             short = "in-sample" if reference.startswith("learned") else reference.split(" ")[0]
@@ -419,6 +437,19 @@ def table(preset, runs):
     return "\n".join(lines)
 
 
+def _learned_param(text):
+    """``NAME=VALUE`` -> (NAME, VALUE read as JSON: a number, true/false, null)."""
+    name, sep, value = text.partition("=")
+    if not sep or "__" not in name:
+        raise argparse.ArgumentTypeError(f"--learned-param {text!r}: give step__name=value")
+    try:
+        return name, json.loads(value)
+    except json.JSONDecodeError as error:
+        raise argparse.ArgumentTypeError(
+            f"--learned-param {text!r}: {value!r} is not a number, true, false or null"
+        ) from error
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2])
@@ -436,6 +467,14 @@ def main(argv=None):
         "--pq-only", action="store_true", help="only the causal PQ of the streams (no trackers, no training half)"
     )
     parser.add_argument("--without-sliding", action="store_true", help="neither tune nor stream SlidingDBSCAN")
+    parser.add_argument(
+        "--learned-param",
+        dest="learned_params",
+        action="append",
+        type=_learned_param,
+        metavar="NAME=VALUE",
+        help="a parameter of the learned pipeline changed from the main job's (e.g. link__pair_window=0.5)",
+    )
     options = parser.parse_args(argv)
     if options.summary:
         for preset in options.presets:
