@@ -59,6 +59,13 @@ CLUSTER_FEATURES = {
         "RMS of v_r minus the Doppler the Eq. 6 velocity predicts, all detections (NaN when unknown)",
         ("azimuth_sc", "sensor_yaw"),
     ),
+    "length": (
+        "m",
+        "extent along the first principal axis of the positions moved to the segment's mean time with the Eq. 6 "
+        "velocity (NaN when unknown)",
+        ("azimuth_sc", "sensor_yaw"),
+    ),
+    "width": ("m", "the same along the second principal axis (NaN when unknown)", ("azimuth_sc", "sensor_yaw")),
     "n_sensors": ("1", "number of distinct sensors that saw the segment", ("sensor_id",)),
 }
 
@@ -110,6 +117,12 @@ def cluster_features(X, labels, *, window=None, return_rows=False):
     ``speed_residual``  m/s    root mean square, over all the segment's
                                detections, of ``v_r`` minus the Doppler that
                                velocity predicts; NaN when unknown
+    ``length``          m      extent along the first principal axis of the
+                               positions moved to the segment's mean time with
+                               that velocity, ``x - vx (t - mean t)`` (likewise
+                               y): the body without the distance it travels;
+                               NaN when the velocity is unknown
+    ``width``           m      the same along the second principal axis
     ``n_sensors``       1      number of distinct ``sensor_id``
     ==================  =====  ==================================================
 
@@ -117,7 +130,9 @@ def cluster_features(X, labels, *, window=None, return_rows=False):
     the positions accumulated over the segment's time span, so a moving
     object's extent along its track includes the distance it travels in that
     time, as in features accumulated over a time window (Scheiner et al.
-    2018).  A feature whose column X lacks is left out of the table, never
+    2018); ``length`` and ``width`` take the travel out (in the fixed frame,
+    ``FrameTransform(frame="frame")``; in the car frame the ego motion stays
+    in every position).  A feature whose column X lacks is left out of the table, never
     made up: the RCS features need ``rcs``, ``range_mean`` needs
     ``range_sc``, ``azimuth_spread`` and the velocity features need
     ``azimuth_sc`` and ``sensor_yaw`` (the line of sight of Eq. 6 is
@@ -325,6 +340,14 @@ def _extent(values, starts):
     return np.maximum.reduceat(values, starts) - np.minimum.reduceat(values, starts)
 
 
+def _principal_extents(dx, dy, segment, starts, counts):
+    """Extents of centred positions along their first and second principal axes (of the 2 x 2 covariance)."""
+    sxx, syy, sxy = (_mean(product, starts, counts) for product in (dx * dx, dy * dy, dx * dy))
+    phi = 0.5 * np.arctan2(2.0 * sxy, sxx - syy)
+    cos_phi, sin_phi = np.cos(phi)[segment], np.sin(phi)[segment]
+    return _extent(dx * cos_phi + dy * sin_phi, starts), _extent(-dx * sin_phi + dy * cos_phi, starts)
+
+
 def _std(values, segment, starts, counts):
     """Population standard deviation per segment (two passes: centred first, for large coordinates)."""
     deviation = values - _mean(values, starts, counts)[segment]
@@ -336,14 +359,9 @@ def _features(v, segment, starts, counts, n_segments):
     out = {"n_detections": counts.astype(np.int64)}
     out["duration"] = _extent(v["t"], starts)
 
-    # Principal axes of the positions: the eigenvectors of the 2 x 2 covariance, at angle phi.
     dx = v["x"] - _mean(v["x"], starts, counts)[segment]
     dy = v["y"] - _mean(v["y"], starts, counts)[segment]
-    sxx, syy, sxy = (_mean(product, starts, counts) for product in (dx * dx, dy * dy, dx * dy))
-    phi = 0.5 * np.arctan2(2.0 * sxy, sxx - syy)
-    cos_phi, sin_phi = np.cos(phi)[segment], np.sin(phi)[segment]
-    out["extent_along"] = _extent(dx * cos_phi + dy * sin_phi, starts)
-    out["extent_across"] = _extent(-dx * sin_phi + dy * cos_phi, starts)
+    out["extent_along"], out["extent_across"] = _principal_extents(dx, dy, segment, starts, counts)
 
     out["vr_mean"] = _mean(v["v_r"], starts, counts)
     out["vr_std"], _ = _std(v["v_r"], segment, starts, counts)
@@ -363,6 +381,10 @@ def _features(v, segment, starts, counts, n_segments):
         vx, vy, residual = _velocities_and_residuals(v["v_r"], azimuth + heading, segment, n_segments)
         out["speed"] = np.hypot(vx, vy)
         out["speed_residual"] = residual
+        # The positions moved to the segment's mean time with its velocity: the body without its travel.
+        dt = v["t"] - _mean(v["t"], starts, counts)[segment]
+        moved_x, moved_y = dx - vx[segment] * dt, dy - vy[segment] * dt
+        out["length"], out["width"] = _principal_extents(moved_x, moved_y, segment, starts, counts)
     if v["sensor_id"] is not None:
         out["n_sensors"] = _distinct_per_segment(v["sensor_id"], segment, n_segments)
     return out

@@ -20,6 +20,13 @@ def _table(**columns):
     return pd.DataFrame({**base, **{name: np.asarray(values, dtype=float) for name, values in columns.items()}})
 
 
+def _principal_coordinates(position):
+    """Coordinates of positions along their first and second principal axes (eigenvectors of the covariance)."""
+    _, vectors = np.linalg.eigh(np.cov(position.T, bias=True).reshape(2, 2))
+    centred = position - position.mean(axis=0)
+    return centred @ vectors[:, 1], centred @ vectors[:, 0]  # eigh: ascending eigenvalues
+
+
 def _reference(X, labels, window):
     """The feature table computed segment by segment with plain numpy and the per-cluster velocity estimate."""
     labels = np.asarray(labels)
@@ -41,9 +48,7 @@ def _reference(X, labels, window):
         d = X.iloc[rows]
         record = dict(zip(("sequence", "cluster", "window"), key, strict=True))
         position = d[["x", "y"]].to_numpy()
-        _, vectors = np.linalg.eigh(np.cov(position.T, bias=True).reshape(2, 2))
-        centred = position - position.mean(axis=0)
-        along, across = centred @ vectors[:, 1], centred @ vectors[:, 0]  # eigh: ascending eigenvalues
+        along, across = _principal_coordinates(position)
         v_r = d["v_r"].to_numpy()
         record.update(
             n_detections=len(rows),
@@ -68,6 +73,10 @@ def _reference(X, labels, window):
             record["speed"] = np.hypot(vx, vy)
             predicted = vx * np.cos(azimuth + heading) + vy * np.sin(azimuth + heading)
             record["speed_residual"] = np.sqrt(np.mean((v_r - predicted) ** 2))
+            t = d["t"].to_numpy()
+            moved = position - np.outer(t - t.mean(), [vx, vy])  # NaN throughout when the velocity is unknown
+            length, width = _principal_coordinates(moved) if np.isfinite(vx) else (np.nan, np.nan)
+            record["length"], record["width"] = np.ptp(length), np.ptp(width)
         if "sensor_id" in d:
             record["n_sensors"] = len(set(d["sensor_id"]))
         records.append(record)
@@ -205,6 +214,34 @@ def test_velocity_of_a_rigid_object_and_its_residual():
     # Two detections: too few for Eq. 6, the velocity and its residual are unknown.
     two = cluster_features(X.iloc[:2], [0, 0]).iloc[0]
     assert np.isnan(two["speed"]) and np.isnan(two["speed_residual"])
+
+
+def test_length_and_width_of_a_moving_rectangle():
+    # A 4 m x 2 m body (corners and centre) moving at (3, -4) m/s along its long side, its detections 0.08 s
+    # apart: the extents of the positions include the 2 m it travels in 0.4 s; length and width are the body's.
+    heading, side = np.array([3.0, -4.0]) / 5.0, np.array([4.0, 3.0]) / 5.0
+    along, across = np.array([-2.0, 2.0, -2.0, 2.0, 0.0, 0.0]), np.array([-1.0, -1.0, 1.0, 1.0, 0.0, 0.0])
+    t = np.linspace(0.0, 0.4, 6)
+    position = np.outer(along, heading) + np.outer(across, side) + np.outer(t, [3.0, -4.0]) + [10.0, 20.0]
+    azimuth = np.linspace(-0.4, 0.4, 6)
+    X = _table(
+        x=position[:, 0],
+        y=position[:, 1],
+        v_r=3.0 * np.cos(azimuth) - 4.0 * np.sin(azimuth),
+        t=t,
+        azimuth_sc=azimuth,
+        sensor_yaw=np.zeros(6),
+    )
+    row = cluster_features(X, [0] * 6).iloc[0]
+    assert row["length"] == pytest.approx(4.0) and row["width"] == pytest.approx(2.0)
+    assert row["extent_along"] > 5.0  # the travel is in the plain extents
+    # Seen at one instant there is no travel: length and width are the principal extents.
+    still = cluster_features(X.assign(t=0.0), [0] * 6).iloc[0]
+    assert still["length"] == pytest.approx(still["extent_along"])
+    assert still["width"] == pytest.approx(still["extent_across"])
+    # Two detections: the velocity is unknown, and so are length and width.
+    two = cluster_features(X.iloc[:2], [0, 0]).iloc[0]
+    assert np.isnan(two["length"]) and np.isnan(two["width"])
 
 
 def test_a_feature_without_its_columns_is_left_out():
