@@ -150,9 +150,15 @@ def test_the_classified_file_is_the_devkits_and_the_devkit_reads_it(folder, file
     known = np.array([value is not None for value in true])
     hits = predicted[known] == np.array(true, dtype=object)[known].astype(int)
     moving = np.array(true, dtype=object)[known].astype(int) != ClassificationLabel.STATIC.value
-    # Against the devkit's own mapping of the true labels: background is STATIC (measured 99 %), and road users are
-    # found in their devkit class (measured 44 %, noise included), so the classes are in the devkit's numbering.
-    assert hits[~moving].mean() > 0.95 and hits[moving].mean() > 0.3
+    # Against the devkit's own mapping of the true labels: background is STATIC (measured 99.6 %), and the road-user
+    # label most often given to the true cars is CAR, to the true two-wheelers TWO_WHEELER (the classifier, trained
+    # on 24 s, confuses the rarer classes), so the classes are in the devkit's numbering.  A share of all road-user
+    # hits is no test of it: 30 % here, and one of the 119 other orders of the five codes scores 31 %.
+    assert hits[~moving].mean() > 0.95
+    true_moving, predicted_moving = np.array(true, dtype=object)[known][moving].astype(int), predicted[known][moving]
+    for label in (ClassificationLabel.CAR, ClassificationLabel.TWO_WHEELER):
+        given = predicted_moving[(true_moving == label.value) & (predicted_moving != ClassificationLabel.STATIC.value)]
+        assert np.bincount(given).argmax() == label.value, (label, np.bincount(given))
     instances = radar_data["pred_instance_id"].astype(int)
     static = predicted == ClassificationLabel.STATIC.value
     assert (instances[static] == -1).all() and (instances[~static] >= 0).all()
