@@ -132,8 +132,8 @@ def cluster_features(X, labels, *, window=None, return_rows=False):
     time, as in features accumulated over a time window (Scheiner et al.
     2018); ``length`` and ``width`` take the travel out (in the fixed frame,
     ``FrameTransform(frame="frame")``; in the car frame the ego motion stays
-    in every position).  A feature whose column X lacks is left out of the table, never
-    made up: the RCS features need ``rcs``, ``range_mean`` needs
+    in every position).  A feature whose column X lacks is left out of the
+    table, never made up: the RCS features need ``rcs``, ``range_mean`` needs
     ``range_sc``, ``azimuth_spread`` and the velocity features need
     ``azimuth_sc`` and ``sensor_yaw`` (the line of sight of Eq. 6 is
     ``azimuth_sc + sensor_yaw + heading``, ``heading`` 0 when absent), and
