@@ -56,7 +56,9 @@ Run (about an hour per preset and 3 seeds on 2 shared cores)::
 ``--without-sliding`` neither tunes nor streams SlidingDBSCAN (its tuning is most of a seed's time).  Tuned
 settings are cached per preset and seed only: give data of another size its own ``--cache``.
 
-``--learned-param link__pair_window=0.5`` (repeatable) fits a variant of the main job's causal model.
+``--learned-param link__pair_window=0.5`` (repeatable) fits a variant of the main job's causal model;
+``--drop-feature-group 'no rigid velocity'`` fits it without a feature group of ``ablation_learned.py`` (the stream
+then computes only the features the model was fitted with).
 
 ``--save FOLDER`` writes each seed's rows as ``tracking_<preset>_<seed>.json`` (seeds may then run as separate
 processes); ``--summary --save FOLDER`` prints the tables of the saved rows.
@@ -69,6 +71,7 @@ import json
 import math
 import sys
 import time
+from contextlib import contextmanager
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -154,7 +157,8 @@ def streamed(preset, seed, tuned, options):
     changed = dict(options.learned_params or ())  # --learned-param: a variant of the main job's model
     learned = learned_pipeline({**LEARNED_CAUSAL, "link__random_state": seed, "link__n_jobs": 1, **changed})
     start = time.perf_counter()
-    learned.fit(inputs.iloc[train].reset_index(drop=True), instances[train])
+    with _without_features(options.drop_feature_group):
+        learned.fit(inputs.iloc[train].reset_index(drop=True), instances[train])
     print(f"  {preset} seed {seed}: learned causal model fitted in {time.perf_counter() - start:.0f} s", flush=True)
     out_of_fold = {}  # training sequence -> the model fitted on the other training sequences
     for sequence in [] if options.pq_only else np.unique(scenes.groups[train]):
@@ -437,6 +441,22 @@ def table(preset, runs):
     return "\n".join(lines)
 
 
+@contextmanager
+def _without_features(group):
+    """While fitting, LinkClustering leaves out the features of ``group`` (``ablation_learned.FEATURE_GROUPS``)."""
+    if group is None:
+        yield
+        return
+    from ablation_learned import FEATURE_GROUPS, lc
+
+    original, dropped = lc.usable, list(FEATURE_GROUPS[group])
+    lc.usable = lambda table, present: original(table, present) & ~np.isin(list(table), dropped)
+    try:
+        yield
+    finally:
+        lc.usable = original
+
+
 def _learned_param(text):
     """``NAME=VALUE`` -> (NAME, VALUE read as JSON: a number, true/false, null)."""
     name, sep, value = text.partition("=")
@@ -474,6 +494,11 @@ def main(argv=None):
         type=_learned_param,
         metavar="NAME=VALUE",
         help="a parameter of the learned pipeline changed from the main job's (e.g. link__pair_window=0.5)",
+    )
+    parser.add_argument(
+        "--drop-feature-group",
+        default=None,
+        help="fit the learned model without a feature group of ablation_learned.py (e.g. 'no rigid velocity')",
     )
     options = parser.parse_args(argv)
     if options.summary:
