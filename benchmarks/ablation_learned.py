@@ -52,6 +52,7 @@ import json
 import math
 import sys
 import time
+from contextlib import contextmanager
 from pathlib import Path
 
 import numba
@@ -375,19 +376,21 @@ def run_designs(model, seen, fit_s, test, y_test, times, groups, designs=DESIGNS
     return records
 
 
-def run_features(name, train, y_train, test, y_test, times, groups, threads):
-    dropped = set(FEATURE_GROUPS[name])
-    original = lc.usable
-
-    def usable(table, present):
-        return original(table, present) & ~np.isin(list(table), list(dropped))
-
-    lc.usable = usable
+@contextmanager
+def without_features(name):
+    """While it lasts, LinkClustering fits (and predicts) without the features of ``FEATURE_GROUPS[name]``."""
+    original, dropped = lc.usable, list(FEATURE_GROUPS[name])
+    lc.usable = lambda table, present: original(table, present) & ~np.isin(list(table), dropped)
     try:
-        model, _, fit_s = fit_capturing(train, y_train, threads)
-        labels = model.predict(test)
+        yield
     finally:
         lc.usable = original
+
+
+def run_features(name, train, y_train, test, y_test, times, groups, threads):
+    with without_features(name):
+        model, _, fit_s = fit_capturing(train, y_train, threads)
+        labels = model.predict(test)
     record = experiment._scores(name, labels, y_test, times, groups)
     record.update(
         cv_pq=model.cv_score_,

@@ -71,7 +71,7 @@ import json
 import math
 import sys
 import time
-from contextlib import contextmanager
+from contextlib import nullcontext
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -79,6 +79,7 @@ import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 
+from ablation_learned import without_features
 from ablation_object_level import run_one, variants
 from sklearn.base import clone
 
@@ -151,13 +152,17 @@ def streamed(preset, seed, tuned, options):
         2, stage1_params=tuned[f"{OBJECTS} (stage 1)"]["params"], params=tuned[OBJECTS]["params"], causal=True
     )
     sliding_variant = next(v for v in variants() if v.name == SLIDING)
-    sliding = None if SLIDING not in tuned else clone(sliding_variant.searched).set_params(**tuned[SLIDING]["params"])
+    sliding = None  # not measured: --without-sliding
+    if not options.without_sliding:
+        if SLIDING not in tuned:
+            raise ValueError(f"{_cache_file(options.cache, preset, seed)} has no SlidingDBSCAN: give --without-sliding")
+        sliding = clone(sliding_variant.searched).set_params(**tuned[SLIDING]["params"])
     instances = precluster_target(scenes.data, scenes.target)
     inputs = scenes.data[[c for c in scenes.data.columns if c not in LABEL_COLUMNS]]
     changed = dict(options.learned_params or ())  # --learned-param: a variant of the main job's model
     learned = learned_pipeline({**LEARNED_CAUSAL, "link__random_state": seed, "link__n_jobs": 1, **changed})
     start = time.perf_counter()
-    with _without_features(options.drop_feature_group):
+    with nullcontext() if options.drop_feature_group is None else without_features(options.drop_feature_group):
         learned.fit(inputs.iloc[train].reset_index(drop=True), instances[train])
     print(f"  {preset} seed {seed}: learned causal model fitted in {time.perf_counter() - start:.0f} s", flush=True)
     out_of_fold = {}  # training sequence -> the model fitted on the other training sequences
@@ -179,16 +184,13 @@ def streamed(preset, seed, tuned, options):
                 reported=replayed["reported"],
                 confirmed=replayed["confirmed"],
                 final=replayed["object_ids"],
-                sliding=(
-                    np.full(len(data), -1)  # not measured (--without-sliding)
-                    if sliding is None
-                    else clone(sliding).fit(clone(sliding_variant.stage0).fit_transform(data))[-1].labels_
-                ),
                 sequence=np.full(len(data), sequence),
                 learned=learned_ids["reported"],
                 learned_confirmed=learned_ids["followed"],  # what the pipeline's own Tracker follows
                 learned_final=learned_ids["object_ids"],
             )
+            if sliding is not None:
+                part["sliding"] = clone(sliding).fit(clone(sliding_variant.stage0).fit_transform(data))[-1].labels_
             if half == "train":  # the ids of a model that did not see this sequence (what the test half gets;
                 model = out_of_fold.get(sequence, learned)  # a lone training sequence has none: the final model's)
                 replayed_oof = replay(OnlinePipeline(model), data)
@@ -441,22 +443,6 @@ def table(preset, runs):
     return "\n".join(lines)
 
 
-@contextmanager
-def _without_features(group):
-    """While fitting, LinkClustering leaves out the features of ``group`` (``ablation_learned.FEATURE_GROUPS``)."""
-    if group is None:
-        yield
-        return
-    from ablation_learned import FEATURE_GROUPS, lc
-
-    original, dropped = lc.usable, list(FEATURE_GROUPS[group])
-    lc.usable = lambda table, present: original(table, present) & ~np.isin(list(table), dropped)
-    try:
-        yield
-    finally:
-        lc.usable = original
-
-
 def _learned_param(text):
     """``NAME=VALUE`` -> (NAME, VALUE read as JSON: a number, true/false, null)."""
     name, sep, value = text.partition("=")
@@ -501,6 +487,8 @@ def main(argv=None):
         help="fit the learned model without a feature group of ablation_learned.py (e.g. 'no rigid velocity')",
     )
     options = parser.parse_args(argv)
+    if options.without_sliding and not (options.pq_only or options.tune or options.summary):
+        parser.error("--without-sliding needs --pq-only (or --tune): the trackers' rows include the baseline tracker")
     if options.summary:
         for preset in options.presets:
             runs = [json.loads(p.read_text()) for p in sorted(Path(options.save).glob(f"tracking_{preset}_*.json"))]
