@@ -199,14 +199,53 @@ def tune(sequences, objectness, pairs, links, grids, c, y, window, merges_of=mea
 
     Parameters
     ----------
+    sequences, objectness, pairs, links, grids, c, y, window, merges_of
+        As for :func:`tune_surface`.
+
+    Returns
+    -------
+    setting : tuple
+        ``(link_threshold, objectness_threshold, min_cluster_size)``; the first of the grids' order among equals.
+    score : float
+        Its panoptic quality.
+    """
+    return best_of(tune_surface(sequences, objectness, pairs, links, grids, c, y, window, merges_of), grids)
+
+
+def best_of(surface, grids):
+    """The setting of ``grids`` at the maximum of ``surface`` (the first in the grids' order among equals).
+
+    Parameters
+    ----------
+    surface : ndarray of shape (n_objectness, n_link, n_size)
+        A score per setting, as :func:`tune_surface` gives.
+    grids : tuple of three sequences
+        The link thresholds, objectness thresholds and minimum sizes.
+
+    Returns
+    -------
+    setting : tuple
+        ``(link_threshold, objectness_threshold, min_cluster_size)``.
+    score : float
+    """
+    link_grid, objectness_grid, size_grid = grids
+    gate, threshold, size = np.unravel_index(int(np.argmax(np.nan_to_num(surface, nan=-np.inf))), surface.shape)
+    return (link_grid[threshold], objectness_grid[gate], size_grid[size]), float(surface[gate, threshold, size])
+
+
+def tune_surface(sequences, objectness, pairs, links, grids, c, y, window, merges_of=mean_link_merges):
+    """The panoptic quality of every (objectness, link, min size) setting of ``grids``.
+
+    Parameters
+    ----------
     sequences : list of _Sequence
-        The training sequences.
+        The sequences (training ones when tuning).
     objectness : list of ndarray of float64
-        Out-of-fold P(road user) of each sequence's detections.
+        P(road user) of each sequence's detections (out of fold when tuning).
     pairs : list of (ndarray, ndarray)
         Each sequence's candidate pairs.
     links : list of ndarray of float64
-        Their out-of-fold P(link).
+        Their P(link) (out of fold when tuning).
     grids : tuple of three sequences
         The link thresholds, objectness thresholds and minimum sizes to try.
     c : dict of ndarray
@@ -220,30 +259,26 @@ def tune(sequences, objectness, pairs, links, grids, c, y, window, merges_of=mea
 
     Returns
     -------
-    setting : tuple
-        ``(link_threshold, objectness_threshold, min_cluster_size)``; the first of the grids' order among equals.
-    score : float
-        Its panoptic quality.
+    surface : ndarray of float64, shape (n_objectness, n_link, n_size)
+        PQ of each setting, indexed in the order of the objectness, link and size grids.
     """
     n_rows, pq = len(y), _panoptic_quality_of(c, y, window)
     link_grid, objectness_grid, size_grid = grids
-    best, best_score = None, -1.0
-    for gate in objectness_grid:
+    surface = np.empty((len(objectness_grid), len(link_grid), len(size_grid)))
+    for g, gate in enumerate(objectness_grid):
         merges = []
         for s, p, (i, j), link in zip(sequences, objectness, pairs, links, strict=True):
             node = p > gate
             both = node[i] & node[j]
             merges.append((node, merges_of(len(s.rows), i[both], j[both], link[both], min(link_grid))))
-        for threshold in link_grid:
+        for t, threshold in enumerate(link_grid):
             roots = np.full(n_rows, -1, dtype=np.int64)
             for s, (node, merged) in zip(sequences, merges, strict=True):
                 local = np.where(node, roots_at(len(s.rows), *merged, threshold), -1)
                 roots_to_rows(s.rows, local, roots)
-            for size in size_grid:
-                score = pq(drop_small_clusters(roots, size))
-                if score > best_score:
-                    best, best_score = (threshold, gate, size), score
-    return best, best_score
+            for k, size in enumerate(size_grid):
+                surface[g, t, k] = pq(drop_small_clusters(roots, size))
+    return surface
 
 
 def tune_causal(sequences, objectness, pairs, links, grids, c, y, window, pair_window):
@@ -251,11 +286,8 @@ def tune_causal(sequences, objectness, pairs, links, grids, c, y, window, pair_w
 
     Parameters
     ----------
-    sequences, objectness, pairs, links, grids, c, y, window
-        As for :func:`tune`; the pairs in the order of
-        :func:`~._causal_link_features.causal_pairs`.
-    pair_window : float
-        The pair window, s (when clusters retire).
+    sequences, objectness, pairs, links, grids, c, y, window, pair_window
+        As for :func:`tune_causal_surface`.
 
     Returns
     -------
@@ -264,11 +296,29 @@ def tune_causal(sequences, objectness, pairs, links, grids, c, y, window, pair_w
     score : float
         Its panoptic quality.
     """
+    return best_of(tune_causal_surface(sequences, objectness, pairs, links, grids, c, y, window, pair_window), grids)
+
+
+def tune_causal_surface(sequences, objectness, pairs, links, grids, c, y, window, pair_window):
+    """As :func:`tune_surface`, with the causal agglomeration (and ``min_cluster_size`` as its confirmation count).
+
+    Parameters
+    ----------
+    sequences, objectness, pairs, links, grids, c, y, window
+        As for :func:`tune_surface`; the pairs in the order of
+        :func:`~._causal_link_features.causal_pairs`.
+    pair_window : float
+        The pair window, s (when clusters retire).
+
+    Returns
+    -------
+    surface : ndarray of float64, shape (n_objectness, n_link, n_size)
+    """
     n_rows, pq = len(y), _panoptic_quality_of(c, y, window)
     link_grid, objectness_grid, size_grid = grids
-    best, best_score = None, -1.0
-    for gate in objectness_grid:
-        for threshold in link_grid:
+    surface = np.empty((len(objectness_grid), len(link_grid), len(size_grid)))
+    for g, gate in enumerate(objectness_grid):
+        for t, threshold in enumerate(link_grid):
             merged = []
             for s, p, (i, j), link in zip(sequences, objectness, pairs, links, strict=True):
                 node = p > gate
@@ -276,11 +326,9 @@ def tune_causal(sequences, objectness, pairs, links, grids, c, y, window, pair_w
                 merged.append(
                     sequence_merges(s.detections.t, node, i[both], j[both], link[both], pair_window, threshold)
                 )
-            for size in size_grid:
+            for k, size in enumerate(size_grid):
                 roots = np.full(n_rows, -1, dtype=np.int64)
                 for s, (local, sizes) in zip(sequences, merged, strict=True):
                     roots_to_rows(s.rows, confirmed_roots(local, sizes, size), roots)
-                score = pq(roots)
-                if score > best_score:
-                    best, best_score = (threshold, gate, size), score
-    return best, best_score
+                surface[g, t, k] = pq(roots)
+    return surface

@@ -270,3 +270,11 @@ def test_the_detections_of_a_sequence_are_numbered_free_of_the_row_order(data):
     for name in forward.detections._fields:
         np.testing.assert_array_equal(getattr(shuffled.detections, name), getattr(forward.detections, name))
     np.testing.assert_array_equal(shuffled.features, forward.features)
+
+
+def test_best_of_takes_the_first_maximum_in_the_grids_order_and_never_a_nan():
+    grids = ((0.1, 0.2), (0.01, 0.5), (1, 3))  # link thresholds, objectness thresholds, minimum sizes
+    surface = np.array([[[0.2, 0.7], [0.7, 0.1]], [[0.1, 0.7], [0.3, 0.2]]])  # (objectness, link, size)
+    assert _link_training.best_of(surface, grids) == ((0.1, 0.01, 3), 0.7)
+    surface[0, 0, 0] = np.nan
+    assert _link_training.best_of(surface, grids) == ((0.1, 0.01, 3), 0.7)
