@@ -56,7 +56,8 @@ neighbourhood point-wise classifier: each clustering's classifier with the singl
 ``history="mean_proba"``.  The learned grouping's classifier is trained on out-of-fold clusters of the training
 half (each sequence clustered by a ``LinkClustering`` with the tuned thresholds fixed, fitted on the other
 sequences: the kind of clusters the test half gets) and, as ``reproduce`` trains it, on the fitted model's own
-clusters of its training data (``in-sample``); with ``--extra-training`` the grouping stays fitted on the training
+clusters of its training data (``in-sample``), each also with the ground truth's segments beside the clusters
+(``ClusterClassifier(true_segments=True)``); with ``--extra-training`` the grouping stays fitted on the training
 half and labels the extra sequences with ``predict``.  The report gives per class PQ, the class PQ / clustering
 PQ ratio, per-object macro-F1 by windows seen and the paired differences (mean +- 2 SE over seeds); the user
 guide's tables (``--runs-file`` keeps the records as they come)::
@@ -353,11 +354,17 @@ def run_learned(preset, seed, X_test, truth, X_train, y_train, train_instances, 
     )
     records = {}
     in_sample = FrozenEstimator(link) if len(Z) == n_half else _GivenLabels(own)  # predict once, not per row
-    for training, clusterer in (("out-of-fold", _GivenLabels(oof)), ("in-sample", in_sample)):
+    for training, clusterer, true_segments in (
+        ("out-of-fold", _GivenLabels(oof), False),
+        ("in-sample", in_sample, False),
+        ("out-of-fold + true segments", _GivenLabels(oof), True),
+        ("in-sample + true segments", in_sample, True),
+    ):
         for history, suffix in ((None, ""), ("mean_proba", ", mean proba")):
             name = f"learned ({training}){suffix}"
             start = time.perf_counter()
-            classifier = ClusterClassifier(clusterer, history=history).fit(Z, y_train)
+            classifier = ClusterClassifier(clusterer, history=history, true_segments=true_segments)
+            classifier.fit(Z, y_train)
             found = classifier.predict_instances_of(Xt, labels)
             records[name] = score(Xt, labels, found, truth, classifier)
             _print(preset, seed, name, records[name], start)
@@ -524,6 +531,10 @@ def learned_report(preset, runs):
         (LEARNED, OBJECTS),
         (f"{LEARNED}, mean proba", f"{OBJECTS}, mean proba"),
         ("learned (in-sample)", LEARNED),
+        ("learned (out-of-fold + true segments)", LEARNED),
+        ("learned (out-of-fold + true segments), mean proba", f"{LEARNED}, mean proba"),
+        ("learned (in-sample + true segments)", "learned (in-sample)"),
+        ("learned (in-sample + true segments), mean proba", "learned (in-sample), mean proba"),
         (OBJECTS, NEIGHBOURHOOD),
     ):
         for key in ("pq", "clustering_pq"):

@@ -13,7 +13,7 @@ from sklearn.utils._param_validation import HasMethods, Interval, StrOptions
 from sklearn.utils.validation import check_is_fitted
 
 from .._labels import consecutive_labels
-from .._schema import CLUSTER_FEATURE_READS, instance_target
+from .._schema import CLASSIFIER_LAYOUT, CLUSTER_FEATURE_READS, ColumnsRead, instance_target
 from .._validation import validated_input
 from ..cluster import RadarDBSCAN
 from ._classes import BACKGROUND, IGNORED
@@ -22,6 +22,9 @@ from ._history import HISTORY_OPTIONS, cluster_starts, running_weighted_mean, wi
 from ._reading import columns_at, time_columns
 from ._targets import segment_targets
 from ._wrapped import check_class_target, class_proba, fit_classifier, instance_column_of, macro_f1_score
+
+#: The column that says which detections the filter kept (read for the true segments).
+KEEP_READS = ColumnsRead(required=(), optional=("keep",), layout=CLASSIFIER_LAYOUT)
 
 
 class ClusterClassifier(BaseEstimator):
@@ -142,6 +145,15 @@ class ClusterClassifier(BaseEstimator):
         extents, ``vr_range``, ``rcs_max`` and ``speed`` (units those of the
         feature); it is trained on them.  Measured in the
         :ref:`User Guide <classification-history>`.
+    true_segments : bool, default=False
+        Learn, besides the clusterer's segments, from the segments of the
+        ground truth: each instance's kept detections (``keep``) in each
+        window, labelled with its class, as a clusterer without mistakes
+        would give them.  Every class of the training data then has
+        examples even where the clusterer misses it (as a clusterer fitted
+        on other sequences does).  :meth:`fit` only; prediction is
+        unchanged.  Measured in the
+        :ref:`User Guide <classification-true-segments>`.
 
     Attributes
     ----------
@@ -158,7 +170,7 @@ class ClusterClassifier(BaseEstimator):
         it uses: those whose columns X holds.
     n_training_examples_ : int
         The segments it was trained on (those not matched to an ignored
-        instance).
+        instance), the true segments included.
     n_features_in_ : int
         Number of columns seen in :meth:`fit`.
     feature_names_in_ : ndarray of str
@@ -208,8 +220,10 @@ class ClusterClassifier(BaseEstimator):
     True
     """
 
-    #: The default of a classifier pickled before ``history`` existed (its file then loads and classifies as saved).
+    #: The defaults of a classifier pickled before ``history`` (``true_segments``) existed: its file then loads and
+    #: classifies as saved.
     history = None
+    true_segments = False
 
     _parameter_constraints: ClassVar[dict] = {
         "clusterer": [HasMethods(["fit_predict"]), FrozenEstimator, None],
@@ -217,14 +231,25 @@ class ClusterClassifier(BaseEstimator):
         "window": [Interval(Real, 0, None, closed="neither"), None],
         "instance_column": [str, None],
         "history": [StrOptions(set(HISTORY_OPTIONS)), None],
+        "true_segments": ["boolean"],
     }
 
-    def __init__(self, clusterer=None, classifier=None, *, window=0.5, instance_column="track_id", history=None):
+    def __init__(
+        self,
+        clusterer=None,
+        classifier=None,
+        *,
+        window=0.5,
+        instance_column="track_id",
+        history=None,
+        true_segments=False,
+    ):
         self.clusterer = clusterer
         self.classifier = classifier
         self.window = window
         self.instance_column = instance_column
         self.history = history
+        self.true_segments = true_segments
 
     @_fit_context(prefer_skip_nested_validation=False)
     def fit(self, X, y):
@@ -251,6 +276,8 @@ class ClusterClassifier(BaseEstimator):
         instances = self._instances(X, time["sequence"], classes)
         windows = window_index(time["t"], time["sequence"], self.window)
         targets = segment_targets(classes, instances, time["sequence"], windows, rows, len(table))
+        if self.true_segments:
+            table, targets = self._with_true_segments(X, table, targets, classes, instances, time, windows)
         learn = targets != IGNORED
         self.feature_names_ = np.asarray(table.columns[3:], dtype=object)
         self.classifier_ = fit_classifier(
@@ -264,6 +291,14 @@ class ClusterClassifier(BaseEstimator):
         self.classes_ = np.union1d([BACKGROUND], np.asarray(self.classifier_.classes_, dtype=np.int64))
         self.n_training_examples_ = int(learn.sum())
         return self
+
+    def _with_true_segments(self, X, table, targets, classes, instances, time, windows):
+        """The training segments and targets with the ground truth's segments (kept detections) appended."""
+        keep = columns_at(self, X, KEEP_READS, None)["keep"]
+        truth = instances if keep is None else np.where(keep != 0, instances, -1)
+        _, true_table, true_rows = self._describe(X, truth)
+        true_targets = segment_targets(classes, truth, time["sequence"], windows, true_rows, len(true_table))
+        return pd.concat([table, true_table], ignore_index=True), np.concatenate([targets, true_targets])
 
     def predict(self, X):
         """Road-user class of each detection; -1 for noise and for clusters classified as background.

@@ -370,3 +370,27 @@ def test_bad_targets_name_the_problem(change, match):
         warnings.simplefilter("ignore", UserWarning)
         with pytest.raises(ValueError, match=match):
             ClusterClassifier(Given(LABELS), Recording()).fit(X, y)
+
+
+def test_true_segments_are_learned_beside_the_clusters_from_the_kept_detections():
+    X = _detections().assign(keep=True)
+    X.loc[4, "keep"] = False  # the filter dropped the car's second detection of its second window
+    y = road_user_class(X["label_id"])
+    model = ClusterClassifier(Given(LABELS), Recording(), true_segments=True).fit(X, y)
+    # The ground truth's segments by hand: the car's two windows (the second without row 4), each pedestrian.
+    truth = np.array([0, 0, 0, 0, -1, 1, 1, -1, -1, 2, 2, -1])
+    expected = pd.concat([cluster_features(X, LABELS, window=0.5), cluster_features(X, truth, window=0.5)])
+    np.testing.assert_array_equal(model.classifier_.X_.to_numpy(), expected.iloc[:, 3:].to_numpy(dtype=float))
+    assert model.classifier_.y_.tolist() == [0, 0, 3, -1, 3, 0, 0, 3, 3]  # the clusters, then the true segments
+    assert model.n_training_examples_ == 9
+    without = ClusterClassifier(Given(LABELS), Recording()).fit(X, y)
+    np.testing.assert_array_equal(without.predict(X), model.predict(X))  # prediction does not read the truth
+
+
+def test_true_segments_teach_the_classes_a_clusterer_misses():
+    X = _detections()
+    y = road_user_class(X["label_id"])
+    with pytest.warns(UserWarning, match="one class only"):
+        assert ClusterClassifier(Given(np.full(len(X), -1))).fit(X, y).classes_.tolist() == [-1]
+    model = ClusterClassifier(Given(np.full(len(X), -1)), Recording(), true_segments=True).fit(X, y)
+    assert model.classifier_.y_.tolist() == [0, 0, 3, 3]
