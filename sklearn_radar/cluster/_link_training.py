@@ -282,20 +282,7 @@ def tune_surface(sequences, objectness, pairs, links, grids, c, y, window, merge
 
 
 def tune_causal(sequences, objectness, pairs, links, grids, c, y, window, pair_window):
-    """As :func:`tune`, with the causal agglomeration (and ``min_cluster_size`` as its confirmation count).
-
-    Parameters
-    ----------
-    sequences, objectness, pairs, links, grids, c, y, window, pair_window
-        As for :func:`tune_causal_surface`.
-
-    Returns
-    -------
-    setting : tuple
-        ``(link_threshold, objectness_threshold, min_cluster_size)``; the first of the grids' order among equals.
-    score : float
-        Its panoptic quality.
-    """
+    """As :func:`tune`, with the causal agglomeration: the best setting of :func:`tune_causal_surface` and its PQ."""
     return best_of(tune_causal_surface(sequences, objectness, pairs, links, grids, c, y, window, pair_window), grids)
 
 
