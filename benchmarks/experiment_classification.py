@@ -8,6 +8,8 @@ per-window PQ on the training half only, with the object-level ablation's search
 each, folds grouped by sequence).  Then, all trained on the training half and scored on the test half:
 
 * ``clusters``: ``ClusterClassifier`` on the tuned setting's clusters (frame, filter, ClusterClassifier(merge));
+* ``clusters, true segments``: the same, trained also on the ground truth's segments
+  (``ClusterClassifier(true_segments=True)``);
 * ``point (4 features)``: ``PointClassifier()``, the minimal row: v_r, RCS, range and azimuth of one detection;
 * ``point (neighbourhood)``: ``PointClassifier(radius=--radius, time_window=--time-window)``, the same learner
   with each detection's neighbourhood (counts, x-y spread, Doppler and RCS statistics of the kept detections
@@ -217,6 +219,12 @@ def models(setting, options):
     return {
         "clusters": Pipeline(
             [*clone(Pipeline(front)).steps, ("classify", ClusterClassifier(pipeline[-1], classifier=learner))]
+        ),
+        "clusters, true segments": Pipeline(
+            [
+                *clone(Pipeline(front)).steps,
+                ("classify", ClusterClassifier(pipeline[-1], classifier=learner, true_segments=True)),
+            ]
         ),
         "point (4 features)": Pipeline([*clone(Pipeline(front)).steps, ("classify", PointClassifier(**point))]),
         "point (neighbourhood)": Pipeline(
