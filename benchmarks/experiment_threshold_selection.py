@@ -48,12 +48,10 @@ from sklearn_radar.cluster import LinkClustering  # noqa: E402
 from sklearn_radar.cluster import _link_clustering as module  # noqa: E402
 from sklearn_radar.cluster._link_clustering import (  # noqa: E402
     CANDIDATE_OBJECTNESS,
-    DETECTION_FEATURES,
     LINK_READS,
-    PAIR_FEATURES,
     _sequences,
 )
-from sklearn_radar.cluster._link_training import best_of, positive_proba, tune_surface  # noqa: E402
+from sklearn_radar.cluster._link_training import best_of, tune_surface  # noqa: E402
 from sklearn_radar.metrics import panoptic_quality  # noqa: E402
 
 RESULTS = HERE / "results" / "threshold_selection"
@@ -87,16 +85,13 @@ def test_surface(model, test, y_test):
     _, c = read_columns(model, test, LINK_READS, reset=False)
     sequences = _sequences(c, model.causal)
     grids = model._grids()
-    detection_columns = np.flatnonzero(np.isin(list(DETECTION_FEATURES), model.detection_feature_names_))
-    pair_columns = np.flatnonzero(np.isin(list(PAIR_FEATURES), model.pair_feature_names_))
-    floor = min(CANDIDATE_OBJECTNESS, min(grids[1]))
+    floor = min(CANDIDATE_OBJECTNESS, min(grids[1]))  # the pairs of every objectness threshold, as fit forms them
     objectness, pairs, links = [], [], []
     for s in sequences:
-        p = positive_proba(model.objectness_classifier_, s.features[:, detection_columns])
-        i, j = model._pairs(s, p > floor)
+        p, i, j, link = model._probabilities(s, floor)
         objectness.append(p)
         pairs.append((i, j))
-        links.append(positive_proba(model.link_classifier_, model._pair_features(s, p, i, j)[:, pair_columns]))
+        links.append(link)
     return tune_surface(sequences, objectness, pairs, links, grids, c, y_test, model.window)
 
 

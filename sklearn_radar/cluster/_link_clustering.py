@@ -472,14 +472,10 @@ class LinkClustering(ClusterMixin, BaseEstimator):
 
     def _labels(self, sequences, n_rows):
         """Labels of every row from the fitted classifiers and thresholds."""
-        detection_columns = np.flatnonzero(np.isin(list(DETECTION_FEATURES), self.detection_feature_names_))
-        pair_columns = np.flatnonzero(np.isin(list(PAIR_FEATURES), self.pair_feature_names_))
         roots = np.full(n_rows, -1, dtype=np.int64)
         for s in sequences:
-            objectness = positive_proba(self.objectness_classifier_, s.features[:, detection_columns])
+            objectness, i, j, links = self._probabilities(s, self.objectness_threshold_)
             node = objectness > self.objectness_threshold_
-            i, j = self._pairs(s, node)
-            links = positive_proba(self.link_classifier_, self._pair_features(s, objectness, i, j)[:, pair_columns])
             if self.causal:
                 final, sizes = sequence_merges(
                     s.detections.t, node, i, j, links, self.pair_window, self.link_threshold_
@@ -489,6 +485,16 @@ class LinkClustering(ClusterMixin, BaseEstimator):
                 local = sequence_roots(len(s.rows), i, j, links, node, self.link_threshold_, self.min_cluster_size_)
             roots_to_rows(s.rows, local, roots)
         return consecutive_labels(roots)
+
+    def _probabilities(self, s, gate):
+        """The fitted classifiers on sequence ``s``: objectness, the candidate pairs (i, j) of the detections above
+        ``gate`` and their P(link)."""
+        detection_columns = np.flatnonzero(np.isin(list(DETECTION_FEATURES), self.detection_feature_names_))
+        pair_columns = np.flatnonzero(np.isin(list(PAIR_FEATURES), self.pair_feature_names_))
+        objectness = positive_proba(self.objectness_classifier_, s.features[:, detection_columns])
+        i, j = self._pairs(s, objectness > gate)
+        links = positive_proba(self.link_classifier_, self._pair_features(s, objectness, i, j)[:, pair_columns])
+        return objectness, i, j, links
 
 
 def sequence_roots(n, i, j, links, node, link_threshold, min_cluster_size):
