@@ -20,6 +20,12 @@ means that are at most the threshold, it can never merge again.  It
 retires: its evidence is forgotten, so the state holds only the clusters
 of the recent past, which bounds the memory of a stream.
 
+With a ``max_extent``, a merge whose cluster would be longer than that is
+refused: the diagonal of the x-y bounding box of the two clusters' nodes of
+the last pair window (the recent nodes, whose positions the state keeps).
+A refused pair keeps its evidence and merges later only if that changes
+and the extent then allows it.
+
 The state of one sequence is a tuple of numba typed containers (see
 :func:`new_state`); :func:`step` advances it by one time.  The offline
 estimator runs :func:`sequence_merges` (every time of a sequence in one
@@ -50,7 +56,9 @@ def _new_state():
     clusters = List.empty_list(types.int64)  # ... their clusters now ...
     times = List.empty_list(types.float64)  # ... and their times, s
     head = np.zeros(1, dtype=np.int64)
-    return evidence, size, last, position, nodes, clusters, times, head
+    xs = List.empty_list(types.float64)  # ... and their positions, m
+    ys = List.empty_list(types.float64)
+    return evidence, size, last, position, nodes, clusters, times, head, xs, ys
 
 
 def new_state():
@@ -60,12 +68,13 @@ def new_state():
     -------
     state : tuple
         Numba typed containers: per cluster, the evidence (sum and count of link probabilities) to each
-        neighbouring cluster, its size and the time of its last node; per recent node, its cluster.
+        neighbouring cluster, its size and the time of its last node; per recent node, its cluster, time and
+        position.
     """
     return _new_state()
 
 
-def step(state, now, new_nodes, i, j, links, window, threshold):
+def step(state, now, new_nodes, i, j, links, window, threshold, x=None, y=None, max_extent=None):
     """Advance the state of one sequence by one time: new nodes, their pairs, and the merges they cause.
 
     Parameters
@@ -85,6 +94,11 @@ def step(state, now, new_nodes, i, j, links, window, threshold):
         The pair window, s: clusters whose last node is older retire.
     threshold : float
         Clusters merge while their mean link exceeds it.
+    x, y : ndarray of float64 or None, default=None
+        Position of each new node, m; needed with ``max_extent``.
+    max_extent : float or None, default=None
+        Longest cluster a merge may make, m: the diagonal of the bounding box of its nodes of the last
+        ``window`` s.  None: no limit.
 
     Returns
     -------
@@ -95,17 +109,31 @@ def step(state, now, new_nodes, i, j, links, window, threshold):
     child, survivor : ndarray of int64
         The merges, in order: cluster ``child`` joined ``survivor`` (the older).
     """
+    new_nodes = np.ascontiguousarray(new_nodes, dtype=np.int64)
     args = (
         state,
         np.float64(now),
-        np.ascontiguousarray(new_nodes, dtype=np.int64),
+        new_nodes,
         np.ascontiguousarray(i, dtype=np.int64),
         np.ascontiguousarray(j, dtype=np.int64),
         np.ascontiguousarray(links, dtype=np.float64),
         np.float64(window),
         np.float64(threshold),
+        *_positions(x, y, len(new_nodes), max_extent),
     )
     return _step_entry(args)(*args)
+
+
+def _positions(x, y, n, max_extent):
+    """``(x, y, limit)`` for the compiled step: contiguous float64 positions (zeros when not given) and the extent
+    limit (infinite for None)."""
+    if max_extent is not None and (x is None or y is None):
+        raise ValueError("max_extent needs the positions x and y of the nodes")
+    x = np.zeros(n) if x is None else np.ascontiguousarray(x, dtype=np.float64)
+    y = np.zeros(n) if y is None else np.ascontiguousarray(y, dtype=np.float64)
+    if not len(x) == len(y) == n:
+        raise ValueError(f"x and y must give one position per node ({n}), got {len(x)} and {len(y)}")
+    return x, y, np.float64(np.inf if max_extent is None else max_extent)
 
 
 _ENTRY = []
@@ -126,8 +154,8 @@ def _step_entry(args):
 
 
 @numba.njit(cache=True, nogil=True)
-def _step(state, now, new_nodes, i, j, links, window, threshold):
-    evidence, size, last, position, nodes, clusters, times, head = state
+def _step(state, now, new_nodes, i, j, links, window, threshold, x, y, max_extent):
+    evidence, size, last, position, nodes, clusters, times, head, xs, ys = state
     # Retire the clusters that no new pair can reach, and forget the nodes that no new pair can end at.
     retired = [c for c in last.keys() if not now - last[c] <= window]
     for c in retired:
@@ -145,15 +173,20 @@ def _step(state, now, new_nodes, i, j, links, window, threshold):
             nodes[k - start] = nodes[k]
             clusters[k - start] = clusters[k]
             times[k - start] = times[k]
+            xs[k - start] = xs[k]
+            ys[k - start] = ys[k]
             position[nodes[k - start]] = k - start
         keep = len(nodes) - start
         while len(nodes) > keep:
             nodes.pop()
             clusters.pop()
             times.pop()
+            xs.pop()
+            ys.pop()
         start = 0
     head[0] = start
-    for node in new_nodes:
+    for q in range(len(new_nodes)):
+        node = new_nodes[q]
         evidence[node] = Dict.empty(key_type=types.int64, value_type=_EVIDENCE)
         size[node] = 1
         last[node] = now
@@ -161,6 +194,8 @@ def _step(state, now, new_nodes, i, j, links, window, threshold):
         nodes.append(node)
         clusters.append(node)
         times.append(now)
+        xs.append(x[q])
+        ys.append(y[q])
     # The evidence of the new pairs: each new node b is still a cluster of its own, and its pairs (a block of j)
     # sum up per cluster a of their earlier end, in the pairs' order; no pair of clusters (a, b) had evidence before.
     heap = [(0.0, np.int64(0), np.int64(0))]
@@ -206,6 +241,8 @@ def _step(state, now, new_nodes, i, j, links, window, threshold):
         s, k = of_a[b]
         if s / k != -negative:
             continue  # stale: the link changed since
+        if max_extent < np.inf and _extent(clusters, xs, ys, start, a, b) > max_extent:
+            continue  # too long a cluster: refused (the evidence stays)
         # b (the younger) joins a.
         child.append(b)
         survivor.append(a)
@@ -247,7 +284,18 @@ def _step(state, now, new_nodes, i, j, links, window, threshold):
     return out, sizes, child_out, survivor_out
 
 
-def sequence_merges(t, node, i, j, links, window, threshold):
+@numba.njit(cache=True, nogil=True)
+def _extent(clusters, xs, ys, start, a, b):
+    """Diagonal of the x-y bounding box of the recent nodes (from ``start`` on) of clusters ``a`` and ``b``, m."""
+    low_x, high_x, low_y, high_y = np.inf, -np.inf, np.inf, -np.inf
+    for k in range(start, len(clusters)):
+        if clusters[k] == a or clusters[k] == b:
+            low_x, high_x = min(low_x, xs[k]), max(high_x, xs[k])
+            low_y, high_y = min(low_y, ys[k]), max(high_y, ys[k])
+    return np.sqrt((high_x - low_x) ** 2 + (high_y - low_y) ** 2)
+
+
+def sequence_merges(t, node, i, j, links, window, threshold, x=None, y=None, max_extent=None):
     """The causal agglomeration of one sequence: every time in order, as :func:`step` once per time.
 
     Parameters
@@ -265,6 +313,10 @@ def sequence_merges(t, node, i, j, links, window, threshold):
         The pair window, s.
     threshold : float
         The link threshold.
+    x, y : ndarray of float64 of shape (n,) or None, default=None
+        Position of each detection, m; needed with ``max_extent``.
+    max_extent : float or None, default=None
+        Longest cluster a merge may make, m (see :func:`step`).  None: no limit.
 
     Returns
     -------
@@ -273,19 +325,21 @@ def sequence_merges(t, node, i, j, links, window, threshold):
     sizes : ndarray of int64, shape (n,)
         The nodes of each node's cluster at its time (after that time's merges), 0 for the others.
     """
+    t = np.ascontiguousarray(t, dtype=np.float64)
     return _sequence_merges(
-        np.ascontiguousarray(t, dtype=np.float64),
+        t,
         np.ascontiguousarray(node, dtype=np.bool_),
         np.asarray(i, dtype=np.int64),
         np.asarray(j, dtype=np.int64),
         np.asarray(links, dtype=np.float64),
         np.float64(window),
         np.float64(threshold),
+        *_positions(x, y, len(t), max_extent),
     )
 
 
 @numba.njit(cache=True, nogil=True)
-def _sequence_merges(t, node, i, j, links, window, threshold):
+def _sequence_merges(t, node, i, j, links, window, threshold, x, y, max_extent):
     n = len(t)
     state = _new_state()
     parent = np.arange(n)
@@ -303,7 +357,7 @@ def _sequence_merges(t, node, i, j, links, window, threshold):
             while end < len(j) and j[end] < stop:
                 end += 1
             clusters, counts, child, survivor = _step(
-                state, t[first], new, i[e:end], j[e:end], links[e:end], window, threshold
+                state, t[first], new, i[e:end], j[e:end], links[e:end], window, threshold, x[new], y[new], max_extent
             )
             e = end
             for k in range(len(new)):

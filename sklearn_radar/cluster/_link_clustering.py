@@ -168,6 +168,16 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         :meth:`predict` and a stream alike).  Bounds the work per scan of
         :class:`~sklearn_radar.online.OnlinePipeline`.  None keeps every
         candidate; ``causal=False`` requires None.
+    max_extent : float > 0 or None, default=None
+        With ``causal=True``, the longest cluster a merge may make, m: a
+        merge is refused when the diagonal of the x-y bounding box of the
+        two clusters' detections of the last ``pair_window`` s would exceed
+        it (in fit, :meth:`predict` and a stream alike).  Keeps a chain of
+        road users close behind one another (a queue, people walking
+        together) from merging into one ever-growing cluster, since the
+        causal agglomeration never splits a cluster.  None: no limit;
+        ``causal=False`` requires None.  Measured in the
+        :ref:`User Guide <online-learned-extent>`.
 
     Attributes
     ----------
@@ -244,6 +254,7 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         "random_state": ["random_state"],
         "causal": ["boolean"],
         "max_links_per_detection": [None, Interval(Integral, 1, None, closed="left")],
+        "max_extent": [None, Interval(Real, 0, None, closed="neither")],
     }
 
     def __init__(
@@ -264,6 +275,7 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         random_state=0,
         causal=False,
         max_links_per_detection=None,
+        max_extent=None,
     ):
         self.link_threshold = link_threshold
         self.objectness_threshold = objectness_threshold
@@ -280,11 +292,14 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         self.random_state = random_state
         self.causal = causal
         self.max_links_per_detection = max_links_per_detection
+        self.max_extent = max_extent
 
     def __setstate__(self, state):
         # A model pickled before max_links_per_detection existed formed every candidate pair; one pickled before
-        # max_leaf_nodes (max_depth) existed had trees of 31 leaves (of any depth).
+        # max_leaf_nodes (max_depth) existed had trees of 31 leaves (of any depth); one pickled before max_extent
+        # existed merged clusters of any length.
         state.setdefault("max_links_per_detection", None)
+        state.setdefault("max_extent", None)
         state.setdefault("max_leaf_nodes", 31)
         state.setdefault("max_depth", None)
         super().__setstate__(state)
@@ -315,6 +330,11 @@ class LinkClustering(ClusterMixin, BaseEstimator):
             raise ValueError(
                 "LinkClustering: max_links_per_detection requires causal=True (it chooses among a detection's "
                 "earlier candidates); leave it None with causal=False"
+            )
+        if self.max_extent is not None and not self.causal:
+            raise ValueError(
+                "LinkClustering: max_extent requires causal=True (it limits the causal agglomeration's merges); "
+                "leave it None with causal=False"
             )
         X, c = read_columns(self, X, LINK_READS, reset=True)
         y = _check_instances(y, len(c["x"]))
@@ -434,7 +454,7 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         )
         if tuning and self.causal:
             setting, score = tune_causal(
-                sequences, objectness, pairs, links, grids, c, y, self.window, self.pair_window
+                sequences, objectness, pairs, links, grids, c, y, self.window, self.pair_window, self.max_extent
             )
         elif tuning:
             setting, score = tune(sequences, objectness, pairs, links, grids, c, y, self.window)
@@ -477,8 +497,9 @@ class LinkClustering(ClusterMixin, BaseEstimator):
             objectness, i, j, links = self._probabilities(s, self.objectness_threshold_)
             node = objectness > self.objectness_threshold_
             if self.causal:
+                d = s.detections
                 final, sizes = sequence_merges(
-                    s.detections.t, node, i, j, links, self.pair_window, self.link_threshold_
+                    d.t, node, i, j, links, self.pair_window, self.link_threshold_, d.x, d.y, self.max_extent
                 )
                 local = confirmed_roots(final, sizes, self.min_cluster_size_)
             else:

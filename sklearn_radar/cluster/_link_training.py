@@ -281,12 +281,13 @@ def tune_surface(sequences, objectness, pairs, links, grids, c, y, window, merge
     return surface
 
 
-def tune_causal(sequences, objectness, pairs, links, grids, c, y, window, pair_window):
+def tune_causal(sequences, objectness, pairs, links, grids, c, y, window, pair_window, max_extent=None):
     """As :func:`tune`, with the causal agglomeration: the best setting of :func:`tune_causal_surface` and its PQ."""
-    return best_of(tune_causal_surface(sequences, objectness, pairs, links, grids, c, y, window, pair_window), grids)
+    surface = tune_causal_surface(sequences, objectness, pairs, links, grids, c, y, window, pair_window, max_extent)
+    return best_of(surface, grids)
 
 
-def tune_causal_surface(sequences, objectness, pairs, links, grids, c, y, window, pair_window):
+def tune_causal_surface(sequences, objectness, pairs, links, grids, c, y, window, pair_window, max_extent=None):
     """As :func:`tune_surface`, with the causal agglomeration (and ``min_cluster_size`` as its confirmation count).
 
     Parameters
@@ -296,6 +297,8 @@ def tune_causal_surface(sequences, objectness, pairs, links, grids, c, y, window
         :func:`~._causal_link_features.causal_pairs`.
     pair_window : float
         The pair window, s (when clusters retire).
+    max_extent : float or None, default=None
+        Longest cluster a merge may make, m (LinkClustering's ``max_extent``).
 
     Returns
     -------
@@ -310,8 +313,11 @@ def tune_causal_surface(sequences, objectness, pairs, links, grids, c, y, window
             for s, p, (i, j), link in zip(sequences, objectness, pairs, links, strict=True):
                 node = p > gate
                 both = node[i] & node[j]
+                d = s.detections
                 merged.append(
-                    sequence_merges(s.detections.t, node, i[both], j[both], link[both], pair_window, threshold)
+                    sequence_merges(
+                        d.t, node, i[both], j[both], link[both], pair_window, threshold, d.x, d.y, max_extent
+                    )
                 )
             for k, size in enumerate(size_grid):
                 roots = np.full(n_rows, -1, dtype=np.int64)

@@ -177,8 +177,19 @@ class LearnedStream:
             X = causal_pair_features(detections, motion, floats[_F["objectness"]], i, j)[:, self._pair_columns]
             links = self._proba(self._links, model.link_classifier_, X)
         number = window.ints[_I["number"]]
+        at = start + np.flatnonzero(node)  # the new nodes' columns of the window
         new_clusters, new_sizes, child, survivor = step(
-            window.state, now, numbers[node], number[i], number[j], links, model.pair_window, model.link_threshold_
+            window.state,
+            now,
+            numbers[node],
+            number[i],
+            number[j],
+            links,
+            model.pair_window,
+            model.link_threshold_,
+            detections.x[at],
+            detections.y[at],
+            model.max_extent,
         )
         merges = []
         cluster = window.ints[_I["cluster"]]

@@ -1,6 +1,7 @@
 """The causal mean-link agglomeration of LinkClustering: merges time by time, worked by hand."""
 
 import numpy as np
+import pytest
 
 from sklearn_radar.cluster._causal_agglomeration import confirmed_roots, new_state, sequence_merges, step
 
@@ -40,3 +41,42 @@ def test_a_low_mean_stops_the_merging_and_a_node_below_objectness_is_noise():
     roots, sizes = sequence_merges(t, node, np.array([0]), np.array([1]), np.array([0.5]), 0.25, 0.5)
     np.testing.assert_array_equal(roots, [0, 1, -1])  # 0.5 does not exceed 0.5
     np.testing.assert_array_equal(sizes, [1, 1, 0])
+
+
+def test_a_merge_longer_than_max_extent_is_refused():
+    # Nodes 0 at (0, 0) and 1 at (3, 4) at 0 s, linked with 0.9: 5 m apart (the diagonal of their box).
+    # Node 2 at (0, 0.5) at 0.1 s, linked to 0 with 0.9 and to 1 with 0.9.
+    t = np.array([0.0, 0.0, 0.1])
+    x, y = np.array([0.0, 3.0, 0.0]), np.array([0.0, 4.0, 0.5])
+    node = np.ones(3, dtype=bool)
+    i, j, links = np.array([0, 0, 1]), np.array([1, 2, 2]), np.array([0.9, 0.9, 0.9])
+    roots, _ = sequence_merges(t, node, i, j, links, 0.25, 0.5)
+    np.testing.assert_array_equal(roots, [0, 0, 0])  # no limit: one cluster
+    roots, _ = sequence_merges(t, node, i, j, links, 0.25, 0.5, x, y, max_extent=5.0)
+    np.testing.assert_array_equal(roots, [0, 0, 0])  # 5 m does not exceed 5 m
+    # 4.9 m: 0 and 1 stay apart; 2 joins 0 (box 0.5 m; mean link 0.9 to each, ties to the smaller pair (0, 2));
+    # then {0, 2} and 1 (mean 0.9) would span 5 m: refused.
+    roots, sizes = sequence_merges(t, node, i, j, links, 0.25, 0.5, x, y, max_extent=4.9)
+    np.testing.assert_array_equal(roots, [0, 1, 0])
+    np.testing.assert_array_equal(sizes, [1, 1, 2])
+    # Step by step the same.
+    state = new_state()
+    step(state, 0.0, [0, 1], [0], [1], [0.9], 0.25, 0.5, x[:2], y[:2], 4.9)
+    clusters, _, child, survivor = step(state, 0.1, [2], [0, 1], [2, 2], [0.9, 0.9], 0.25, 0.5, x[2:], y[2:], 4.9)
+    assert clusters.tolist() == [0] and list(zip(child.tolist(), survivor.tolist(), strict=True)) == [(2, 0)]
+    # Only the nodes of the pair window count: at 0.3 s node 3 links to node 2 (0.9, 0.2 s earlier); node 0
+    # (0 s) has left the window, so the box of {0, 2} and 3 is that of node 2 (0, 0.5) and node 3.  Node 3 at
+    # (3, 4.5): 5.0 m, refused; at (2.5, 4.5): 4.72 m, merged (with node 0 counted it would be 5.15 m).
+    for x3, merged in ((3.0, False), (2.5, True)):
+        state = new_state()
+        step(state, 0.0, [0, 1], [0], [1], [0.9], 0.25, 0.5, x[:2], y[:2], 4.9)
+        step(state, 0.1, [2], [0, 1], [2, 2], [0.9, 0.9], 0.25, 0.5, x[2:], y[2:], 4.9)
+        clusters, *_ = step(state, 0.3, [3], [2], [3], [0.9], 0.25, 0.5, [x3], [4.5], 4.9)
+        assert clusters.tolist() == ([0] if merged else [3])
+
+
+def test_max_extent_needs_the_positions():
+    with pytest.raises(ValueError, match="max_extent needs the positions"):
+        sequence_merges(np.zeros(2), np.ones(2, dtype=bool), [0], [1], [0.9], 0.25, 0.5, max_extent=1.0)
+    with pytest.raises(ValueError, match="one position per node"):
+        sequence_merges(np.zeros(2), np.ones(2, dtype=bool), [0], [1], [0.9], 0.25, 0.5, np.zeros(1), np.zeros(1))

@@ -139,6 +139,24 @@ def test_max_links_per_detection_requires_causal(data):
         LinkClustering(**{**FIXED, "causal": False, "max_links_per_detection": 4}).fit(X, y)
 
 
+def test_max_extent_requires_causal_and_a_positive_length(data):
+    X, y = data
+    with pytest.raises(ValueError, match="max_extent requires causal=True"):
+        LinkClustering(**{**FIXED, "causal": False, "max_extent": 10.0}).fit(X, y)
+    with pytest.raises(ValueError, match="max_extent"):
+        LinkClustering(**{**FIXED, "max_extent": 0.0}).fit(X, y)
+
+
+def test_a_model_pickled_before_max_extent_merges_clusters_of_any_length(data, fitted):
+    X, _ = data
+    old = clone(fitted)
+    old.__dict__.update(fitted.__dict__)
+    del old.__dict__["max_extent"]  # as pickled by the version without the parameter
+    loaded = pickle.loads(pickle.dumps(old))
+    assert loaded.max_extent is None
+    np.testing.assert_array_equal(loaded.predict(X), fitted.predict(X))
+
+
 def test_a_model_pickled_before_max_links_per_detection_forms_every_pair(data, fitted):
     X, _ = data
     old = clone(fitted)
