@@ -60,6 +60,9 @@ settings are cached per preset and seed only: give data of another size its own 
 ``--drop-feature-group 'no rigid velocity'`` fits it without a feature group of ``ablation_learned.py`` (the stream
 then computes only the features the model was fitted with).
 
+``--form 'learned causal, confirmed + Tracker'`` (repeatable) tunes and scores only the tracked forms named (the
+untracked rows and the causal PQ are always measured).
+
 ``--save FOLDER`` writes each seed's rows as ``tracking_<preset>_<seed>.json`` (seeds may then run as separate
 processes); ``--summary --save FOLDER`` prints the tables of the saved rows.
 """
@@ -359,15 +362,18 @@ def measure(preset, seed, tuned, options):
         "learned causal (reported)": {"scores": scores(test, np.concatenate([p["learned"] for p in test]))},
     }
     for name, (kind, space, clusters, *tuned_on) in FORMS.items():
+        if options.forms and name not in options.forms:
+            continue
         start = time.perf_counter()
         train_clusters = tuned_on[0] if tuned_on else clusters
         train_mota, setting = tuned_tracker(train, kind, train_clusters, space, options.n_settings, seed)
         test_ids = track(test, lambda kind=kind, setting=setting: kind(**setting), clusters)
         rows[name] = {"scores": scores(test, test_ids), "setting": setting, "train_mota": train_mota}
         rows[name]["seconds"] = time.perf_counter() - start
-    setting = rows["objects + Tracker"]["setting"]
-    ids = track(test, lambda: Tracker(**setting), lambda p: p["learned"])
-    rows["learned causal + objects' Tracker"] = {"scores": scores(test, ids)}
+    if "objects + Tracker" in rows:
+        setting = rows["objects + Tracker"]["setting"]
+        ids = track(test, lambda: Tracker(**setting), lambda p: p["learned"])
+        rows["learned causal + objects' Tracker"] = {"scores": scores(test, ids)}
     pq = causal_pq(test)
     print(f"  {preset} seed {seed} causal PQ, test half: " + ", ".join(f"{k} {v:.3f}" for k, v in pq.items()))
     rows["_pq"] = pq
@@ -480,6 +486,13 @@ def main(argv=None):
         type=_learned_param,
         metavar="NAME=VALUE",
         help="a parameter of the learned pipeline changed from the main job's (e.g. link__pair_window=0.5)",
+    )
+    parser.add_argument(
+        "--form",
+        dest="forms",
+        action="append",
+        choices=list(FORMS),
+        help="measure only this tracked form (repeatable; default: every one)",
     )
     parser.add_argument(
         "--drop-feature-group",
