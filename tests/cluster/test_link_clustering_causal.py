@@ -147,23 +147,20 @@ def test_max_extent_requires_causal_and_a_positive_length(data):
         LinkClustering(**{**FIXED, "max_extent": 0.0}).fit(X, y)
 
 
-def test_a_model_pickled_before_max_extent_merges_clusters_of_any_length(data, fitted):
+@pytest.mark.parametrize(
+    "name",
+    [
+        "max_links_per_detection",  # formed every candidate pair
+        "max_extent",  # merged clusters of any length
+    ],
+)
+def test_a_model_pickled_before_a_limit_existed_loads_without_it(data, fitted, name):
     X, _ = data
     old = clone(fitted)
     old.__dict__.update(fitted.__dict__)
-    del old.__dict__["max_extent"]  # as pickled by the version without the parameter
+    del old.__dict__[name]  # as pickled by the version without the parameter
     loaded = pickle.loads(pickle.dumps(old))
-    assert loaded.max_extent is None
-    np.testing.assert_array_equal(loaded.predict(X), fitted.predict(X))
-
-
-def test_a_model_pickled_before_max_links_per_detection_forms_every_pair(data, fitted):
-    X, _ = data
-    old = clone(fitted)
-    old.__dict__.update(fitted.__dict__)
-    del old.__dict__["max_links_per_detection"]  # as pickled by the version without the parameter
-    loaded = pickle.loads(pickle.dumps(old))
-    assert loaded.max_links_per_detection is None
+    assert getattr(loaded, name) is None
     np.testing.assert_array_equal(loaded.predict(X), fitted.predict(X))
 
 

@@ -56,17 +56,24 @@ def test_online_ids_resolved_through_the_aliases_equal_offline_causal_predict(fi
     _same_partition(replayed["object_ids"], expected)
 
 
-def test_a_cap_on_the_links_per_detection_streams_as_offline_predict(recording):
+@pytest.mark.parametrize(
+    "limit",
+    [
+        {"max_links_per_detection": 2},  # leaves links out
+        {"max_extent": 4.0},  # refuses merges
+    ],
+)
+def test_a_limited_model_streams_as_offline_predict(recording, limit):
     scenes = make_scenes(n_sequences=2, duration=3.0, difficulty="realistic", random_state=0)
     y = instance_target(scenes.data["track_id"], scenes.data["sequence"])
-    capped = _pipeline(max_links_per_detection=2).fit(scenes.data, y)
-    online = OnlinePipeline(capped)
+    limited = _pipeline(**limit).fit(scenes.data, y)
+    online = OnlinePipeline(limited)
     replayed = replay(online, recording)
     expected = online.causal_pipeline().predict(recording)
     assert (expected >= 0).sum() > 100
     _same_partition(replayed["object_ids"], expected)
-    uncapped = _pipeline().fit(scenes.data, y).predict(recording)
-    assert not np.array_equal(expected, uncapped)  # the cap leaves links out
+    unlimited = _pipeline().fit(scenes.data, y).predict(recording)
+    assert not np.array_equal(expected, unlimited)  # the limit changes the clusters
 
 
 def test_ids_are_unique_across_sequences_and_the_older_survives(fitted, recording):
@@ -149,16 +156,3 @@ def test_a_scan_without_rcs_is_refused_when_the_model_reads_it(fitted, recording
     scan = recording[recording["timestamp"] == recording["timestamp"].iloc[0]].drop(columns=["rcs"])
     with pytest.raises(ValueError, match="rcs"):
         OnlinePipeline(fitted).update(pd.DataFrame(scan))
-
-
-def test_a_limit_on_the_cluster_extent_streams_as_offline_predict(recording):
-    scenes = make_scenes(n_sequences=2, duration=3.0, difficulty="realistic", random_state=0)
-    y = instance_target(scenes.data["track_id"], scenes.data["sequence"])
-    limited = _pipeline(max_extent=4.0).fit(scenes.data, y)
-    online = OnlinePipeline(limited)
-    replayed = replay(online, recording)
-    expected = online.causal_pipeline().predict(recording)
-    assert (expected >= 0).sum() > 100
-    _same_partition(replayed["object_ids"], expected)
-    unlimited = _pipeline().fit(scenes.data, y).predict(recording)
-    assert not np.array_equal(expected, unlimited)  # the limit refuses merges
