@@ -55,7 +55,8 @@ resolved, what ``stream --classifier`` classifies) instead of the offline ones. 
 experiment's front at the paper's setting and ``LinkClustering`` with its defaults, its thresholds tuned inside its
 fit) fitted on the training half with ``precluster_target``, beside the tuned object setting's clusters and the
 neighbourhood point-wise classifier: each clustering's classifier with the single window and with
-``history="mean_proba"``.  The learned grouping's classifier is trained on out-of-fold clusters of the training
+``history="mean_proba"`` (the learned grouping's also with ``"cluster_mean_proba"``, every window of a cluster
+from all of them).  The learned grouping's classifier is trained on out-of-fold clusters of the training
 half (each sequence clustered by a ``LinkClustering`` with the tuned thresholds fixed, fitted on the other
 sequences: the kind of clusters the test half gets) and, as ``reproduce`` trains it, on the fitted model's own
 clusters of its training data (``in-sample``), each also with the ground truth's segments beside the clusters
@@ -125,6 +126,8 @@ ERROR_KEYS = ("n_true", "tp", "misclassified", "missed", "n_pred", "wrong_class"
 SINGLE = "single window"
 #: ``--learned``: the object setting's clusters, the neighbourhood point-wise baseline and the learned rows.
 OBJECTS, NEIGHBOURHOOD, LEARNED = "objects", "point (neighbourhood)", "learned (out-of-fold)"
+#: The learned grouping's classifier rows: ``history`` and the suffix of the row's name.
+HISTORY_ROWS = ((None, ""), ("mean_proba", ", mean proba"), ("cluster_mean_proba", ", cluster mean proba"))
 #: Bins of the number of windows a cluster has been seen in (this one included): ``(label, low, high)``.
 SEEN_BINS = (("1", 1, 1), ("2-3", 2, 3), ("4-7", 4, 7), ("8+", 8, np.inf))
 
@@ -336,9 +339,9 @@ def run_learned(preset, seed, X_test, truth, X_train, y_train, train_instances, 
     on the training data's clusters in two ways: ``out-of-fold`` (``out_of_fold_labels`` on the training half:
     clusters of models that never saw those sequences, the kind of clusters the test half gets) and ``in-sample``
     (``FrozenEstimator(link)``'s own labels of its training half, what ``reproduce`` trains on), each with the
-    single window and with ``history="mean_proba"``.  The ``--extra-training`` sequences, like the object
-    setting's, train only the classifiers: the grouping fitted on the half labels them by ``predict``, out of
-    sample for both rows.
+    single window, with ``history="mean_proba"`` and with ``"cluster_mean_proba"``.  The ``--extra-training``
+    sequences, like the object setting's, train only the classifiers: the grouping fitted on the half labels them
+    by ``predict``, out of sample for both rows.
     """
     start = time.perf_counter()
     model = learned_pipeline().fit(X_train.iloc[:n_half], train_instances[:n_half])
@@ -368,7 +371,7 @@ def run_learned(preset, seed, X_test, truth, X_train, y_train, train_instances, 
         ("out-of-fold + true segments", _GivenLabels(oof), True),
         ("in-sample + true segments", in_sample, True),
     ):
-        for history, suffix in ((None, ""), ("mean_proba", ", mean proba")):
+        for history, suffix in HISTORY_ROWS:
             name = f"learned ({training}){suffix}"
             start = time.perf_counter()
             classifier = ClusterClassifier(clusterer, history=history, true_segments=true_segments)
@@ -524,11 +527,11 @@ def learned_report(preset, runs):
     lines.append(pd.DataFrame(rows, columns=header).to_string(index=False))
     rows = [[name, *(_fmt2([r[name]["objects"][b][0] for r in runs]) for b in bins)] for name in names]
     for name in names:
-        if f"{name}, mean proba" in names:
-            other = f"{name}, mean proba"
-            cells = [f"{other} - single"]
-            cells += [_fmt2([r[other]["objects"][b][0] - r[name]["objects"][b][0] for r in runs], True) for b in bins]
-            rows.append(cells)
+        for _, suffix in HISTORY_ROWS[1:]:
+            other = f"{name}{suffix}"
+            if other in names:
+                differences = [[r[other]["objects"][b][0] - r[name]["objects"][b][0] for r in runs] for b in bins]
+                rows.append([f"{other} - single", *(_fmt2(values, True) for values in differences)])
     lines.append("per-object macro-F1 by windows seen (differences paired over seeds)")
     lines.append(pd.DataFrame(rows, columns=["classifier", *bins]).to_string(index=False))
     counts = {b: int(np.mean([r[LEARNED]["objects"][b][1] for r in runs])) for b in bins}
@@ -543,6 +546,11 @@ def learned_report(preset, runs):
         ("learned (out-of-fold + true segments), mean proba", f"{LEARNED}, mean proba"),
         ("learned (in-sample + true segments)", "learned (in-sample)"),
         ("learned (in-sample + true segments), mean proba", "learned (in-sample), mean proba"),
+        ("learned (out-of-fold + true segments), cluster mean proba", "learned (out-of-fold + true segments)"),
+        (
+            "learned (out-of-fold + true segments), cluster mean proba",
+            "learned (out-of-fold + true segments), mean proba",
+        ),
         (OBJECTS, NEIGHBOURHOOD),
     ):
         for key in ("pq", "clustering_pq"):

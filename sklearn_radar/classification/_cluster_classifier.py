@@ -18,7 +18,7 @@ from .._validation import validated_input
 from ..cluster import RadarDBSCAN
 from ._classes import BACKGROUND, IGNORED
 from ._features import _check_labels, segment_features, window_index
-from ._history import HISTORY_OPTIONS, cluster_starts, running_weighted_mean, with_history
+from ._history import HISTORY_OPTIONS, cluster_starts, cluster_weighted_mean, running_weighted_mean, with_history
 from ._reading import columns_at, time_columns
 from ._targets import segment_targets
 from ._wrapped import check_class_target, class_proba, fit_classifier, instance_column_of, macro_f1_score
@@ -126,13 +126,14 @@ class ClusterClassifier(BaseEstimator):
         no instance ids; the detections of one class in one window of one
         sequence are one instance (panoptic segmentation's rule for "stuff"
         classes), which is what a plain array needs.
-    history : {"mean_proba", "features"} or None, default=None
+    history : {"mean_proba", "features", "cluster_mean_proba"} or None, default=None
         Classify a cluster that spans several windows from its past as well
         (a cluster id seen in several windows is one road user: the clusters
         of the object setting, the object ids of
         :class:`~sklearn_radar.online.OnlinePipeline` given to
-        :meth:`predict_instances_of`).  Causal: a segment reads only the
-        segments of its cluster at or before its own window.  None: each
+        :meth:`predict_instances_of`).  Causal but for
+        ``"cluster_mean_proba"``: a segment reads only the segments of its
+        cluster at or before its own window.  None: each
         window is classified alone.  ``"mean_proba"``: the class
         probabilities of a segment are the mean of its own and those of the
         cluster's earlier segments, each weighted by its number of
@@ -143,7 +144,10 @@ class ClusterClassifier(BaseEstimator):
         mean ``mean_<feature>`` of every feature over the windows seen, and
         the running maximum ``max_<feature>`` of ``n_detections``, the
         extents, ``vr_range``, ``rcs_max`` and ``speed`` (units those of the
-        feature); it is trained on them.  Measured in the
+        feature); it is trained on them.  ``"cluster_mean_proba"``: as
+        ``"mean_proba"`` over all of the cluster's windows, later ones
+        included, so that a cluster gets one class; not causal (a whole
+        recording, offline).  Measured in the
         :ref:`User Guide <classification-history>`.
     true_segments : bool, default=False
         Learn, besides the clusterer's segments, from the segments of the
@@ -463,9 +467,11 @@ class ClusterClassifier(BaseEstimator):
             raise ValueError(f"ClusterClassifier: X lacks the columns of the feature(s) {missing} it was fitted with")
         features = table[list(self.feature_names_)].to_numpy(dtype=np.float64)
         proba = class_proba(self.classifier_, features, self.feature_names_, self.classes_)
+        weights = table["n_detections"].to_numpy(dtype=np.float64)
         if self.history == "mean_proba":  # the windows seen so far, each weighted by its detections
-            weights = table["n_detections"].to_numpy(dtype=np.float64)
             proba = running_weighted_mean(proba, weights, cluster_starts(table))
+        elif self.history == "cluster_mean_proba":  # all the cluster's windows, later ones too
+            proba = cluster_weighted_mean(proba, weights, cluster_starts(table))
         return table, rows, proba
 
     def _read_segments(self, X, *, reset):

@@ -3,9 +3,10 @@
 A cluster id that persists over time (the clusters of the object setting, which span windows; the persistent
 object ids of :class:`~sklearn_radar.online.OnlinePipeline`) is one road user seen in several windows.  Its
 segments (one per window) are the rows of the feature table of one ``(sequence, cluster)``, in window order
-(:func:`~sklearn_radar.classification._features.segment_keys` sorts them so).  Everything here is causal: a
-segment's aggregate reads only the segments of its cluster at or before its own window.  No Python loop runs over
-segments: the running sums are one cumulative sum minus its value at each cluster's start.
+(:func:`~sklearn_radar.classification._features.segment_keys` sorts them so).  Everything here but
+:func:`cluster_weighted_mean` is causal: a segment's aggregate reads only the segments of its cluster at or before
+its own window.  No Python loop runs over segments: the running sums are one cumulative sum minus its value at each
+cluster's start.
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ import numpy as np
 import pandas as pd
 
 #: The options of ``ClusterClassifier(history=...)`` besides None (each window classified alone).
-HISTORY_OPTIONS = ("mean_proba", "features")
+HISTORY_OPTIONS = ("mean_proba", "features", "cluster_mean_proba")
 
 #: The per-window features whose running maximum over the cluster's windows so far is a history feature.
 RUNNING_MAX = ("n_detections", "extent_along", "extent_across", "vr_range", "rcs_max", "speed")
@@ -72,6 +73,30 @@ def running_weighted_mean(values, weights, first):
     """
     weights = weights[:, None]
     return _running_sum(values * weights, first) / _running_sum(weights, first)
+
+
+def cluster_weighted_mean(values, weights, first):
+    """The mean of all the rows of each row's cluster, weighted: later rows included (not causal).
+
+    Parameters
+    ----------
+    values : ndarray of float64, shape (n_segments, k)
+    weights : ndarray of float64, shape (n_segments,)
+        Each > 0.
+    first : ndarray of bool, shape (n_segments,)
+        Whether a row starts its cluster.
+
+    Returns
+    -------
+    means : ndarray of float64, shape (n_segments, k)
+        Equal for the rows of one cluster.
+    """
+    start = np.flatnonzero(first)
+    if not len(start):
+        return np.empty_like(values)
+    weights = weights[:, None]
+    means = np.add.reduceat(values * weights, start, axis=0) / np.add.reduceat(weights, start, axis=0)
+    return means[np.cumsum(first) - 1]
 
 
 def _running_sum(values, first):

@@ -34,8 +34,9 @@ def fitted():
     return model, X_test, labels
 
 
-def _brute_force_running_mean(X, labels, proba):
-    """Per detection: its cluster's segment probabilities over the windows up to its own, weighted by detections."""
+def _brute_force_running_mean(X, labels, proba, later=False):
+    """Per detection: its cluster's segment probabilities over the windows up to its own (``later``: all its
+    cluster's windows), weighted by detections."""
     table, rows = cluster_features(X[["x", "y", "v_r", "t", "sequence"]], labels, window=0.5, return_rows=True)
     per_segment = np.zeros((len(table), proba.shape[1]))
     per_segment[rows[rows >= 0]] = proba[rows >= 0]
@@ -45,7 +46,7 @@ def _brute_force_running_mean(X, labels, proba):
         past = (
             (table["sequence"] == segment["sequence"])
             & (table["cluster"] == segment["cluster"])
-            & (table["window"] <= segment["window"])
+            & ((table["window"] <= segment["window"]) | later)
         ).to_numpy()
         weights = table.loc[past, "n_detections"].to_numpy(dtype=float)
         expected[i] = (per_segment[past] * weights[:, None]).sum(axis=0) / weights.sum()
@@ -72,6 +73,26 @@ def test_mean_proba_averages_the_segment_probabilities_over_the_windows_seen(fit
     assert (table.groupby(["sequence", "cluster"]).size() > 4).any()  # clusters span several windows here
     assert not np.array_equal(found["class"], single["class"])  # the history changes some decisions
     np.testing.assert_allclose(found["confidence"][rows >= 0], expected[rows >= 0].max(axis=1), atol=1e-12)
+
+
+def test_cluster_mean_proba_averages_over_all_the_windows_of_the_cluster(fitted):
+    model, X, labels = fitted
+    _, _, window_proba = model._segments_of(X, labels)
+    model.set_params(history="cluster_mean_proba")
+    try:
+        found = model.predict_instances_of(X, labels)
+        _, rows, cluster_proba = model._segments_of(X, labels)
+    finally:
+        model.set_params(history=None)
+    per_detection = np.zeros((len(X), len(model.classes_)))
+    per_detection[rows >= 0] = window_proba[rows[rows >= 0]]
+    expected = _brute_force_running_mean(X, labels, per_detection, later=True)
+    np.testing.assert_allclose(cluster_proba[rows[rows >= 0]], expected[rows >= 0], atol=1e-12)
+    # One class per cluster and sequence: the same probabilities in every window.
+    clustered = rows >= 0
+    classes = pd.DataFrame({"sequence": X["sequence"].to_numpy(), "cluster": labels, "class": found["class"]})
+    assert (classes[clustered].groupby(["sequence", "cluster"])["class"].nunique() == 1).all()
+    assert not np.allclose(cluster_proba, window_proba)
 
 
 @pytest.mark.parametrize("history", ["mean_proba", "features"])
