@@ -172,11 +172,8 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         With ``causal=True``, the longest cluster a merge may make, m: a
         merge is refused when the diagonal of the x-y bounding box of the
         two clusters' detections of the last ``pair_window`` s would exceed
-        it (in fit, :meth:`predict` and a stream alike).  Keeps a chain of
-        road users close behind one another (a queue, people walking
-        together) from merging into one ever-growing cluster, since the
-        causal agglomeration never splits a cluster.  None: no limit;
-        ``causal=False`` requires None.  Measured in the
+        it (in fit, :meth:`predict` and a stream alike).  None: no limit;
+        ``causal=False`` requires None.  Why, and measured: the
         :ref:`User Guide <online-learned-extent>`.
 
     Attributes
