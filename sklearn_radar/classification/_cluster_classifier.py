@@ -300,7 +300,7 @@ class ClusterClassifier(BaseEstimator):
         """The training segments and targets with the ground truth's segments (kept detections) appended."""
         keep = columns_at(self, X, KEEP_READS, None)["keep"]
         truth = instances if keep is None else np.where(keep != 0, instances, -1)
-        _, true_table, true_rows = self._describe(X, truth)
+        _, true_table, true_rows = self._describe(X, truth, time)
         true_targets = segment_targets(classes, truth, time["sequence"], windows, true_rows, len(true_table))
         return pd.concat([table, true_table], ignore_index=True), np.concatenate([targets, true_targets])
 
@@ -480,15 +480,17 @@ class ClusterClassifier(BaseEstimator):
         time, table, rows = self._describe(X, self._cluster(X, X.shape[0]))
         return X, time, table, rows
 
-    def _describe(self, X, labels):
+    def _describe(self, X, labels, time=None):
         """The segments of a validated X with cluster ``labels``: ``(time columns, feature table, table rows)``.
 
         Only ``t`` and ``sequence`` are read for every row (the windows start at
-        each sequence's first detection); the other columns only for the
-        clustered detections (:mod:`._reading`).
+        each sequence's first detection; ``time``: those columns, already
+        read); the other columns only for the clustered detections
+        (:mod:`._reading`).
         """
         n = X.shape[0]
-        time = time_columns(self, X, CLUSTER_FEATURE_READS)
+        if time is None:
+            time = time_columns(self, X, CLUSTER_FEATURE_READS)
         clustered = np.flatnonzero(labels >= 0)
         c = columns_at(self, X, CLUSTER_FEATURE_READS, clustered, skip=("t", "sequence"))
         c["t"] = time["t"][clustered]
