@@ -48,6 +48,11 @@ LINK_READS = ColumnsRead(
 OBJECTNESS_GRID = (0.01, 0.02, 0.05, 0.15, 0.3, 0.5)
 LINK_GRID = tuple(np.round(np.arange(0.1, 0.951, 0.05), 2).tolist())
 MIN_SIZE_GRID = (1, 3, 6, 10, 15, 20, 25, 30, 40)
+#: The parameters that only a causal model takes (None otherwise), and why.
+_CAUSAL_ONLY = {
+    "max_links_per_detection": "it chooses among a detection's earlier candidates",
+    "max_extent": "it limits the causal agglomeration's merges",
+}
 #: P(road user) above which a training detection takes part in the link classifier's pairs.
 CANDIDATE_OBJECTNESS = 0.05
 
@@ -323,16 +328,11 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         -------
         self : LinkClustering
         """
-        if self.max_links_per_detection is not None and not self.causal:
-            raise ValueError(
-                "LinkClustering: max_links_per_detection requires causal=True (it chooses among a detection's "
-                "earlier candidates); leave it None with causal=False"
-            )
-        if self.max_extent is not None and not self.causal:
-            raise ValueError(
-                "LinkClustering: max_extent requires causal=True (it limits the causal agglomeration's merges); "
-                "leave it None with causal=False"
-            )
+        for name, why in _CAUSAL_ONLY.items():
+            if getattr(self, name) is not None and not self.causal:
+                raise ValueError(
+                    f"LinkClustering: {name} requires causal=True ({why}); leave it None with causal=False"
+                )
         X, c = read_columns(self, X, LINK_READS, reset=True)
         y = _check_instances(y, len(c["x"]))
         sequences = _sequences(c, self.causal)
