@@ -28,7 +28,6 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 from pathlib import Path
 
@@ -45,6 +44,7 @@ from sklearn_radar.metrics import panoptic_quality, precluster_target
 from sklearn_radar.model_selection import sequence_train_test_split
 
 sys.path.insert(0, str(Path(__file__).parent))
+from experiment_learned import _mean_2se
 from experiment_tracking import LABEL_COLUMNS, LEARNED_CAUSAL
 
 CAUSAL, RETRO, OFFLINE_AGGLOMERATION = "causal", "causal, labels from the end", "causal links, offline agglomeration"
@@ -108,13 +108,6 @@ def run_one(preset, seed):
             pq = panoptic_quality(instances[test], predicted, times=times, groups=groups, window=0.5).pq
             found[name] = float(pq)
     return found
-
-
-def _mean_2se(values):
-    values = np.asarray(values, dtype=np.float64)
-    if len(values) < 2:
-        return f"{values.mean():+.3f}"
-    return f"{values.mean():+.3f} ± {2 * values.std(ddof=1) / math.sqrt(len(values)):.3f}"
 
 
 def report(preset, runs):

@@ -330,18 +330,13 @@ def out_of_fold_labels(link, Z, train_instances, n_folds=2):
     return labels
 
 
-def run_learned(preset, seed, X_test, truth, X_train, y_train, train_instances, n_half):
-    """The learned grouping classified: ``{row: record}``.
+def learned_clusters(preset, seed, X_test, X_train, train_instances, n_half):
+    """The learned grouping fitted on the training half and its clusters: ``(link, Z, Xt, labels, oof, own)``.
 
-    ``learned_pipeline()`` (the object experiment's front at the paper's setting, then ``LinkClustering`` tuned
-    inside its fit) is fitted on the training half (the first ``n_half`` rows of the training data) with
-    ``precluster_target``; the test half is clustered once by its ``predict``.  The ClusterClassifier is trained
-    on the training data's clusters in two ways: ``out-of-fold`` (``out_of_fold_labels`` on the training half:
-    clusters of models that never saw those sequences, the kind of clusters the test half gets) and ``in-sample``
-    (``FrozenEstimator(link)``'s own labels of its training half, what ``reproduce`` trains on), each with the
-    single window, with ``history="mean_proba"`` and with ``"cluster_mean_proba"``.  The ``--extra-training``
-    sequences, like the object setting's, train only the classifiers: the grouping fitted on the half labels them
-    by ``predict``, out of sample for both rows.
+    ``Z`` and ``Xt`` are the training data and the test half through the fitted front, ``labels`` the test half's
+    clusters (``predict``), ``oof`` the training data's out-of-fold clusters (``out_of_fold_labels`` on the half,
+    ``predict`` on the extra sequences) and ``own`` the fitted model's own clusters of its half (and ``predict`` on
+    the extra sequences); see :func:`run_learned`.
     """
     start = time.perf_counter()
     model = learned_pipeline().fit(X_train.iloc[:n_half], train_instances[:n_half])
@@ -363,6 +358,23 @@ def run_learned(preset, seed, X_test, truth, X_train, y_train, train_instances, 
         f"min size {link.min_cluster_size_}",
         flush=True,
     )
+    return link, Z, Xt, labels, oof, own
+
+
+def run_learned(preset, seed, X_test, truth, X_train, y_train, train_instances, n_half):
+    """The learned grouping classified: ``{row: record}``.
+
+    ``learned_pipeline()`` (the object experiment's front at the paper's setting, then ``LinkClustering`` tuned
+    inside its fit) is fitted on the training half (the first ``n_half`` rows of the training data) with
+    ``precluster_target``; the test half is clustered once by its ``predict``.  The ClusterClassifier is trained
+    on the training data's clusters in two ways: ``out-of-fold`` (``out_of_fold_labels`` on the training half:
+    clusters of models that never saw those sequences, the kind of clusters the test half gets) and ``in-sample``
+    (``FrozenEstimator(link)``'s own labels of its training half, what ``reproduce`` trains on), each with the
+    single window, with ``history="mean_proba"`` and with ``"cluster_mean_proba"``.  The ``--extra-training``
+    sequences, like the object setting's, train only the classifiers: the grouping fitted on the half labels them
+    by ``predict``, out of sample for both rows.
+    """
+    link, Z, Xt, labels, oof, own = learned_clusters(preset, seed, X_test, X_train, train_instances, n_half)
     records = {}
     in_sample = FrozenEstimator(link) if len(Z) == n_half else _GivenLabels(own)  # predict once, not per row
     for training, clusterer, true_segments in (

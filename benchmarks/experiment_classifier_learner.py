@@ -29,7 +29,6 @@ user guide's table, section "The learner"; the learner was chosen on seeds 0-4 a
 from __future__ import annotations
 
 import argparse
-import math
 import pickle
 import sys
 import types
@@ -42,9 +41,9 @@ from threadpoolctl import threadpool_limits
 
 sys.path.insert(0, str(Path(__file__).parent))
 import experiment_classification as ec
+from experiment_learned import _mean_2se
 
 from sklearn_radar.classification import ClusterClassifier
-from sklearn_radar.experiments._learned import learned_pipeline
 
 HISTORIES = (None, "mean_proba", "cluster_mean_proba")
 DEFAULT = "default"
@@ -74,21 +73,14 @@ def clusters_of(preset, seed, options):
     columns = ["sequence", "timestamp", "x_cc", "y_cc"]
     if not np.array_equal(X_train[columns].to_numpy()[:n_half], X[columns].to_numpy()[in_half]):
         raise ValueError("the training half's rows are not the rows outside the test half, in order")
-    model = learned_pipeline().fit(X_train.iloc[:n_half], train_instances[:n_half])
-    link = model[-1]
-    Z = model[:-1].transform(X_train)
-    Xt = model[:-1].transform(X.iloc[test])
-    oof = ec.out_of_fold_labels(link, Z.iloc[:n_half], train_instances[:n_half])
-    if len(Z) > n_half:
-        extra = link.predict(Z.iloc[n_half:])
-        oof = np.concatenate([oof, np.where(extra >= 0, extra + oof.max() + 1, -1)])
+    _, Z, Xt, labels, oof, _ = ec.learned_clusters(preset, seed, X.iloc[test], X_train, train_instances, n_half)
     found = {
         "Z": Z,
         "y_train": y_train,
         "n_half": n_half,
         "train_objects": instances[in_half],
         "Xt": Xt,
-        "labels": link.predict(Xt),
+        "labels": labels,
         "oof": oof,
         "truth": (classes[test], instances[test]),
     }
@@ -127,13 +119,6 @@ def _objects(classes, instances):
     """Annotated objects of each class (distinct instances with at least one detection of it)."""
     present = instances >= 0
     return {name: len(np.unique(instances[(classes == code) & present])) for code, name in ec.CLASS_NAMES.items()}
-
-
-def _mean_2se(values):
-    values = np.asarray(values, dtype=np.float64)
-    if len(values) < 2:
-        return f"{values.mean():+.3f}"
-    return f"{values.mean():+.3f} ± {2 * values.std(ddof=1) / math.sqrt(len(values)):.3f}"
 
 
 def report(preset, seeds, runs):

@@ -42,6 +42,7 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 
 import bench_link_clustering as bench  # noqa: E402
+from experiment_learned import _mean_2se  # noqa: E402
 
 from sklearn_radar._validation import read_columns  # noqa: E402
 from sklearn_radar.cluster import LinkClustering  # noqa: E402
@@ -129,12 +130,6 @@ def _index(setting, grids):
     link, gate, size = setting
     link_grid, objectness_grid, size_grid = grids
     return list(objectness_grid).index(gate), list(link_grid).index(link), list(size_grid).index(size)
-
-
-def _mean_2se(values):
-    values = np.asarray(values, dtype=np.float64)
-    se = values.std(ddof=1) / math.sqrt(len(values)) if len(values) > 1 else float("nan")
-    return f"{values.mean():+.3f} ± {2 * se:.3f}"
 
 
 def summary(directory):
