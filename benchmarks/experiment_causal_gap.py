@@ -60,10 +60,12 @@ STEPS = (
 
 
 def labellings(link, Xt, causal):
-    """``{row: labels}`` of the fitted ``link`` on the transformed test half ``Xt`` (its two rows of the table)."""
+    """``{row: labels}`` of the fitted ``link`` on the transformed test half ``Xt``: the rows besides its
+    ``predict`` (``RETRO`` and ``OFFLINE_AGGLOMERATION`` for the causal model, ``OFFLINE_LINKS_CAUSAL`` for the
+    offline one)."""
     _, c = read_columns(link, Xt, LINK_READS, reset=False)
     n = len(c["x"])
-    names = (CAUSAL, RETRO, OFFLINE_AGGLOMERATION) if causal else (OFFLINE_LINKS_CAUSAL,)
+    names = (RETRO, OFFLINE_AGGLOMERATION) if causal else (OFFLINE_LINKS_CAUSAL,)
     roots = {name: np.full(n, -1, dtype=np.int64) for name in names}
     size = link.min_cluster_size_
     for s in _sequences(c, causal):
@@ -81,8 +83,7 @@ def labellings(link, Xt, causal):
             order = np.lexsort((i, j))
             i, j, links = i[order], j[order], links[order]
         final, sizes = sequence_merges(d.t, node, i, j, links, link.pair_window, link.link_threshold_)
-        if causal:
-            roots_to_rows(s.rows, confirmed_roots(final, sizes, size), roots[CAUSAL])
+        if causal:  # (the causal labels themselves are its predict's: confirmed_roots of these merges)
             roots_to_rows(s.rows, drop_small_clusters(final, size), roots[RETRO])
         else:
             roots_to_rows(s.rows, confirmed_roots(final, sizes, size), roots[OFFLINE_LINKS_CAUSAL])
@@ -103,7 +104,7 @@ def run_one(preset, seed):
         Xt = model[:-1].transform(X_test)
         times, groups = Xt["t"].to_numpy(), Xt["sequence"].to_numpy()
         labels = labellings(model[-1], Xt, causal)
-        labels[CAUSAL if causal else OFFLINE] = model[-1].predict(Xt)  # the predict itself (the stream's labels)
+        labels[CAUSAL if causal else OFFLINE] = model[-1].predict(Xt)  # (causal: the stream's labels)
         for name, predicted in labels.items():
             pq = panoptic_quality(instances[test], predicted, times=times, groups=groups, window=0.5).pq
             found[name] = float(pq)
