@@ -51,7 +51,8 @@ _NEEDS_INSTANCES = (
 #: (tests/cluster/test_link_clustering.py).
 _LINK_CLUSTERING = LinkClustering(link_threshold=0.5, objectness_threshold=0.5, min_cluster_size=1, max_iter=5)
 _CAUSAL_LINK_CLUSTERING = clone(_LINK_CLUSTERING).set_params(causal=True)
-#: The checks LinkClustering fails by design, causal or not.
+_CONTEXT_LINK_CLUSTERING = clone(_CAUSAL_LINK_CLUSTERING).set_params(cluster_window=0.5)
+#: The checks LinkClustering fails by design, causal or not, with cluster context or not.
 _LINK_CLUSTERING_FAILURES = {
     "check_clustering": _NEEDS_INSTANCES,
     "check_clustering(readonly_memmap=True)": _NEEDS_INSTANCES,
@@ -125,7 +126,7 @@ EXPECTED_FAILED_CHECKS = {
     },
     **{
         repr(link_clustering): _LINK_CLUSTERING_FAILURES
-        for link_clustering in (_LINK_CLUSTERING, _CAUSAL_LINK_CLUSTERING)
+        for link_clustering in (_LINK_CLUSTERING, _CAUSAL_LINK_CLUSTERING, _CONTEXT_LINK_CLUSTERING)
     },
     "ClusterMerger()": {
         "check_clustering": "Its default stage 1 is RadarDBSCAN() with vr_min = 0.4 m/s: " + _BY_DESIGN_NOISE,
@@ -198,6 +199,7 @@ CHECKS = _strict(
             PointClassifier(radius=2.0, causal=True),
             _LINK_CLUSTERING,
             _CAUSAL_LINK_CLUSTERING,
+            _CONTEXT_LINK_CLUSTERING,
         ],
         expected_failed_checks=_expected_failed_checks,
     )

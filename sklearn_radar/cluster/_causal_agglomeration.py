@@ -42,6 +42,8 @@ import numpy as np
 from numba import types
 from numba.typed import Dict, List
 
+from .._compiled import entry_point
+
 _EVIDENCE = types.Tuple((types.float64, types.int64))  # (sum of P(link), number of pairs)
 _NEIGHBOURS = types.DictType(types.int64, _EVIDENCE)
 
@@ -121,7 +123,7 @@ def step(state, now, new_nodes, i, j, links, window, threshold, x=None, y=None, 
         np.float64(threshold),
         *_positions(x, y, len(new_nodes), max_extent),
     )
-    return _step_entry(args)(*args)
+    return entry_point(_step, args)(*args)
 
 
 def _positions(x, y, n, max_extent):
@@ -134,23 +136,6 @@ def _positions(x, y, n, max_extent):
     if not len(x) == len(y) == n:
         raise ValueError(f"x and y must give one position per node ({n}), got {len(x)} and {len(y)}")
     return x, y, np.float64(np.inf if max_extent is None else max_extent)
-
-
-_ENTRY = []
-
-
-def _step_entry(args):
-    """The compiled :func:`_step` for these argument types, called without numba's dispatch.
-
-    Numba's dispatcher types every argument at each call, which for the state's nested typed containers costs
-    more than the step itself (:ref:`online-learned`).  The types never change (the state is :func:`new_state`'s,
-    the arrays contiguous of fixed dtypes), so the entry point found once serves every later call.
-    """
-    if not _ENTRY:
-        signature = tuple(numba.typeof(arg) for arg in args)
-        _step.compile(signature)
-        _ENTRY.append(_step.overloads[signature].entry_point)
-    return _ENTRY[0]
 
 
 @numba.njit(cache=True, nogil=True)

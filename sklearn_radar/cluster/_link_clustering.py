@@ -18,6 +18,7 @@ from .._validation import read_columns, sequence_slices
 from ._agglomeration import mean_link_merges, roots_at
 from ._causal_agglomeration import confirmed_roots, sequence_merges
 from ._causal_link_features import causal_detection_features, causal_pair_features, causal_pairs
+from ._cluster_context import CONTEXT_FEATURES, context_merges, links_by_fold
 from ._link_features import (
     DETECTION_FEATURES,
     PAIR_FEATURES,
@@ -28,7 +29,15 @@ from ._link_features import (
     pairs_within,
     usable,
 )
-from ._link_training import cross_fit, fold_of_groups, positive_proba, tune, tune_causal
+from ._link_training import (
+    cross_fit,
+    fold_classifiers,
+    fold_of_groups,
+    positive_proba,
+    tune,
+    tune_causal,
+    tune_context,
+)
 
 #: Working detections as LinkClustering reads them from an array: the classifiers' layout, then the ego speed
 #: ``ego_vx`` (m/s; a measurement without a neutral value: absent, its feature is left out).
@@ -52,6 +61,7 @@ MIN_SIZE_GRID = (1, 3, 6, 10, 15, 20, 25, 30, 40)
 _CAUSAL_ONLY = {
     "max_links_per_detection": "it chooses among a detection's earlier candidates",
     "max_extent": "it limits the causal agglomeration's merges",
+    "cluster_window": "it describes the clusters the causal agglomeration has formed so far",
 }
 #: P(road user) above which a training detection takes part in the link classifier's pairs.
 CANDIDATE_OBJECTNESS = 0.05
@@ -180,6 +190,20 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         it (in fit, :meth:`predict` and a stream alike).  None: no limit;
         ``causal=False`` requires None.  Why, and measured: the
         :ref:`User Guide <online-learned-extent>`.
+    cluster_window : float > 0 or None, default=None
+        With ``causal=True``, the link classifier also sees the cluster
+        that a pair's earlier detection already belongs to, described by
+        its detections of the last ``cluster_window`` s
+        (:data:`~sklearn_radar.cluster._cluster_context.CONTEXT_FEATURES`:
+        its size and extent, and how well its rigid velocity of Eq. 6
+        predicts the later detection's Doppler and position).  The links of
+        each time are then decided after the merges of the times before (in
+        fit, :meth:`predict` and a stream alike); :meth:`fit` learns them
+        from the clusters that the links without context form on the
+        training data, and tunes ``link_threshold`` and
+        ``min_cluster_size`` again with them.  None: the pair features
+        alone; ``causal=False`` requires None.  Measured: the
+        :ref:`User Guide <learned-cluster-context>`.
 
     Attributes
     ----------
@@ -203,6 +227,9 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         The per-detection features used (those whose columns X holds).
     pair_feature_names_ : ndarray of str
         The pair features used.
+    context_feature_names_ : ndarray of str
+        The cluster-context features the link classifier sees after the pair features (empty without
+        ``cluster_window``).
     n_training_pairs_ : int
         Candidate pairs of the training data (before subsampling).
     n_features_in_ : int
@@ -257,6 +284,7 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         "causal": ["boolean"],
         "max_links_per_detection": [None, Interval(Integral, 1, None, closed="left")],
         "max_extent": [None, Interval(Real, 0, None, closed="neither")],
+        "cluster_window": [None, Interval(Real, 0, None, closed="neither")],
     }
 
     def __init__(
@@ -278,6 +306,7 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         causal=False,
         max_links_per_detection=None,
         max_extent=None,
+        cluster_window=None,
     ):
         self.link_threshold = link_threshold
         self.objectness_threshold = objectness_threshold
@@ -295,13 +324,17 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         self.causal = causal
         self.max_links_per_detection = max_links_per_detection
         self.max_extent = max_extent
+        self.cluster_window = cluster_window
 
     def __setstate__(self, state):
         # A model pickled before max_links_per_detection existed formed every candidate pair; one pickled before
         # max_leaf_nodes (max_depth) existed had trees of 31 leaves (of any depth); one pickled before max_extent
-        # existed merged clusters of any length.
+        # existed merged clusters of any length; one pickled before cluster_window existed saw no cluster context.
         state.setdefault("max_links_per_detection", None)
         state.setdefault("max_extent", None)
+        state.setdefault("cluster_window", None)
+        if "link_classifier_" in state:
+            state.setdefault("context_feature_names_", np.zeros(0, dtype=object))
         state.setdefault("max_leaf_nodes", 31)
         state.setdefault("max_depth", None)
         super().__setstate__(state)
@@ -347,6 +380,9 @@ class LinkClustering(ClusterMixin, BaseEstimator):
             usable(DETECTION_FEATURES, present)
         ]
         self.pair_feature_names_ = np.asarray(list(PAIR_FEATURES), dtype=object)[usable(PAIR_FEATURES, present)]
+        self.context_feature_names_ = np.asarray(list(CONTEXT_FEATURES), dtype=object)[
+            usable(CONTEXT_FEATURES, present) & (self.cluster_window is not None)
+        ]
         rng = check_random_state(self.random_state)
         with thread_bound(_effective_n_jobs(self.n_jobs)):
             self._fit(sequences, c, y, rng)
@@ -395,7 +431,7 @@ class LinkClustering(ClusterMixin, BaseEstimator):
     def _fit(self, sequences, c, y, rng):
         """Both classifiers and the thresholds, from the training sequences."""
         detection_columns = np.flatnonzero(np.isin(list(DETECTION_FEATURES), self.detection_feature_names_))
-        pair_columns = np.flatnonzero(np.isin(list(PAIR_FEATURES), self.pair_feature_names_))
+        pair_columns = self._pair_columns()
         groups = _groups(sequences, c, self.cv)
         n_groups = len(np.unique(np.concatenate(groups)))
         grids = self._grids()
@@ -460,6 +496,63 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         self.link_threshold_, self.objectness_threshold_ = float(setting[0]), float(setting[1])
         self.min_cluster_size_ = int(setting[2])
         self.cv_score_ = float(score)
+        if self.cluster_window is not None:
+            training = (sequences, objectness, pairs, pair_x, pair_y, links, pair_folds)
+            self._fit_context(training, c, y, grids, tuning, seeds[1], tree, rng)
+
+    def _fit_context(self, training, c, y, grids, tuning, seed, tree, rng):
+        """The link classifier in cluster context, learned from the clusters that the links without context
+        (out of fold when tuning) form at the tuned thresholds; then the link threshold and the confirmation count
+        tuned again with it (out of fold)."""
+        gate, window, columns = self.objectness_threshold_, self.cluster_window, self._context_columns()
+        parts = []
+        for s, p, (i, j), x, target, link, fold in zip(*training, strict=True):
+            node = p > gate
+            both = node[i] & node[j]
+            i, j, x, link = i[both], j[both], x[both], link[both]
+            _, _, context, _ = context_merges(
+                s.detections,
+                node,
+                i,
+                j,
+                lambda rows, _context, link=link: link[rows],
+                self.pair_window,
+                self.link_threshold_,
+                window,
+                self.max_extent,
+            )
+            parts.append((s, node, i, j, x, context[:, columns], target[both], fold[both]))
+        features = [np.hstack([x, context]) for *_, x, context, _, _ in parts]
+        targets, folds = [part[6] for part in parts], [part[7] for part in parts]
+        if tuning:
+            models = fold_classifiers(features, targets, folds, self.max_iter, seed, self.max_pairs, rng, tree)
+        self.link_classifier_, _ = cross_fit(
+            features, targets, folds, self.max_iter, seed, self.max_pairs, rng, out_of_fold=False, tree=tree
+        )
+        if not tuning:
+            return
+
+        def merged_at(threshold):
+            found = []
+            for s, node, i, j, x, _, _, fold in parts:
+                roots, sizes, _, _ = context_merges(
+                    s.detections,
+                    node,
+                    i,
+                    j,
+                    links_by_fold(models, x, fold, columns),
+                    self.pair_window,
+                    threshold,
+                    window,
+                    self.max_extent,
+                )
+                found.append((s.rows, roots, sizes))
+            return found
+
+        link_grid, _, size_grid = grids
+        setting, score = tune_context(merged_at, link_grid, size_grid, c, y, self.window)
+        self.link_threshold_, self.min_cluster_size_ = float(setting[0]), int(setting[1])
+        self.cv_score_ = float(score)
 
     def _grids(self):
         """(link, objectness, min size) values to try: the grid of each "auto" parameter, else its value."""
@@ -471,6 +564,10 @@ class LinkClustering(ClusterMixin, BaseEstimator):
                 (self.min_cluster_size, MIN_SIZE_GRID),
             )
         )
+
+    def _context_columns(self):
+        """The columns of CONTEXT_FEATURES the link classifier sees (after the pair features)."""
+        return np.flatnonzero(np.isin(list(CONTEXT_FEATURES), self.context_feature_names_))
 
     def _pair_features(self, s, objectness, i, j):
         """The pair features of the pairs (i, j) of sequence s (causal: the compiled loop a stream runs too)."""
@@ -491,6 +588,11 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         """Labels of every row from the fitted classifiers and thresholds."""
         roots = np.full(n_rows, -1, dtype=np.int64)
         for s in sequences:
+            if self.cluster_window is not None:  # (causal: fit refuses it otherwise)
+                objectness, i, j = self._candidates(s, self.objectness_threshold_)
+                local = confirmed_roots(*self._context_merges(s, objectness, i, j)[:2], self.min_cluster_size_)
+                roots_to_rows(s.rows, local, roots)
+                continue
             objectness, i, j, links = self._probabilities(s, self.objectness_threshold_)
             node = objectness > self.objectness_threshold_
             if self.causal:
@@ -506,13 +608,43 @@ class LinkClustering(ClusterMixin, BaseEstimator):
 
     def _probabilities(self, s, gate):
         """The fitted classifiers on sequence ``s``: objectness, the candidate pairs (i, j) of the detections above
-        ``gate`` and their P(link)."""
-        detection_columns = np.flatnonzero(np.isin(list(DETECTION_FEATURES), self.detection_feature_names_))
-        pair_columns = np.flatnonzero(np.isin(list(PAIR_FEATURES), self.pair_feature_names_))
-        objectness = positive_proba(self.objectness_classifier_, s.features[:, detection_columns])
-        i, j = self._pairs(s, objectness > gate)
-        links = positive_proba(self.link_classifier_, self._pair_features(s, objectness, i, j)[:, pair_columns])
+        ``gate`` and their P(link).
+
+        With ``cluster_window``, the links are those decided in context at the fitted objectness threshold (and
+        ``gate`` must be it); the labels then come from :meth:`_context_merges`.
+        """
+        objectness, i, j = self._candidates(s, gate)
+        if self.cluster_window is not None:
+            return objectness, i, j, self._context_merges(s, objectness, i, j)[3]
+        links = positive_proba(self.link_classifier_, self._pair_features(s, objectness, i, j)[:, self._pair_columns()])
         return objectness, i, j, links
+
+    def _candidates(self, s, gate):
+        """The fitted objectness of sequence ``s`` and the candidate pairs (i, j) of the detections above ``gate``."""
+        detection_columns = np.flatnonzero(np.isin(list(DETECTION_FEATURES), self.detection_feature_names_))
+        objectness = positive_proba(self.objectness_classifier_, s.features[:, detection_columns])
+        return (objectness, *self._pairs(s, objectness > gate))
+
+    def _pair_columns(self):
+        """The columns of PAIR_FEATURES the link classifier sees."""
+        return np.flatnonzero(np.isin(list(PAIR_FEATURES), self.pair_feature_names_))
+
+    def _context_merges(self, s, objectness, i, j):
+        """:func:`context_merges` of sequence ``s`` with the fitted classifier and thresholds: roots, sizes, context
+        and links of the pairs (i, j) of the nodes."""
+        node = objectness > self.objectness_threshold_
+        x = self._pair_features(s, objectness, i, j)[:, self._pair_columns()]
+        return context_merges(
+            s.detections,
+            node,
+            i,
+            j,
+            links_by_fold({0: self.link_classifier_}, x, np.zeros(len(i), dtype=np.int64), self._context_columns()),
+            self.pair_window,
+            self.link_threshold_,
+            self.cluster_window,
+            self.max_extent,
+        )
 
 
 def sequence_roots(n, i, j, links, node, link_threshold, min_cluster_size):

@@ -170,20 +170,49 @@ def cross_fit(features, targets, folds, max_iter, seed, max_rows, rng, *, out_of
     y = np.concatenate(targets) if targets else np.zeros(0, dtype=bool)
     fold = np.concatenate(folds) if folds else np.zeros(0, dtype=np.int64)
 
-    def fit(rows):
-        if max_rows is not None and len(rows) > max_rows:
-            rows = rows[np.sort(rng.choice(len(rows), max_rows, replace=False))]
-        return _fit(X[rows], y[rows], max_iter, seed, tree or {})
-
     proba = np.empty(len(y))
     if out_of_fold:
-        for k in np.unique(fold):
+        for k, model in _per_fold(X, y, fold, max_iter, seed, max_rows, rng, tree).items():
             held = fold == k
-            proba[held] = positive_proba(fit(np.flatnonzero(~held)), X[held])
-    model = fit(np.arange(len(y)))
+            proba[held] = positive_proba(model, X[held])
+    model = _subsampled_fit(X, y, np.arange(len(y)), max_iter, seed, max_rows, rng, tree)
     if not out_of_fold:
         proba = positive_proba(model, X)
     return model, np.split(proba, np.cumsum([len(t) for t in targets])[:-1]) if targets else []
+
+
+def fold_classifiers(features, targets, folds, max_iter, seed, max_rows, rng, tree=None):
+    """The classifier of each fold, fitted on the other folds' rows (those :func:`cross_fit` gives out-of-fold
+    probabilities with).
+
+    Parameters
+    ----------
+    features, targets, folds, max_iter, seed, max_rows, rng, tree
+        As for :func:`cross_fit`.
+
+    Returns
+    -------
+    models : dict
+        Fold -> its classifier (HistGradientBoostingClassifier or a constant probability).
+    """
+    X = np.concatenate(features) if features else np.zeros((0, 0))
+    y = np.concatenate(targets) if targets else np.zeros(0, dtype=bool)
+    fold = np.concatenate(folds) if folds else np.zeros(0, dtype=np.int64)
+    return _per_fold(X, y, fold, max_iter, seed, max_rows, rng, tree)
+
+
+def _per_fold(X, y, fold, max_iter, seed, max_rows, rng, tree):
+    return {
+        k: _subsampled_fit(X, y, np.flatnonzero(fold != k), max_iter, seed, max_rows, rng, tree)
+        for k in np.unique(fold).tolist()
+    }
+
+
+def _subsampled_fit(X, y, rows, max_iter, seed, max_rows, rng, tree):
+    """A classifier of ``y`` on ``rows`` of ``X``, at most ``max_rows`` of them (drawn with ``rng``)."""
+    if max_rows is not None and len(rows) > max_rows:
+        rows = rows[np.sort(rng.choice(len(rows), max_rows, replace=False))]
+    return _fit(X[rows], y[rows], max_iter, seed, tree or {})
 
 
 def _panoptic_quality_of(c, y, window):
@@ -325,3 +354,41 @@ def tune_causal_surface(sequences, objectness, pairs, links, grids, c, y, window
                     roots_to_rows(s.rows, confirmed_roots(local, sizes, size), roots)
                 surface[g, t, k] = pq(roots)
     return surface
+
+
+def tune_context(merged_at, thresholds, sizes, c, y, window):
+    """The (link threshold, confirmation count) with the best panoptic quality for links decided in context.
+
+    Parameters
+    ----------
+    merged_at : callable
+        ``merged_at(threshold)``: for each sequence, ``(rows, roots, sizes)``: its rows of the data and the
+        :func:`~._cluster_context.context_merges` at that link threshold.
+    thresholds : sequence of float
+        The link thresholds to try.
+    sizes : sequence of int
+        The confirmation counts to try.
+    c : dict of ndarray
+        The columns read (``t`` in s, ``sequence``).
+    y : ndarray of int64
+        Ground-truth instance of every row.
+    window : float
+        Frame of the panoptic quality, s.
+
+    Returns
+    -------
+    setting : tuple
+        ``(link_threshold, min_cluster_size)``; the first in the grids' order among equals.
+    score : float
+    """
+    pq = _panoptic_quality_of(c, y, window)
+    surface = np.empty((len(thresholds), len(sizes)))
+    for g, threshold in enumerate(thresholds):
+        merged = merged_at(threshold)
+        for k, size in enumerate(sizes):
+            roots = np.full(len(y), -1, dtype=np.int64)
+            for rows, local, counts in merged:
+                roots_to_rows(rows, confirmed_roots(local, counts, size), roots)
+            surface[g, k] = pq(roots)
+    g, k = np.unravel_index(int(np.argmax(np.nan_to_num(surface, nan=-np.inf))), surface.shape)
+    return (thresholds[g], sizes[k]), float(surface[g, k])

@@ -6,7 +6,9 @@ features and pairs need: its detections are sorted as the estimator sorts
 a sequence (time first), their causal features computed against the
 window (:func:`~sklearn_radar.cluster._causal_link_features.causal_detection_features`),
 their objectness, their candidate pairs to the window and within the scan,
-the pairs' link probabilities, and one step of the causal agglomeration
+the pairs' link probabilities (with ``cluster_window``, from the context of
+the clusters so far too: :func:`~sklearn_radar.cluster._cluster_context.context_features`),
+and one step of the causal agglomeration
 (:func:`~sklearn_radar.cluster._causal_agglomeration.step`).  The code is
 the estimator's, on the same numbers, so the clusters are those of the
 offline ``predict``.
@@ -19,6 +21,7 @@ from sklearn.utils.validation import check_is_fitted
 
 from ..cluster._causal_agglomeration import new_state, step
 from ..cluster._causal_link_features import causal_detection_features, causal_pair_features, causal_pairs
+from ..cluster._cluster_context import CONTEXT_FEATURES, context_features
 from ..cluster._link_clustering import _SORT_KEY
 from ..cluster._link_features import (
     DETECTION_FEATURES,
@@ -80,6 +83,7 @@ class LearnedStream:
         self.model = model
         self._detection_columns = np.flatnonzero(np.isin(list(DETECTION_FEATURES), model.detection_feature_names_))
         self._pair_columns = np.flatnonzero(np.isin(list(PAIR_FEATURES), model.pair_feature_names_))
+        self._context_columns = np.flatnonzero(np.isin(list(CONTEXT_FEATURES), model.context_feature_names_))
         self._objectness = _fast(model.objectness_classifier_)
         self._links = _fast(model.link_classifier_)
         names = getattr(model, "feature_names_in_", None)
@@ -90,7 +94,7 @@ class LearnedStream:
         )
         if names is not None and not {"azimuth_sc", "sensor_yaw"} <= set(names.tolist()):
             self._absent.add("los")
-        self.span = max(LOCAL_WINDOW, float(model.pair_window))
+        self.span = max(LOCAL_WINDOW, float(model.pair_window), float(model.cluster_window or 0.0))
         self._windows = {}
 
     @property
@@ -175,6 +179,8 @@ class LearnedStream:
         if len(i):
             motion = LocalMotion(*(floats[_F[name]] for name in LocalMotion._fields))
             X = causal_pair_features(detections, motion, floats[_F["objectness"]], i, j)[:, self._pair_columns]
+            if model.cluster_window is not None:
+                X = np.hstack([X, self._context(detections, flags, window.ints[_I["cluster"]], start, i, j, now)])
             links = self._proba(self._links, model.link_classifier_, X)
         number = window.ints[_I["number"]]
         at = start + np.flatnonzero(node)  # the new nodes' columns of the window
@@ -204,6 +210,12 @@ class LearnedStream:
         clusters[rows[node]] = new_clusters
         sizes[rows[node]] = new_sizes
         return clusters, sizes, merges
+
+    def _context(self, d, node, cluster, start, i, j, now):
+        """The context features of the pairs (i, j) (window columns) from the clusters before this scan."""
+        window = self.model.cluster_window
+        found = context_features(d.x, d.y, d.t, d.v, d.los, cluster, node, 0, start, window, i, j, now)
+        return found[:, self._context_columns]
 
     def recent(self, sequence):
         """The buffered nodes of a sequence: ``cluster`` now, ``x``, ``y`` (m), ``v_r`` (m/s), ``los`` (rad), ``us``."""

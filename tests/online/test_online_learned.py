@@ -61,6 +61,8 @@ def test_online_ids_resolved_through_the_aliases_equal_offline_causal_predict(fi
     [
         {"max_links_per_detection": 2},  # leaves links out
         {"max_extent": 4.0},  # refuses merges
+        {"cluster_window": 0.5},  # links from the clusters so far (a window longer than the pair window)
+        {"cluster_window": 0.1, "max_extent": 4.0},  # (shorter)
     ],
 )
 def test_a_limited_model_streams_as_offline_predict(recording, limit):
