@@ -8,8 +8,9 @@ streams on a simulated training recording of its own (``--learned-train``
 sequences of 20 s of the realistic preset, other seeds than the stream's;
 ``--learned-max-iter`` boosting iterations, ``--learned-max-links`` its
 ``max_links_per_detection`` (``none`` for every pair),
-``--learned-max-depth`` its ``max_depth``, by default those of the main
-job's causal model (``LEARNED_CAUSAL_PARAMS``: 40, 16, 6);
+``--learned-max-depth`` its ``max_depth``, ``--learned-cluster-window``
+its ``cluster_window`` (``none``: no cluster context), by default those of
+the main job's causal model (``LEARNED_CAUSAL_PARAMS``);
 ``--learned-max-leaf-nodes`` its ``max_leaf_nodes``), trained
 on the pre-clustered instances as the main job trains it, thresholds
 tuned as ``LinkClustering`` tunes them; the fit time and the thresholds
@@ -67,7 +68,7 @@ LEARNED = 0
 LEARNED_MODEL_ENV = "SKLEARN_RADAR_BENCH_LEARNED_MODEL"
 
 
-def fit_learned(n_sequences, path, max_iter, max_links=None, max_leaf_nodes=31, max_depth=None):
+def fit_learned(n_sequences, path, max_iter, max_links=None, max_leaf_nodes=31, max_depth=None, cluster_window=None):
     """Fit the causal learned pipeline on simulated training sequences; save it to ``path``; print what it took."""
     import joblib
     from sklearn.pipeline import Pipeline
@@ -93,6 +94,7 @@ def fit_learned(n_sequences, path, max_iter, max_links=None, max_leaf_nodes=31, 
                     max_links_per_detection=max_links,
                     max_leaf_nodes=max_leaf_nodes,
                     max_depth=max_depth,
+                    cluster_window=cluster_window,
                 ),
             ),
         ]
@@ -257,6 +259,12 @@ def main():
         default=MAIN_JOB["link__max_depth"],
         help="max_depth of the learned one's classifiers (default: the main job's; 'none': as the leaves allow)",
     )
+    parser.add_argument(
+        "--learned-cluster-window",
+        type=lambda text: None if text == "none" else float(text),
+        default=MAIN_JOB.get("link__cluster_window"),
+        help="cluster_window of the learned one, s (default: the main job's; 'none': no cluster context)",
+    )
     parser.add_argument("--child", nargs=3, type=int, help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.child:
@@ -277,6 +285,7 @@ def main():
             args.learned_max_links,
             args.learned_max_leaf_nodes,
             args.learned_max_depth,
+            args.learned_cluster_window,
         )
         os.environ[LEARNED_MODEL_ENV] = path
         numbers.append(LEARNED)
