@@ -293,8 +293,25 @@ def context_merges(d, node, i, j, links_of, pair_window, threshold, cluster_wind
 
 
 def links_by_fold(models, x, fold, columns):
-    """``links_of`` for :func:`context_merges`: each pair's P(link) by the classifier of its fold, from its pair
-    features ``x`` and the ``columns`` of its context."""
+    """``links_of`` for :func:`context_merges`: each pair's P(link) by the classifier of its fold.
+
+    Parameters
+    ----------
+    models : dict
+        Fold -> link classifier (fitted on pair features followed by context features), as
+        :func:`~._link_training.fold_classifiers` gives; ``{0: model}`` with ``fold`` all 0 for one classifier.
+    x : ndarray of float64, shape (n_pairs, n_pair_features)
+        The pair features of every pair.
+    fold : ndarray of int, shape (n_pairs,)
+        The fold of every pair.
+    columns : ndarray of int
+        The columns of :data:`CONTEXT_FEATURES` the classifiers see.
+
+    Returns
+    -------
+    links_of : callable
+        ``links_of(rows, context) -> P(link)`` of the pairs ``rows``.
+    """
 
     def links_of(rows, context):
         features = np.hstack([x[rows], context[:, columns]])
