@@ -321,6 +321,8 @@ class LearnedCausalResult(JsonRecord):
         Clusters found on the test half.
     instance_test : InstanceScores
         Object-level scores on the test half, causal (the stream's final ids).
+    params : dict, default={}
+        The causal pipeline's settings (``step__name``: value; empty in a run written before they were recorded).
     model : Pipeline or None, default=None
         The fitted causal pipeline itself, for the tracking step of the same run (not written: the file holds it).
     """
@@ -334,6 +336,7 @@ class LearnedCausalResult(JsonRecord):
     v1_test: float
     n_clusters_test: int
     instance_test: InstanceScores
+    params: dict[str, Any] = field(default_factory=dict)
     model: Any = field(default=None, compare=False, repr=False, metadata=NOT_WRITTEN)
 
 

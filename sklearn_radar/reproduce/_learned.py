@@ -92,7 +92,8 @@ def _causal(env, params, X_train, y_train):
     test scores: its ``predict``, which the stream's final ids equal."""
     model = learned_pipeline({**LEARNED_CAUSAL_PARAMS, **params, "link__causal": True, "filter__causal": True})
     fields, _ = _fitted(env, model, X_train, y_train)
-    return LearnedCausalResult(model_file=LEARNED_CAUSAL_FILE, **fields), model
+    settings = native_params({k: v for k, v in model.get_params().items() if _is_setting(k)})
+    return LearnedCausalResult(model_file=LEARNED_CAUSAL_FILE, params=settings, **fields), model
 
 
 def _fitted(env, model, X_train, y_train):

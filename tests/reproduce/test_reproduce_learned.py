@@ -103,6 +103,9 @@ def test_the_causal_record_scores_what_a_directly_fitted_causal_model_labels(lea
     target, label, time, group = _test_scores(tiny_folder, results, model)
     assert record["instance_test"]["pq"] == pytest.approx(panoptic_quality(target, label, times=time, groups=group).pq)
     assert load_learned(learned_run / "learned_causal.joblib")[-1].causal is True
+    link = model[-1].get_params()
+    assert {k.removeprefix("link__"): v for k, v in record["params"].items() if k.startswith("link__")} == link
+    assert record["params"]["link__cluster_window"] == learned_step.LEARNED_CAUSAL_PARAMS["link__cluster_window"]
 
 
 def test_params_json_points_to_the_model_with_the_front(learned_run):
@@ -125,6 +128,8 @@ def test_report_section(learned_run):
     causal = json.loads((learned_run / "results.json").read_text())["learned"]["causal"]
     assert f"| learned grouping, causal | past only | {causal['instance_test']['pq']:.3f} |" in report
     assert "| object experiment, causal | past only |" in report
+    window = learned_step.LEARNED_CAUSAL_PARAMS["link__cluster_window"]
+    assert f"cluster_window={window}" in report.split("The causal learned grouping", 1)[1].split("\n", 1)[0]
     errors = json.loads((learned_run / "results.json").read_text())["learned"]["errors"]["learned grouping"]
     assert f"| learned grouping | {errors['n_true']} | {errors['missed']} | {errors['noise']} |" in report
 

@@ -129,6 +129,10 @@ def _causal_rows(results):
     if sliding is not None and sliding.instance_test is not None:
         name = f"{SLIDING_BASELINE}, tuned for {results.meta.objective.upper()}"
         rows.append(_row(name, sliding.instance_test, sliding.v1_test, repeat=sliding.repeats, decides="past only"))
+    offline = results.learned.params
+    changed = {  # the causal model's link settings that differ from the offline model's (listed above)
+        k: v for k, v in causal.params.items() if k.startswith("link__") and offline.get(k) != v
+    }
     return [
         *rows,
         "",
@@ -138,7 +142,8 @@ def _causal_rows(results):
         "agglomeration (each time's new detections join the clusters so far; the minimum size confirms a detection "
         "at its time); its test labels are the stream's final ids. Tuned: link threshold "
         f"{causal.link_threshold:.2f}, objectness threshold {causal.objectness_threshold:.2f}, minimum cluster size "
-        f"{causal.min_cluster_size} (out-of-fold PQ {causal.cv_pq:.3f}); fitted in {causal.fit_wall_time_s:.1f} s.",
+        f"{causal.min_cluster_size} (out-of-fold PQ {causal.cv_pq:.3f}); fitted in {causal.fit_wall_time_s:.1f} s"
+        + (f"; {format_params(changed)}." if changed else "."),
     ]
 
 
