@@ -14,6 +14,11 @@ scored on the test half:
   ``experiment_tracking.py``'s ``learned causal, confirmed + Tracker, out-of-fold`` (30 random settings).
 
 The report gives each row's mean and the paired difference with context minus without (mean +- 2 SE over seeds).
+
+``--rounds 2`` (a prototype, not in the library) trains the context model's link classifier on more states: after
+the first round (the library's: the state that the links without context make), the state that the first
+round's out-of-fold classifiers make at their tuned threshold, its pairs added to the training rows, the
+classifier refitted and the thresholds retuned (data aggregation).
 Run (the learned guide's table, section "Cluster context"; about 4 minutes per seed on 2 shared cores)::
 
     OMP_NUM_THREADS=1 nice -n 19 python benchmarks/experiment_cluster_context.py --data realistic \\
@@ -32,6 +37,9 @@ import numpy as np
 from sklearn.base import clone
 from threadpoolctl import threadpool_limits
 
+from sklearn_radar.cluster import LinkClustering
+from sklearn_radar.cluster._cluster_context import context_merges, links_by_fold
+from sklearn_radar.cluster._link_training import cross_fit, fold_classifiers, tune_context
 from sklearn_radar.datasets import make_scenes
 from sklearn_radar.experiments._learned import learned_pipeline
 from sklearn_radar.metrics import panoptic_quality, precluster_target, tracking_scores
@@ -45,6 +53,49 @@ from experiment_tracking import LABEL_COLUMNS, LEARNED_CAUSAL, TRACKER_SPACE, fi
 
 WITHOUT, WITH = "pair features", "cluster context"
 METRICS = ("pq", "ids_mota", "ids_idf1", "mota", "idf1", "hota")
+
+
+def _fit_context_rounds(self, training, c, y, grids, tuning, seed, tree, rng, rounds=2):
+    """``LinkClustering._fit_context`` with ``rounds`` rounds of training states (tuning only)."""
+    gate, window, columns = self.objectness_threshold_, self.cluster_window, self._context_columns()
+    parts, features, targets, folds = [], [], [], []
+
+    def merges(part, links_of, threshold):
+        s, node, i, j = part[:4]
+        return context_merges(s.detections, node, i, j, links_of, self.pair_window, threshold, window, self.max_extent)
+
+    for s, p, (i, j), x, target, link, fold in zip(*training, strict=True):
+        node = p > gate
+        both = node[i] & node[j]
+        part = (s, node, i[both], j[both], x[both], target[both], fold[both])
+        context = merges(part, lambda rows, _c, link=link[both]: link[rows], self.link_threshold_)[2]
+        parts.append(part)
+        features.append(np.hstack([part[4], context[:, columns]]))
+        targets.append(part[5])
+        folds.append(part[6])
+    link_grid, _, size_grid = grids
+    models = setting = None  # (of the round before)
+    for round_ in range(rounds):
+        if round_:  # the state that the last round's out-of-fold classifiers make
+            for part in parts:
+                context = merges(part, links_by_fold(models, part[4], part[6], columns), setting[0])[2]
+                features.append(np.hstack([part[4], context[:, columns]]))
+                targets.append(part[5])
+                folds.append(part[6])
+        models = fold_classifiers(features, targets, folds, self.max_iter, seed, self.max_pairs, rng, tree)
+
+        def merged_at(threshold, models=models):
+            return [
+                (part[0].rows, *merges(part, links_by_fold(models, part[4], part[6], columns), threshold)[:2])
+                for part in parts
+            ]
+
+        setting, score = tune_context(merged_at, link_grid, size_grid, c, y, self.window)
+    self.link_classifier_, _ = cross_fit(
+        features, targets, folds, self.max_iter, seed, self.max_pairs, rng, out_of_fold=False, tree=tree
+    )
+    self.link_threshold_, self.min_cluster_size_ = float(setting[0]), int(setting[1])
+    self.cv_score_ = float(score)
 
 
 def streamed(model, data, groups, rows, truth, models=None):
@@ -125,8 +176,12 @@ def main(argv=None):
     )
     parser.add_argument("--cluster-window", type=float, default=0.5, help="LinkClustering's cluster_window, s")
     parser.add_argument("--n-settings", type=int, default=30, help="random settings tried for the Tracker")
+    parser.add_argument("--rounds", type=int, default=1, help="rounds of training states (2: the prototype)")
     parser.add_argument("--out", help="folder to write each preset's runs in (cluster_context_<preset>.json)")
     options = parser.parse_args(argv)
+    if options.rounds > 1:
+        rounds = options.rounds
+        LinkClustering._fit_context = lambda self, *args: _fit_context_rounds(self, *args, rounds=rounds)
     with threadpool_limits(1):
         for preset in options.data:
             runs = {}
