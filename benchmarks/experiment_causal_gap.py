@@ -18,6 +18,9 @@ five ways and scored by per-frame PQ (0.5 s windows) against ``precluster_target
 
 The steps 1 -> 2 (confirmation), 2 -> 3 (agglomeration) and 3 -> 4 (links: features and the model trained on them)
 add up to the gap 1 -> 4.  The report gives the mean over seeds and each step's paired difference (mean +- 2 SE).
+The records in ``benchmarks/results/causal_gap/`` were taken before the main job's causal model had the cluster
+context (``link__cluster_window``); a rerun now measures the model with it.
+
 Run (the learned guide's table, section "Where the causal score goes")::
 
     OMP_NUM_THREADS=1 nice -n 19 python benchmarks/experiment_causal_gap.py --data easy realistic radarscenes \\
