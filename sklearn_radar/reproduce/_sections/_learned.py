@@ -143,7 +143,13 @@ def _causal_rows(results):
         "at its time); its test labels are the stream's final ids. Tuned: link threshold "
         f"{causal.link_threshold:.2f}, objectness threshold {causal.objectness_threshold:.2f}, minimum cluster size "
         f"{causal.min_cluster_size} (out-of-fold PQ {causal.cv_pq:.3f}); fitted in {causal.fit_wall_time_s:.1f} s"
-        + (f"; {format_params(changed)}." if changed else "."),
+        + (f"; its settings unlike the offline model's: {format_params(changed)}" if changed else "")
+        + (
+            f" (with cluster_window, each pair's link also sees the cluster its earlier detection already belongs to, "
+            f"over the last {changed['link__cluster_window']:g} s)."
+            if changed.get("link__cluster_window") is not None
+            else "."
+        ),
     ]
 
 
