@@ -343,17 +343,24 @@ def tune_causal_surface(sequences, objectness, pairs, links, grids, c, y, window
                 node = p > gate
                 both = node[i] & node[j]
                 d = s.detections
-                merged.append(
-                    sequence_merges(
-                        d.t, node, i[both], j[both], link[both], pair_window, threshold, d.x, d.y, max_extent
-                    )
+                merges = sequence_merges(
+                    d.t, node, i[both], j[both], link[both], pair_window, threshold, d.x, d.y, max_extent
                 )
-            for k, size in enumerate(size_grid):
-                roots = np.full(n_rows, -1, dtype=np.int64)
-                for s, (local, sizes) in zip(sequences, merged, strict=True):
-                    roots_to_rows(s.rows, confirmed_roots(local, sizes, size), roots)
-                surface[g, t, k] = pq(roots)
+                merged.append((s.rows, *merges))
+            surface[g, t] = _confirmed_scores(merged, size_grid, n_rows, pq)
     return surface
+
+
+def _confirmed_scores(merged, sizes, n_rows, pq):
+    """The score ``pq`` of the causal merges ``merged`` (``(rows, roots, sizes)`` per sequence) at each confirmation
+    count of ``sizes``: labels of all ``n_rows`` rows, -1 where a detection's cluster was not yet confirmed."""
+    scores = np.empty(len(sizes))
+    for k, size in enumerate(sizes):
+        roots = np.full(n_rows, -1, dtype=np.int64)
+        for rows, local, counts in merged:
+            roots_to_rows(rows, confirmed_roots(local, counts, size), roots)
+        scores[k] = pq(roots)
+    return scores
 
 
 def tune_context(merged_at, thresholds, sizes, c, y, window):
@@ -382,13 +389,6 @@ def tune_context(merged_at, thresholds, sizes, c, y, window):
     score : float
     """
     pq = _panoptic_quality_of(c, y, window)
-    surface = np.empty((len(thresholds), len(sizes)))
-    for g, threshold in enumerate(thresholds):
-        merged = merged_at(threshold)
-        for k, size in enumerate(sizes):
-            roots = np.full(len(y), -1, dtype=np.int64)
-            for rows, local, counts in merged:
-                roots_to_rows(rows, confirmed_roots(local, counts, size), roots)
-            surface[g, k] = pq(roots)
+    surface = np.array([_confirmed_scores(merged_at(threshold), sizes, len(y), pq) for threshold in thresholds])
     g, k = np.unravel_index(int(np.argmax(np.nan_to_num(surface, nan=-np.inf))), surface.shape)
     return (thresholds[g], sizes[k]), float(surface[g, k])

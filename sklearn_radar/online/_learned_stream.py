@@ -21,12 +21,11 @@ from sklearn.utils.validation import check_is_fitted
 
 from ..cluster._causal_agglomeration import new_state, step
 from ..cluster._causal_link_features import causal_detection_features, causal_pair_features, causal_pairs
-from ..cluster._cluster_context import CONTEXT_FEATURES, context_features
+from ..cluster._cluster_context import context_features
 from ..cluster._link_clustering import _SORT_KEY
 from ..cluster._link_features import (
     DETECTION_FEATURES,
     LOCAL_WINDOW,
-    PAIR_FEATURES,
     Detections,
     LocalMotion,
 )
@@ -82,8 +81,8 @@ class LearnedStream:
         check_learned(model)
         self.model = model
         self._detection_columns = np.flatnonzero(np.isin(list(DETECTION_FEATURES), model.detection_feature_names_))
-        self._pair_columns = np.flatnonzero(np.isin(list(PAIR_FEATURES), model.pair_feature_names_))
-        self._context_columns = np.flatnonzero(np.isin(list(CONTEXT_FEATURES), model.context_feature_names_))
+        self._pair_columns = model._pair_columns()
+        self._context_columns = model._context_columns()
         self._objectness = _fast(model.objectness_classifier_)
         self._links = _fast(model.link_classifier_)
         names = getattr(model, "feature_names_in_", None)
