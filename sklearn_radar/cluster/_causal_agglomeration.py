@@ -26,11 +26,14 @@ the last pair window (the recent nodes, whose positions the state keeps).
 A refused pair keeps its evidence and merges later only if that changes
 and the extent then allows it.
 
-The state of one sequence is a tuple of numba typed containers (see
-:func:`new_state`); :func:`step` advances it by one time.  The offline
-estimator runs :func:`sequence_merges` (every time of a sequence in one
-call), the online pipeline :func:`step` once per scan with new nodes: the
-same code, so both give the same floating-point means and the same merges.
+The state of one sequence is a tuple of arrays (see :func:`new_state`);
+:func:`step` advances it by one time.  Each live cluster holds a *slot*:
+the evidence between clusters is a matrix over slots (sum and count; a
+count of 0 is no evidence), so that a merge adds one row to another
+instead of updating a hash map per neighbour.  The offline estimator runs
+:func:`sequence_merges` (every time of a sequence in one call), the
+online pipeline :func:`step` once per scan with new nodes: the same code,
+so both give the same floating-point means and the same merges.
 """
 
 from __future__ import annotations
@@ -40,27 +43,36 @@ import heapq
 import numba
 import numpy as np
 from numba import types
-from numba.typed import Dict, List
+from numba.typed import List
 
 from .._compiled import entry_point
 
-_EVIDENCE = types.Tuple((types.float64, types.int64))  # (sum of P(link), number of pairs)
-_NEIGHBOURS = types.DictType(types.int64, _EVIDENCE)
+#: The state's arrays, by name: per slot (a live cluster's place in the evidence matrices), per recent node (in time
+#: order from the head on), and the stack of free slots; then its counters.
+_CLUSTER, _SIZE, _FREE, _NUMBER, _SLOT = range(5)  # int arrays
+_LAST, _TIME, _X, _Y = range(4)  # float arrays
+_N_FREE, _HEAD, _TAIL = range(3)  # counters
 
 
 @numba.njit(cache=True, nogil=True)
 def _new_state():
-    evidence = Dict.empty(key_type=types.int64, value_type=_NEIGHBOURS)  # cluster -> {cluster: (sum, count)}
-    size = Dict.empty(key_type=types.int64, value_type=types.int64)  # live cluster -> its nodes so far
-    last = Dict.empty(key_type=types.int64, value_type=types.float64)  # live cluster -> time of its last node, s
-    position = Dict.empty(key_type=types.int64, value_type=types.int64)  # recent node -> its place in the lists
-    nodes = List.empty_list(types.int64)  # the recent nodes in time order (from head on) ...
-    clusters = List.empty_list(types.int64)  # ... their clusters now ...
-    times = List.empty_list(types.float64)  # ... and their times, s
-    head = np.zeros(1, dtype=np.int64)
-    xs = List.empty_list(types.float64)  # ... and their positions, m
-    ys = List.empty_list(types.float64)
-    return evidence, size, last, position, nodes, clusters, times, head, xs, ys
+    ints = List.empty_list(types.int64[::1])
+    ints.append(np.full(16, -1, dtype=np.int64))  # slot -> its cluster (its oldest node's number), -1 when free
+    ints.append(np.zeros(16, dtype=np.int64))  # slot -> the cluster's nodes so far
+    ints.append(np.arange(15, -1, -1).astype(np.int64))  # the free slots, the next one last
+    ints.append(np.zeros(64, dtype=np.int64))  # recent node -> its number
+    ints.append(np.zeros(64, dtype=np.int64))  # recent node -> its cluster's slot
+    floats = List.empty_list(types.float64[::1])
+    floats.append(np.zeros(16))  # slot -> time of the cluster's last node, s
+    floats.append(np.zeros(64))  # recent node -> its time, s
+    floats.append(np.zeros(64))  # ... and its position, m
+    floats.append(np.zeros(64))
+    sums = List.empty_list(types.float64[:, ::1])
+    sums.append(np.zeros((16, 16)))  # slot x slot -> sum of P(link) between the two clusters
+    counts = List.empty_list(types.int64[:, ::1])
+    counts.append(np.zeros((16, 16), dtype=np.int64))  # ... and the number of pairs (0: no evidence)
+    counters = np.array([16, 0, 0], dtype=np.int64)  # free slots, head and tail of the recent nodes
+    return ints, floats, sums, counts, counters
 
 
 def new_state():
@@ -69,11 +81,38 @@ def new_state():
     Returns
     -------
     state : tuple
-        Numba typed containers: per cluster, the evidence (sum and count of link probabilities) to each
-        neighbouring cluster, its size and the time of its last node; per recent node, its cluster, time and
-        position.
+        Arrays in numba typed lists: per live cluster, its evidence (sum and count of link probabilities) to
+        each other live cluster, its size and the time of its last node; per recent node, its number, cluster,
+        time and position.
     """
     return _new_state()
+
+
+def live_clusters(state):
+    """The live clusters of a state and the evidence between them (for inspection and tests).
+
+    Parameters
+    ----------
+    state : tuple
+        Of :func:`new_state`.
+
+    Returns
+    -------
+    sizes : dict
+        Live cluster -> its nodes so far.
+    evidence : dict
+        ``(a, b)`` with ``a < b`` -> (sum of P(link), number of pairs) between clusters ``a`` and ``b``.
+    """
+    ints, _, sums, counts, _ = state
+    cluster, size = ints[_CLUSTER], ints[_SIZE]
+    live = np.flatnonzero(cluster >= 0)
+    sizes = {int(cluster[s]): int(size[s]) for s in live}
+    evidence = {}
+    for s in live:
+        for o in live:
+            if counts[0][s, o] > 0 and cluster[s] < cluster[o]:
+                evidence[int(cluster[s]), int(cluster[o])] = (float(sums[0][s, o]), int(counts[0][s, o]))
+    return sizes, evidence
 
 
 def step(state, now, new_nodes, i, j, links, window, threshold, x=None, y=None, max_extent=None):
@@ -140,126 +179,94 @@ def _positions(x, y, n, max_extent):
 
 @numba.njit(cache=True, nogil=True)
 def _step(state, now, new_nodes, i, j, links, window, threshold, x, y, max_extent):
-    evidence, size, last, position, nodes, clusters, times, head, xs, ys = state
-    # Retire the clusters that no new pair can reach, and forget the nodes that no new pair can end at.
-    retired = [c for c in last.keys() if not now - last[c] <= window]
-    for c in retired:
-        for other in evidence[c].keys():
-            del evidence[other][c]
-        del evidence[c]
-        del size[c]
-        del last[c]
-    start = head[0]
-    while start < len(nodes) and not now - times[start] <= window:
-        del position[nodes[start]]
-        start += 1
-    if start > 64 and 2 * start > len(nodes):  # compact the lists
-        for k in range(start, len(nodes)):
-            nodes[k - start] = nodes[k]
-            clusters[k - start] = clusters[k]
-            times[k - start] = times[k]
-            xs[k - start] = xs[k]
-            ys[k - start] = ys[k]
-            position[nodes[k - start]] = k - start
-        keep = len(nodes) - start
-        while len(nodes) > keep:
-            nodes.pop()
-            clusters.pop()
-            times.pop()
-            xs.pop()
-            ys.pop()
-        start = 0
-    head[0] = start
-    for q in range(len(new_nodes)):
-        node = new_nodes[q]
-        evidence[node] = Dict.empty(key_type=types.int64, value_type=_EVIDENCE)
-        size[node] = 1
-        last[node] = now
-        position[node] = len(nodes)
-        nodes.append(node)
-        clusters.append(node)
-        times.append(now)
-        xs.append(x[q])
-        ys.append(y[q])
+    ints, floats, sums, counts, counters = state
+    _retire(state, now, window)
+    _make_room(state, len(new_nodes))
+    cluster, size, free, number, slot = ints[_CLUSTER], ints[_SIZE], ints[_FREE], ints[_NUMBER], ints[_SLOT]
+    last, times, xs, ys = floats[_LAST], floats[_TIME], floats[_X], floats[_Y]
+    total, count = sums[0], counts[0]
+    head, first_new = counters[_HEAD], counters[_TAIL]
+    for q in range(len(new_nodes)):  # each new node a cluster of its own, in a free slot (its rows hold zeros)
+        counters[_N_FREE] -= 1
+        s = free[counters[_N_FREE]]
+        cluster[s], size[s], last[s] = new_nodes[q], 1, now
+        k = first_new + q
+        number[k], slot[k], times[k], xs[k], ys[k] = new_nodes[q], s, now, x[q], y[q]
+    tail = counters[_TAIL] = first_new + len(new_nodes)
     # The evidence of the new pairs: each new node b is still a cluster of its own, and its pairs (a block of j)
     # sum up per cluster a of their earlier end, in the pairs' order; no pair of clusters (a, b) had evidence before.
-    heap = [(0.0, np.int64(0), np.int64(0))]
+    at = np.searchsorted(number[head:tail], i) + head
+    heap = [(0.0, np.int64(0), np.int64(0), np.int64(0), np.int64(0))]
     heap.pop()
     distinct = np.empty(len(i), dtype=np.int64)
-    sums = np.empty(len(i), dtype=np.float64)
-    counts = np.empty(len(i), dtype=np.int64)
+    found_sums = np.empty(len(i), dtype=np.float64)
+    found_counts = np.empty(len(i), dtype=np.int64)
     e = 0
     while e < len(i):
-        b = j[e]
+        later = j[e]
+        b = slot[first_new + np.searchsorted(new_nodes, later)]
         found = 0
-        while e < len(i) and j[e] == b:
-            a = clusters[position[i[e]]]
-            slot = -1
+        while e < len(i) and j[e] == later:
+            a = slot[at[e]]
+            place = -1
             for q in range(found):
                 if distinct[q] == a:
-                    slot = q
+                    place = q
                     break
-            if slot < 0:
-                distinct[found], sums[found], counts[found] = a, links[e], 1
+            if place < 0:
+                distinct[found], found_sums[found], found_counts[found] = a, links[e], 1
                 found += 1
             else:
-                sums[slot] += links[e]
-                counts[slot] += 1
+                found_sums[place] += links[e]
+                found_counts[place] += 1
             e += 1
-        to_b = evidence[b]
         for q in range(found):
             a = distinct[q]
-            to_b[a] = evidence[a][b] = (sums[q], counts[q])
-            mean = sums[q] / counts[q]
+            total[a, b] = total[b, a] = found_sums[q]
+            count[a, b] = count[b, a] = found_counts[q]
+            mean = found_sums[q] / found_counts[q]
             if mean > threshold:
-                heap.append((-mean, min(a, b), max(a, b)))
+                heap.append(_candidate(mean, cluster, a, b))
     heapq.heapify(heap)
     child = List.empty_list(types.int64)
     survivor = List.empty_list(types.int64)
     while len(heap):
-        negative, a, b = heapq.heappop(heap)
-        if a not in size or b not in size:
-            continue
-        of_a = evidence[a]
-        if b not in of_a:
-            continue
-        s, k = of_a[b]
-        if s / k != -negative:
+        negative, older, younger, a, b = heapq.heappop(heap)
+        if cluster[a] != older or cluster[b] != younger or count[a, b] == 0:
+            continue  # one side merged or retired since (its slot free, or another cluster's)
+        if total[a, b] / count[a, b] != -negative:
             continue  # stale: the link changed since
-        if max_extent < np.inf and _extent(clusters, xs, ys, start, a, b) > max_extent:
+        if max_extent < np.inf and _extent(slot, xs, ys, head, tail, a, b) > max_extent:
             continue  # too long a cluster: refused (the evidence stays)
         # b (the younger) joins a.
-        child.append(b)
-        survivor.append(a)
-        of_b = evidence[b]
-        del of_a[b]
-        del of_b[a]
-        for c, (s, k) in of_b.items():
-            of_c = evidence[c]
-            del of_c[b]
-            if c in of_a:
-                s_a, k_a = of_a[c]
-                s, k = s_a + s, k_a + k
-            of_a[c] = of_c[a] = (s, k)
+        child.append(younger)
+        survivor.append(older)
+        total[a, b] = total[b, a] = 0.0
+        count[a, b] = count[b, a] = 0
+        for c in range(len(cluster)):
+            if count[b, c] == 0:
+                continue
+            s, k = total[b, c], count[b, c]
+            total[b, c] = total[c, b] = 0.0
+            count[b, c] = count[c, b] = 0
+            if count[a, c] > 0:
+                s, k = total[a, c] + s, count[a, c] + k
+            total[a, c] = total[c, a] = s
+            count[a, c] = count[c, a] = k
             mean = s / k
             if mean > threshold:
-                heapq.heappush(heap, (-mean, min(a, c), max(a, c)))
-        del evidence[b]
-        if size[b] == 1:  # a cluster of one node is that node (numbered as it), which is still recent
-            clusters[position[b]] = a
-        else:
-            for k in range(start, len(clusters)):
-                if clusters[k] == b:
-                    clusters[k] = a
+                heapq.heappush(heap, _candidate(mean, cluster, a, c))
+        for k in range(head, tail):
+            if slot[k] == b:
+                slot[k] = a
         size[a] += size[b]
         last[a] = max(last[a], last[b])
-        del size[b]
-        del last[b]
+        _free(state, b)
     out = np.empty(len(new_nodes), dtype=np.int64)
     sizes = np.empty(len(new_nodes), dtype=np.int64)
-    for k in range(len(new_nodes)):
-        out[k] = clusters[position[new_nodes[k]]]
-        sizes[k] = size[out[k]]
+    for q in range(len(new_nodes)):
+        out[q] = cluster[slot[first_new + q]]
+        sizes[q] = size[slot[first_new + q]]
     n_merges = len(child)
     child_out = np.empty(n_merges, dtype=np.int64)
     survivor_out = np.empty(n_merges, dtype=np.int64)
@@ -270,11 +277,83 @@ def _step(state, now, new_nodes, i, j, links, window, threshold, x, y, max_exten
 
 
 @numba.njit(cache=True, nogil=True)
-def _extent(clusters, xs, ys, start, a, b):
-    """Diagonal of the x-y bounding box of the recent nodes (from ``start`` on) of clusters ``a`` and ``b``, m."""
+def _candidate(mean, cluster, a, b):
+    """The heap entry of a mean link between the clusters of slots ``a`` and ``b``: largest mean first, ties to
+    the smaller pair of cluster numbers; the older (smaller) cluster first."""
+    if cluster[a] < cluster[b]:
+        return (-mean, cluster[a], cluster[b], a, b)
+    return (-mean, cluster[b], cluster[a], b, a)
+
+
+@numba.njit(cache=True, nogil=True)
+def _free(state, s):
+    """Forget the cluster of slot ``s``: its evidence (row and column) to zero, the slot back on the stack."""
+    ints, _, sums, counts, counters = state
+    total, count = sums[0], counts[0]
+    for o in range(len(ints[_CLUSTER])):
+        if count[s, o] > 0:
+            total[s, o] = total[o, s] = 0.0
+            count[s, o] = count[o, s] = 0
+    ints[_CLUSTER][s] = -1
+    ints[_FREE][counters[_N_FREE]] = s
+    counters[_N_FREE] += 1
+
+
+@numba.njit(cache=True, nogil=True)
+def _retire(state, now, window):
+    """Retire the clusters that no new pair can reach, and forget the nodes that no new pair can end at."""
+    ints, floats, _, _, counters = state
+    cluster, last, times = ints[_CLUSTER], floats[_LAST], floats[_TIME]
+    for s in range(len(cluster)):
+        if cluster[s] >= 0 and not now - last[s] <= window:
+            _free(state, s)
+    head = counters[_HEAD]
+    while head < counters[_TAIL] and not now - times[head] <= window:
+        head += 1
+    counters[_HEAD] = head
+
+
+@numba.njit(cache=True, nogil=True)
+def _make_room(state, n):
+    """Room for ``n`` new nodes: as many free slots and places after the tail (moved to the front, or grown)."""
+    ints, floats, sums, counts, counters = state
+    slots = len(ints[_CLUSTER])
+    if counters[_N_FREE] < n:  # more slots: the matrices grown, the new slots free
+        grown = max(2 * slots, slots - counters[_N_FREE] + n)
+        total, count = np.zeros((grown, grown)), np.zeros((grown, grown), dtype=np.int64)
+        total[:slots, :slots], count[:slots, :slots] = sums[0], counts[0]
+        sums[0], counts[0] = total, count
+        cluster, size, last = np.full(grown, -1, dtype=np.int64), np.zeros(grown, dtype=np.int64), np.zeros(grown)
+        cluster[:slots], size[:slots], last[:slots] = ints[_CLUSTER], ints[_SIZE], floats[_LAST]
+        ints[_CLUSTER], ints[_SIZE], floats[_LAST] = cluster, size, last
+        free = np.empty(grown, dtype=np.int64)
+        added = grown - slots
+        free[:added] = np.arange(grown - 1, slots - 1, -1)
+        free[added : added + counters[_N_FREE]] = ints[_FREE][: counters[_N_FREE]]
+        ints[_FREE] = free
+        counters[_N_FREE] += added
+    head, tail, places = counters[_HEAD], counters[_TAIL], len(ints[_NUMBER])
+    if tail + n > places:  # the recent nodes moved to the front, into larger arrays if they still do not fit
+        kept = tail - head
+        size = max(places, 2 * (kept + n))
+        for k in (_NUMBER, _SLOT):
+            moved = np.zeros(size, dtype=np.int64)
+            moved[:kept] = ints[k][head:tail]
+            ints[k] = moved
+        for k in (_TIME, _X, _Y):
+            moved = np.zeros(size)
+            moved[:kept] = floats[k][head:tail]
+            floats[k] = moved
+        counters[_HEAD], counters[_TAIL] = 0, kept
+
+
+@numba.njit(cache=True, nogil=True)
+def _extent(slot, xs, ys, head, tail, a, b):
+    """Diagonal of the x-y bounding box of the recent nodes (``head:tail``) of the clusters of slots ``a`` and
+    ``b``, m."""
     low_x, high_x, low_y, high_y = np.inf, -np.inf, np.inf, -np.inf
-    for k in range(start, len(clusters)):
-        if clusters[k] == a or clusters[k] == b:
+    for k in range(head, tail):
+        if slot[k] == a or slot[k] == b:
             low_x, high_x = min(low_x, xs[k]), max(high_x, xs[k])
             low_y, high_y = min(low_y, ys[k]), max(high_y, ys[k])
     return np.sqrt((high_x - low_x) ** 2 + (high_y - low_y) ** 2)

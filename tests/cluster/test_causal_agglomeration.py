@@ -2,8 +2,16 @@
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
-from sklearn_radar.cluster._causal_agglomeration import confirmed_roots, new_state, sequence_merges, step
+from sklearn_radar.cluster._causal_agglomeration import (
+    confirmed_roots,
+    live_clusters,
+    new_state,
+    sequence_merges,
+    step,
+)
 
 
 def test_the_causal_merges_worked_by_hand():
@@ -31,8 +39,17 @@ def test_the_causal_merges_worked_by_hand():
     assert clusters.tolist() == [0] and counts.tolist() == [4]
     assert list(zip(child.tolist(), survivor.tolist(), strict=True)) == [(3, 2), (2, 0)]
     step(state, 0.6, [4], [], [], [], 0.25, 0.5)
-    total, _, size, *_ = state
-    assert sorted(size.keys()) == [4] and sorted(total.keys()) == [4]
+    assert live_clusters(state) == ({4: 1}, {})
+
+
+def test_the_state_holds_the_evidence_between_live_clusters():
+    state = new_state()
+    step(state, 0.0, [0, 1], [0], [1], [0.9], 0.25, 0.5)
+    step(state, 0.1, [2], [0, 1], [2, 2], [0.2, 0.3], 0.25, 0.5)
+    sizes, evidence = live_clusters(state)
+    assert sizes == {0: 2, 2: 1}
+    assert list(evidence) == [(0, 2)] and evidence[0, 2][1] == 2
+    assert evidence[0, 2][0] == pytest.approx(0.5)
 
 
 def test_a_low_mean_stops_the_merging_and_a_node_below_objectness_is_noise():
@@ -80,3 +97,72 @@ def test_max_extent_needs_the_positions():
         sequence_merges(np.zeros(2), np.ones(2, dtype=bool), [0], [1], [0.9], 0.25, 0.5, max_extent=1.0)
     with pytest.raises(ValueError, match="one position per node"):
         sequence_merges(np.zeros(2), np.ones(2, dtype=bool), [0], [1], [0.9], 0.25, 0.5, np.zeros(1), np.zeros(1))
+
+
+def _reference_merges(t, node, i, j, links, window, threshold):
+    """The causal agglomeration as its definition reads, in plain Python: at each time, clusters whose last node
+    is more than ``window`` older retire; the new nodes enter as singletons; their pairs add P(link) to the sum
+    and count between the clusters they join; then the pair of clusters with the largest mean (ties: the
+    smaller pair of numbers) merges, the younger into the older, while that mean exceeds ``threshold``."""
+    evidence, cluster_of, size, last, parent = {}, {}, {}, {}, {}
+    roots, sizes = np.full(len(t), -1), np.zeros(len(t), dtype=int)
+    e = 0
+    for now in np.unique(t):
+        for c in [c for c in last if not now - last[c] <= window]:
+            del size[c], last[c]
+            evidence = {pair: v for pair, v in evidence.items() if c not in pair}
+        new = [k for k in np.flatnonzero(t == now) if node[k]]
+        for k in new:
+            cluster_of[k], size[k], last[k], parent[k] = k, 1, now, k
+        while e < len(j) and t[j[e]] == now:
+            a, b = cluster_of[i[e]], j[e]
+            found = evidence.setdefault((a, b), [0.0, 0])
+            found[0] += links[e]
+            found[1] += 1
+            e += 1
+        while evidence:
+            (a, b), (s, k) = max(evidence.items(), key=lambda item: (item[1][0] / item[1][1], -item[0][0], -item[0][1]))
+            if not s / k > threshold:
+                break
+            del evidence[a, b]
+            for (p, q), (s_b, k_b) in [(pair, v) for pair, v in evidence.items() if b in pair]:
+                c = q if p == b else p
+                del evidence[p, q]
+                mine = evidence.pop((min(a, c), max(a, c)), None)
+                evidence[min(a, c), max(a, c)] = [mine[0] + s_b, mine[1] + k_b] if mine else [s_b, k_b]
+            for n, c in cluster_of.items():
+                if c == b:
+                    cluster_of[n] = a
+            size[a] += size.pop(b)
+            last[a] = max(last[a], last.pop(b))
+            parent[b] = a
+        for k in new:
+            sizes[k] = size[cluster_of[k]]
+    for k in parent:
+        root = k
+        while parent[root] != root:
+            root = parent[root]
+        roots[k] = root
+    return roots, sizes
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.data())
+def test_the_merges_are_those_of_the_definition(data):
+    # Many detections over few times: more live clusters and recent nodes than the state first holds, mean links
+    # on a grid of tenths (ties), pairs within the window (each later end a node).
+    n = data.draw(st.integers(1, 120))
+    t = np.sort(np.array(data.draw(st.lists(st.integers(0, 12), min_size=n, max_size=n)))) * 0.05
+    node = np.array(data.draw(st.lists(st.booleans(), min_size=n, max_size=n)))
+    window, threshold = 0.25, data.draw(st.sampled_from([0.3, 0.5, 0.7]))
+    i, j = [], []
+    for b in np.flatnonzero(node):
+        earlier = [a for a in np.flatnonzero(node[:b]) if t[b] - t[a] <= window]
+        i += sorted(data.draw(st.sets(st.sampled_from(earlier), max_size=6))) if earlier else []
+        j += [b] * (len(i) - len(j))
+    links = np.array(data.draw(st.lists(st.integers(0, 10), min_size=len(i), max_size=len(i)))) / 10
+    i, j = np.array(i, dtype=np.int64), np.array(j, dtype=np.int64)
+    roots, sizes = sequence_merges(t, node, i, j, links, window, threshold)
+    expected_roots, expected_sizes = _reference_merges(t, node, i, j, links, window, threshold)
+    np.testing.assert_array_equal(roots, expected_roots)
+    np.testing.assert_array_equal(sizes, expected_sizes)

@@ -7,6 +7,7 @@ from sklearn.pipeline import Pipeline
 
 from sklearn_radar import DopplerDensityFilter, FrameTransform, instance_target
 from sklearn_radar.cluster import LinkClustering
+from sklearn_radar.cluster._causal_agglomeration import live_clusters
 from sklearn_radar.datasets import make_scenes
 from sklearn_radar.online import OnlinePipeline, Tracker
 from sklearn_radar.online._replay import replay
@@ -133,8 +134,8 @@ def test_memory_stays_bounded(fitted):
     late = np.array(held[len(held) // 2 :])
     spread = late[:, 0].max() - late[:, 0].min()
     assert late[:, 0].max() < 4 * max(np.median(late[:, 0]), 1) and spread < len(scenes.data) / 4
-    state = online._learned._windows[sequence].state
-    assert len(state[2]) <= late[:, 1].max() + 1  # live clusters of the agglomeration: the recent ones
+    live, _ = live_clusters(online._learned._windows[sequence].state)
+    assert 0 < len(live) <= late[:, 1].max() + 1  # live clusters of the agglomeration: the recent ones
 
 
 @pytest.mark.parametrize(
