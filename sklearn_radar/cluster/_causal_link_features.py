@@ -75,6 +75,12 @@ def _neighbourhoods(x, y, t, v, los, start):
     n_moving, mean_abs, spread = np.zeros(m), np.zeros(m), np.zeros(m)
     vx, vy, residual = np.zeros(m), np.zeros(m), np.zeros(m)
     lo, hi = 0, start
+    while start > lo and t[start] - t[lo] > LOCAL_WINDOW:
+        lo += 1
+    cos_los, sin_los = np.empty(n), np.empty(n)  # (of the detections that a neighbourhood can hold)
+    for j in range(lo, n):
+        cos_los[j], sin_los[j] = math.cos(los[j]), math.sin(los[j])
+    box = np.empty(n, dtype=np.int64)
     for k in range(start, n):
         tk = t[k]
         while tk - t[lo] > LOCAL_WINDOW:
@@ -84,19 +90,20 @@ def _neighbourhoods(x, y, t, v, los, start):
         total_v = total_sq = total_abs = 0.0
         a11 = a12 = a22 = b1 = b2 = vv = 0.0
         n_local = n_near = n_similar = moving = 0.0
-        for j in range(lo, hi):
+        found = _in_box(x, y, lo, hi, x[k], y[k], LOCAL_RADIUS, box)
+        for q in range(found):
+            j = box[q]
             if j == k:
                 continue
             dt = tk - t[j]
             dx, dy = x[k] - x[j], y[k] - y[j]
             if dt > LOCAL_WINDOW or abs(dx) > LOCAL_RADIUS or abs(dy) > LOCAL_RADIUS:
                 continue  # (the box test is exact: a distance within the radius has both sides within it)
-            distance = math.hypot(dx, dy)
-            if distance > LOCAL_RADIUS:
+            if not _within(dx, dy, LOCAL_RADIUS):
                 continue
             vj = v[j]
             n_local += 1.0
-            if distance <= NEAR_RADIUS and dt <= NEAR_WINDOW:
+            if dt <= NEAR_WINDOW and _within(dx, dy, NEAR_RADIUS):
                 n_near += 1.0
             if abs(v[k] - vj) < V_SIMILAR:
                 n_similar += 1.0
@@ -105,7 +112,7 @@ def _neighbourhoods(x, y, t, v, los, start):
             total_abs += abs(vj)
             if abs(vj) > V_MOVING:
                 moving += 1.0
-                cj, sj = math.cos(los[j]), math.sin(los[j])
+                cj, sj = cos_los[j], sin_los[j]
                 a11 += cj * cj
                 a12 += cj * sj
                 a22 += sj * sj
@@ -119,7 +126,7 @@ def _neighbourhoods(x, y, t, v, los, start):
         mean_abs[r] = total_abs / per
         spread[r] = math.sqrt(max(total_sq / per - mean_v * mean_v, 0.0))
         # Eq. 6's rigid velocity of the moving neighbours and the detection itself, ridge towards v u.
-        ck, sk, vk = math.cos(los[k]), math.sin(los[k]), v[k]
+        ck, sk, vk = cos_los[k], sin_los[k], v[k]
         a11 += ck * ck
         a12 += ck * sk
         a22 += sk * sk
@@ -134,6 +141,31 @@ def _neighbourhoods(x, y, t, v, los, start):
         vx[r], vy[r] = fx, fy
         residual[r] = math.sqrt(max(squares, 0.0) / (moving + 1))
     return count, near, similar, n_moving, mean_abs, spread, vx, vy, residual
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _within(dx, dy, radius):
+    """``math.hypot(dx, dy) <= radius``, the same answer: from the squares where they decide beyond any rounding,
+    from ``hypot`` (slower) near the circle."""
+    squares, limit = dx * dx + dy * dy, radius * radius
+    if 1e-200 < limit < 1e200:  # (no square of the radius lost to underflow or overflow)
+        if squares < limit * (1.0 - 1e-9):
+            return True
+        if squares > limit * (1.0 + 1e-9):
+            return False
+    return math.hypot(dx, dy) <= radius
+
+
+@numba.njit(cache=True, nogil=True)
+def _in_box(x, y, lo, hi, x0, y0, radius, out):
+    """Into ``out``, in index order: the indices in ``lo:hi`` whose x and y are both within ``radius`` of
+    ``(x0, y0)``; returns how many.  (Without a branch per index: a box holds few of a window's detections, and
+    a mispredicted branch costs more than the test.)"""
+    found = 0
+    for j in range(lo, hi):
+        out[found] = j
+        found += (abs(x0 - x[j]) <= radius) & (abs(y0 - y[j]) <= radius)
+    return found
 
 
 def causal_pairs(x, y, t, node, start, radius, window, max_links=None):
@@ -188,17 +220,17 @@ def _pairs(x, y, t, node, start, radius, window, max_links):
     near = np.empty(16, dtype=np.float64)  # scaled squared distance of each pair found
     used = 0
     nodes = np.flatnonzero(node)  # only nodes take part: the loops visit them alone, in index order
+    node_x, node_y = x[nodes], y[nodes]
+    box = np.empty(len(nodes), dtype=np.int64)
     lo = 0
     for b in range(np.searchsorted(nodes, start), len(nodes)):
         j = nodes[b]
         while t[j] - t[nodes[lo]] > window:
             lo += 1
         first = used
-        for a in range(lo, b):
-            i = nodes[a]
-            if abs(x[i] - x[j]) > radius or abs(y[i] - y[j]) > radius:
-                continue
-            if math.hypot(x[i] - x[j], y[i] - y[j]) <= radius:
+        for q in range(_in_box(node_x, node_y, lo, b, x[j], y[j], radius, box)):
+            i = nodes[box[q]]
+            if _within(x[i] - x[j], y[i] - y[j], radius):
                 if used == len(found_i):
                     found_i = np.concatenate((found_i, np.empty(used, dtype=np.int64)))
                     found_j = np.concatenate((found_j, np.empty(used, dtype=np.int64)))
@@ -232,7 +264,12 @@ def _keep_nearest(found_i, near, first, used, max_links):
             k -= 1
         best_near[k], best_at[k] = near[a], a
         size = min(size + 1, max_links)
-    best_at[:size].sort()
+    for k in range(1, size):  # (few: by insertion)
+        at, q = best_at[k], k
+        while q > 0 and best_at[q - 1] > at:
+            best_at[q] = best_at[q - 1]
+            q -= 1
+        best_at[q] = at
     for k in range(size):
         found_i[first + k] = found_i[best_at[k]]
     return first + size

@@ -1,10 +1,18 @@
 """Causal features of LinkClustering: the offline features of the data cut at each time, the same pairs."""
 
+import math
+
+import numba
 import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from sklearn_radar.cluster._causal_link_features import causal_detection_features, causal_pair_features, causal_pairs
+from sklearn_radar.cluster._causal_link_features import (
+    _within,
+    causal_detection_features,
+    causal_pair_features,
+    causal_pairs,
+)
 from sklearn_radar.cluster._link_features import Detections, detection_features, pair_features, pairs_within
 
 
@@ -122,3 +130,28 @@ def test_compiled_pair_features_equal_the_numpy_ones(seed, n, measured):
         rtol=1e-9,
         atol=1e-9,
     )
+
+
+@settings(max_examples=300, deadline=None)
+@given(
+    st.floats(-50, 50, allow_nan=False),
+    st.floats(-50, 50, allow_nan=False),
+    st.integers(-4, 4),
+    st.sampled_from([0.0, 1e-300, 1.0, 2.5]),
+)
+def test_the_circle_test_is_hypots_even_on_the_circle(dx, dy, ulps, scale):
+    # The kernels decide "within the radius" from the squares away from the circle and from math.hypot near it:
+    # radii a few ulps either side of the distance, and arbitrary ones, give hypot's answer (compiled, numba's
+    # hypot, which can differ from Python's in the last bit).
+    distance = math.hypot(dx, dy)
+    radius = distance
+    for _ in range(abs(ulps)):
+        radius = np.nextafter(radius, np.inf if ulps > 0 else -np.inf)
+    for r in (radius, scale, distance * 0.5, distance * 2):
+        assert _within.py_func(dx, dy, r) == (math.hypot(dx, dy) <= r)
+        assert _within(dx, dy, r) == _hypot_within(dx, dy, r)
+
+
+@numba.njit
+def _hypot_within(dx, dy, radius):
+    return math.hypot(dx, dy) <= radius
