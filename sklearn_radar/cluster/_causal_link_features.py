@@ -327,10 +327,15 @@ def _hi(a, b):
 def _pair_features(x, y, t, v, los, ranges, sensor, rcs, count, spread, objectness, vx, vy, i, j):
     n = len(i)
     out = np.empty((n, N_PAIR_FEATURES))
+    cos_los, sin_los = np.full(len(x), np.nan), np.empty(len(x))  # (each detection's once: NaN until then)
+    for e in range(n):
+        for k in (i[e], j[e]):
+            if cos_los[k] != cos_los[k]:
+                cos_los[k], sin_los[k] = math.cos(los[k]), math.sin(los[k])
     for e in range(n):
         a, b = i[e], j[e]
         dx, dy, dt = x[b] - x[a], y[b] - y[a], t[b] - t[a]
-        ca, sa, cb, sb = math.cos(los[a]), math.sin(los[a]), math.cos(los[b]), math.sin(los[b])
+        ca, sa, cb, sb = cos_los[a], sin_los[a], cos_los[b], sin_los[b]
         res_ab = abs(v[b] - (cb * vx[a] + sb * vy[a]))
         res_ba = abs(v[a] - (ca * vx[b] + sa * vy[b]))
         det = ca * sb - sa * cb
