@@ -15,10 +15,11 @@ scored on the test half:
 
 The report gives each row's mean and the paired difference with context minus without (mean +- 2 SE over seeds).
 
-``--rounds 2`` (a prototype, not in the library) trains the context model's link classifier on more states: after
-the first round (the library's: the state that the links without context make), the state that the first
-round's out-of-fold classifiers make at their tuned threshold, its pairs added to the training rows, the
-classifier refitted and the thresholds retuned (data aggregation).
+``--rounds 2`` (a prototype, not in the library; ``--rounds 1 2`` fits both context models on the same split)
+trains the context model's link classifier on more states: after the first round (the library's: the state that
+the links without context make), the state that the first round's out-of-fold classifiers make at their tuned
+threshold, its pairs added to the training rows, the classifier refitted and the thresholds retuned (data
+aggregation).
 Run (the learned guide's table, section "Cluster context"; about 4 minutes per seed on 2 shared cores)::
 
     OMP_NUM_THREADS=1 nice -n 19 python benchmarks/experiment_cluster_context.py --data realistic \\
@@ -52,6 +53,14 @@ from experiment_learned import _mean_2se
 from experiment_tracking import LABEL_COLUMNS, LEARNED_CAUSAL, TRACKER_SPACE, fixed_frame, scores, track, tuned_tracker
 
 WITHOUT, WITH = "pair features", "cluster context"
+ROUNDS = {"rounds": 1}  # of the context model being fitted (``--rounds``)
+
+
+def variant(rounds):
+    """The record name of the context model trained on ``rounds`` rounds of states."""
+    return WITH if rounds == 1 else f"{WITH}, {rounds} rounds"
+
+
 METRICS = ("pq", "ids_mota", "ids_idf1", "mota", "idf1", "hota")
 
 
@@ -117,16 +126,18 @@ def streamed(model, data, groups, rows, truth, models=None):
     return parts
 
 
-def run_one(preset, seed, cluster_window, n_settings):
-    """Every metric of both models on the test half of one data set."""
+def run_one(preset, seed, cluster_window, n_settings, rounds=(1,)):
+    """Every metric of the model without context and of each context model (one per ``rounds``) on the test half
+    of one data set."""
     scenes = make_scenes(n_sequences=4, duration=20.0, difficulty=preset, random_state=seed)
     train, test = sequence_train_test_split(scenes.groups, test_size=0.5, random_state=seed)
     instances = precluster_target(scenes.data, scenes.target)
     inputs = scenes.data[[c for c in scenes.data.columns if c not in LABEL_COLUMNS]]
     X_train, X_test = inputs.iloc[train].reset_index(drop=True), inputs.iloc[test].reset_index(drop=True)
     found = {}
-    for name, window in ((WITHOUT, None), (WITH, cluster_window)):
+    for name, window, n in ((WITHOUT, None, 1), *((variant(n), cluster_window, n) for n in rounds)):
         start = time.perf_counter()
+        ROUNDS["rounds"] = n
         params = {**LEARNED_CAUSAL, "link__random_state": seed, "link__n_jobs": 1, "link__cluster_window": window}
         model = learned_pipeline(params).fit(X_train, instances[train])
         Xt = model[:-1].transform(X_test)
@@ -156,15 +167,21 @@ def run_one(preset, seed, cluster_window, n_settings):
 
 
 def report(preset, runs):
-    """Mean of each metric per model and the paired difference (with context minus without) over the seeds."""
+    """Mean of each metric per model and the paired differences over the seeds: each context model minus the model
+    without, and each further context model minus the first."""
     lines = [f"\n{preset}, seeds {sorted(runs)}: test half, mean over seeds; difference paired (mean ± 2 SE)"]
+    names = [name for name in next(iter(runs.values())) if name != WITHOUT]
     for metric in METRICS:
         without = np.array([run[WITHOUT][metric] for run in runs.values()])
-        within = np.array([run[WITH][metric] for run in runs.values()])
-        lines.append(
-            f"  {metric:9s} {WITHOUT} {without.mean():.3f}, {WITH} {within.mean():.3f}, "
-            f"difference {_mean_2se(within - without)}"
-        )
+        for name in names:
+            within = np.array([run[name][metric] for run in runs.values()])
+            lines.append(
+                f"  {metric:9s} {WITHOUT} {without.mean():.3f}, {name} {within.mean():.3f}, "
+                f"difference {_mean_2se(within - without)}"
+            )
+        for name in names[1:]:
+            first, other = (np.array([run[n][metric] for run in runs.values()]) for n in (names[0], name))
+            lines.append(f"  {metric:9s} {name} minus {names[0]}: {_mean_2se(other - first)}")
     return "\n".join(lines)
 
 
@@ -176,21 +193,32 @@ def main(argv=None):
     )
     parser.add_argument("--cluster-window", type=float, default=0.5, help="LinkClustering's cluster_window, s")
     parser.add_argument("--n-settings", type=int, default=30, help="random settings tried for the Tracker")
-    parser.add_argument("--rounds", type=int, default=1, help="rounds of training states (2: the prototype)")
+    parser.add_argument(
+        "--rounds",
+        type=int,
+        nargs="+",
+        default=[1],
+        help="rounds of training states, one context model per value (1: the library's; 2: the prototype)",
+    )
     parser.add_argument("--out", help="folder to write each preset's runs in (cluster_context_<preset>.json)")
     options = parser.parse_args(argv)
-    if options.rounds > 1:
-        rounds = options.rounds
-        LinkClustering._fit_context = lambda self, *args: _fit_context_rounds(self, *args, rounds=rounds)
+    library = LinkClustering._fit_context
+
+    def fit_context(self, *args):
+        if ROUNDS["rounds"] == 1:
+            return library(self, *args)
+        return _fit_context_rounds(self, *args, rounds=ROUNDS["rounds"])
+
+    LinkClustering._fit_context = fit_context
     with threadpool_limits(1):
         for preset in options.data:
             runs = {}
             for seed in options.seeds:
-                runs[seed] = run_one(preset, seed, options.cluster_window, options.n_settings)
+                runs[seed] = run_one(preset, seed, options.cluster_window, options.n_settings, options.rounds)
                 print(f"  {preset} seed {seed}: {json.dumps(runs[seed])}", flush=True)
-            if options.out:
-                Path(options.out).mkdir(parents=True, exist_ok=True)
-                (Path(options.out) / f"cluster_context_{preset}.json").write_text(json.dumps(runs, indent=1))
+                if options.out:  # after each seed, so that a stopped run keeps what it measured
+                    Path(options.out).mkdir(parents=True, exist_ok=True)
+                    (Path(options.out) / f"cluster_context_{preset}.json").write_text(json.dumps(runs, indent=1))
             print(report(preset, runs), flush=True)
     return 0
 
