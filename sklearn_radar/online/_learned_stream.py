@@ -275,17 +275,16 @@ class LearnedIds:
             aliases.append((us, kept[0], lost[0], "learned"))
         object_ids = np.full(len(clusters), -1, dtype=np.int64)
         found = clusters >= 0
-        numbers, first, inverse = np.unique(clusters[found], return_index=True, return_inverse=True)
-        of_number = np.empty(len(numbers), dtype=np.int64)
-        for k, (number, size) in enumerate(zip(numbers.tolist(), sizes[found][first].tolist(), strict=True)):
+        numbers = clusters[found].tolist()
+        size_of = dict(zip(numbers, sizes[found].tolist(), strict=True))  # (the rows of one cluster: its one size)
+        for number in sorted(size_of):  # (a scan's few clusters: plain Python is quicker than np.unique)
             if number not in known:
                 known[number] = [self.next_id, now]
                 self.first_us[self.next_id] = us
                 self.next_id += 1
             known[number][1] = now
-            object_id = of_number[k] = known[number][0]
-            self.size[object_id] = size  # (the rows of one cluster have its one size)
-        object_ids[found] = of_number[inverse]
+            self.size[known[number][0]] = size_of[number]
+        object_ids[found] = [known[number][0] for number in numbers]
         return object_ids, aliases
 
     def of(self, sequence, clusters):
