@@ -151,7 +151,7 @@ def _reference_merges(t, node, i, j, links, window, threshold):
 def test_the_merges_are_those_of_the_definition(data):
     # Many detections over few times: more live clusters and recent nodes than the state first holds, mean links
     # on a grid of tenths (ties), pairs within the window (each later end a node).
-    n = data.draw(st.integers(1, 120))
+    n = data.draw(st.integers(1, 200))
     t = np.sort(np.array(data.draw(st.lists(st.integers(0, 12), min_size=n, max_size=n)))) * 0.05
     node = np.array(data.draw(st.lists(st.booleans(), min_size=n, max_size=n)))
     window, threshold = 0.25, data.draw(st.sampled_from([0.3, 0.5, 0.7]))
