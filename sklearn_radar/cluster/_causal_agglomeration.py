@@ -27,13 +27,15 @@ A refused pair keeps its evidence and merges later only if that changes
 and the extent then allows it.
 
 The state of one sequence is a tuple of arrays (see :func:`new_state`);
-:func:`step` advances it by one time.  Each live cluster holds a *slot*:
-the evidence between clusters is a matrix over slots (sum and count; a
-count of 0 is no evidence), so that a merge adds one row to another
-instead of updating a hash map per neighbour.  The offline estimator runs
-:func:`sequence_merges` (every time of a sequence in one call), the
-online pipeline :func:`step` once per scan with new nodes: the same code,
-so both give the same floating-point means and the same merges.
+:func:`step` advances it by one time.  Each live cluster holds a *slot*: the
+evidence between clusters is a matrix over slots (sum and count; a count of
+0 is no evidence), so that a merge adds one row to another instead of
+updating a hash map per neighbour.  The matrices double when the live
+clusters outgrow them and never shrink: 16 bytes times the square of the
+most clusters live at once (those of one pair window).  The offline
+estimator runs :func:`sequence_merges` (every time of a sequence in one
+call), the online pipeline :func:`step` once per scan with new nodes: the
+same code, so both give the same floating-point means and the same merges.
 """
 
 from __future__ import annotations
