@@ -10,6 +10,7 @@ import pytest
 from sklearn.metrics import adjusted_rand_score
 
 import sklearn_radar.reproduce._learned as learned_step
+import sklearn_radar.reproduce._sections._learned as learned_section
 from sklearn_radar.cli import main
 from sklearn_radar.datasets import load_radarscenes
 from sklearn_radar.experiments._learned import learned_pipeline, load_learned
@@ -105,7 +106,19 @@ def test_the_causal_record_scores_what_a_directly_fitted_causal_model_labels(lea
     assert load_learned(learned_run / "learned_causal.joblib")[-1].causal is True
     link = model[-1].get_params()
     assert {k.removeprefix("link__"): v for k, v in record["params"].items() if k.startswith("link__")} == link
-    assert record["params"]["link__cluster_window"] == learned_step.LEARNED_CAUSAL_PARAMS["link__cluster_window"]
+    expected = {**learned_step.LEARNED_CAUSAL_PARAMS, **SMALL}  # (the test run's smaller model)
+    assert all(record["params"][key] == value for key, value in expected.items())
+    assert record["params"]["link__cluster_window"] is None
+
+
+def test_the_report_says_what_a_causal_models_cluster_window_does(learned_run):
+    # A run whose causal model had a cluster context (the main job's for a round; a run of one's own): the report
+    # names the setting and says in words what it does.
+    results = RunResults.read(learned_run / "results.json")
+    results.learned.causal.params["link__cluster_window"] = 0.5
+    paragraph = "\n".join(learned_section.markdown(results)).split("The causal learned grouping", 1)[1]
+    assert "cluster_window=0.5" in paragraph
+    assert "also sees the cluster its earlier detection already belongs to, over the last 0.5 s" in paragraph
 
 
 def test_params_json_points_to_the_model_with_the_front(learned_run):
@@ -128,8 +141,9 @@ def test_report_section(learned_run):
     causal = json.loads((learned_run / "results.json").read_text())["learned"]["causal"]
     assert f"| learned grouping, causal | past only | {causal['instance_test']['pq']:.3f} |" in report
     assert "| object experiment, causal | past only |" in report
-    window = learned_step.LEARNED_CAUSAL_PARAMS["link__cluster_window"]
-    assert f"cluster_window={window}" in report.split("The causal learned grouping", 1)[1].split("\n", 1)[0]
+    paragraph = report.split("The causal learned grouping", 1)[1].split("\n", 1)[0]
+    assert "its settings unlike the offline model's: " in paragraph and "max_links_per_detection=16" in paragraph
+    assert "cluster_window" not in paragraph  # (the main job's causal model has no cluster context)
     errors = json.loads((learned_run / "results.json").read_text())["learned"]["errors"]["learned grouping"]
     assert f"| learned grouping | {errors['n_true']} | {errors['missed']} | {errors['noise']} |" in report
 
