@@ -20,6 +20,8 @@ trains the context model's link classifier on more states: after the first round
 the links without context make), the state that the first round's out-of-fold classifiers make at their tuned
 threshold, its pairs added to the training rows, the classifier refitted and the thresholds retuned (data
 aggregation).
+Records: seeds 0-4 in ``benchmarks/results/cluster_context/`` (``rounds2/``: the second round's prototype, run
+alone), fresh seeds 5-9 in ``fresh/`` (``--rounds 1 2``; the easy preset ``--rounds 1``).
 Run (the learned guide's table, section "Cluster context"; about 4 minutes per seed on 2 shared cores)::
 
     OMP_NUM_THREADS=1 nice -n 19 python benchmarks/experiment_cluster_context.py --data realistic \\
