@@ -504,23 +504,13 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         """The link classifier in cluster context, learned from the clusters that the links without context
         (out of fold when tuning) form at the tuned thresholds; then the link threshold and the confirmation count
         tuned again with it (out of fold)."""
-        gate, window, columns = self.objectness_threshold_, self.cluster_window, self._context_columns()
+        gate, columns = self.objectness_threshold_, self._context_columns()
         parts = []
         for s, p, (i, j), x, target, link, fold in zip(*training, strict=True):
             node = p > gate
             both = node[i] & node[j]
             i, j, x, link = i[both], j[both], x[both], link[both]
-            _, _, context, _ = context_merges(
-                s.detections,
-                node,
-                i,
-                j,
-                lambda rows, _context, link=link: link[rows],
-                self.pair_window,
-                self.link_threshold_,
-                window,
-                self.max_extent,
-            )
+            context = self._merged(s, node, i, j, lambda rows, _, link=link: link[rows], self.link_threshold_)[2]
             parts.append((s, node, i, j, x, context[:, columns], target[both], fold[both]))
         features = [np.hstack([x, context]) for *_, x, context, _, _ in parts]
         targets, folds = [part[6] for part in parts], [part[7] for part in parts]
@@ -535,17 +525,7 @@ class LinkClustering(ClusterMixin, BaseEstimator):
         def merged_at(threshold):
             found = []
             for s, node, i, j, x, _, _, fold in parts:
-                roots, sizes, _, _ = context_merges(
-                    s.detections,
-                    node,
-                    i,
-                    j,
-                    links_by_fold(models, x, fold, columns),
-                    self.pair_window,
-                    threshold,
-                    window,
-                    self.max_extent,
-                )
+                roots, sizes, _, _ = self._merged(s, node, i, j, links_by_fold(models, x, fold, columns), threshold)
                 found.append((s.rows, roots, sizes))
             return found
 
@@ -632,18 +612,16 @@ class LinkClustering(ClusterMixin, BaseEstimator):
     def _context_merges(self, s, objectness, i, j):
         """:func:`context_merges` of sequence ``s`` with the fitted classifier and thresholds: roots, sizes, context
         and links of the pairs (i, j) of the nodes."""
-        node = objectness > self.objectness_threshold_
         x = self._pair_features(s, objectness, i, j)[:, self._pair_columns()]
+        links_of = links_by_fold(
+            {0: self.link_classifier_}, x, np.zeros(len(i), dtype=np.int64), self._context_columns()
+        )
+        return self._merged(s, objectness > self.objectness_threshold_, i, j, links_of, self.link_threshold_)
+
+    def _merged(self, s, node, i, j, links_of, threshold):
+        """:func:`context_merges` of sequence ``s`` at a link threshold, each time's links from ``links_of``."""
         return context_merges(
-            s.detections,
-            node,
-            i,
-            j,
-            links_by_fold({0: self.link_classifier_}, x, np.zeros(len(i), dtype=np.int64), self._context_columns()),
-            self.pair_window,
-            self.link_threshold_,
-            self.cluster_window,
-            self.max_extent,
+            s.detections, node, i, j, links_of, self.pair_window, threshold, self.cluster_window, self.max_extent
         )
 
 

@@ -39,11 +39,7 @@ LEARNED_PARAMS = {}
 #: The causal model's, under LEARNED_PARAMS: fewer boosting iterations, at most 16 links per detection and trees at
 #: most 6 levels deep, for the stream's time per scan (the measured PQ cost: :ref:`user-guide-learned`,
 #: :ref:`online-learned`).  No cluster context: its gain did not hold on fresh seeds (:ref:`learned-cluster-context`).
-LEARNED_CAUSAL_PARAMS = {
-    "link__max_iter": 40,
-    "link__max_links_per_detection": 16,
-    "link__max_depth": 6,
-}
+LEARNED_CAUSAL_PARAMS = {"link__max_iter": 40, "link__max_links_per_detection": 16, "link__max_depth": 6}
 #: The object-level scores kept (those of :class:`InstanceScores`).
 _SCORES = tuple(name for name in InstanceScores.__dataclass_fields__ if name != "window_s")
 #: The error anatomy's name of each setting.
