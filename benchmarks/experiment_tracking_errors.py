@@ -1,0 +1,265 @@
+"""Where the tracked learned grouping's MOTA goes (issue #44): its misses and false positives, by kind.
+
+Per preset and seed: ``make_scenes`` of ``--n-sequences`` x ``--duration`` s split as ``experiment_tracking.py``
+splits it; the main job's causal model (``experiment_tracking.LEARNED_CAUSAL``) fitted on the training half with the
+pre-clustered instance target and streamed through ``OnlinePipeline`` on both halves; the Tracker tuned on the
+training half's confirmed clusters for MOTA (``experiment_tracking.tuned_tracker``: the defaults and
+``--n-settings`` random settings, what the row ``learned causal, confirmed + Tracker`` measures) and run on the test
+half's.  Three id sets of the test half are taken apart, per 0.5 s window and moving road user (an *object-frame*,
+matched when a predicted id covers it with IoU > 0.5, which is the match of ``metrics.tracking_scores``):
+
+* ``reported``: the stream's ids as reported at each scan (every cluster);
+* ``confirmed``: the same, only where the cluster had ``min_cluster_size`` detections at the scan (what
+  ``OnlinePipeline`` feeds its Tracker);
+* ``tracked``: the Tracker's ids on the confirmed clusters.
+
+Each missed object-frame is counted by where it lies in its road user's life (``never``: the road user is matched in
+none of its windows; ``before``: before its first matched window; ``gap``: between two matched windows; ``after``:
+after its last) and by whether the road user has at most ``--sparse`` detections in the window (``sparse``).  Each
+false positive of the tracked ids (a window's id matched to no road user) is counted as ``background`` (most of its
+detections are no road user's), ``duplicate`` (most are a matched road user's: a second id on it), ``merge`` (it
+holds two or more road users, none covered with IoU > 0.5) or ``partial`` (one road user's, under half of it).
+
+Run (about two minutes per preset and seed on one core; records ``benchmarks/results/tracking_errors/``)::
+
+    OMP_NUM_THREADS=1 nice -n 19 python benchmarks/experiment_tracking_errors.py --data realistic radarscenes easy \\
+        --seeds 0 1 2 3 4 --save benchmarks/results/tracking_errors
+    python benchmarks/experiment_tracking_errors.py --summary --save benchmarks/results/tracking_errors
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+import time
+from collections import Counter
+from pathlib import Path
+
+import numpy as np
+
+sys.path.insert(0, str(Path(__file__).parent))
+
+from experiment_tracking import (
+    LABEL_COLUMNS,
+    LEARNED_CAUSAL,
+    PRESETS,
+    TRACKER_SPACE,
+    _mean_se,
+    fixed_frame,
+    scenes_of,
+    scores,
+    track,
+    tuned_tracker,
+)
+
+from sklearn_radar._schema import LABELS
+from sklearn_radar.experiments._learned import learned_pipeline
+from sklearn_radar.metrics import precluster_target
+from sklearn_radar.online import OnlinePipeline, Tracker
+from sklearn_radar.online._replay import replay
+
+ID_SETS = ("reported", "confirmed", "tracked")
+PLACES = ("never", "before", "gap", "after")
+FALSE_KINDS = ("background", "duplicate", "merge", "partial")
+
+
+def streamed(preset, seed, options):
+    """Per half, per sequence: fixed-frame columns, truth, and the stream's reported and confirmed ids."""
+    scenes, train, test = scenes_of(preset, seed, options)
+    instances = precluster_target(scenes.data, scenes.target)
+    inputs = scenes.data[[c for c in scenes.data.columns if c not in LABEL_COLUMNS]]
+    model = learned_pipeline({**LEARNED_CAUSAL, "link__random_state": seed, "link__n_jobs": 1})
+    model.fit(inputs.iloc[train].reset_index(drop=True), instances[train])
+    halves = {}
+    for half, rows in (("train", train), ("test", test)):
+        parts = []
+        for sequence in np.unique(scenes.groups[rows]):
+            of_sequence = rows[scenes.groups[rows] == sequence]
+            data = scenes.data.iloc[of_sequence].reset_index(drop=True)
+            replayed = replay(OnlinePipeline(model), data)
+            part = fixed_frame(data)
+            part.update(
+                reported=replayed["reported"],
+                confirmed=replayed["followed"],
+                sequence=np.full(len(data), sequence),
+                truth=scenes.target[of_sequence],
+                label=data["label_id"].to_numpy(),
+            )
+            parts.append(part)
+        halves[half] = parts
+    return halves
+
+
+def _best(inside, ids, window_rows):
+    """Largest IoU of the detections ``inside`` (a road user's in a window) with one id of ``ids`` there."""
+    best = 0.0
+    for k in np.unique(ids[inside & (ids >= 0)]):
+        predicted = window_rows & (ids == k)
+        best = max(best, (inside & predicted).sum() / (inside | predicted).sum())
+    return best
+
+
+def misses(part, ids, sparse):
+    """Missed object-frames of one sequence, counted by place in the road user's life and sparseness; and, as
+    ``"sparse frames"``, the sparse object-frames, missed or not."""
+    counts = Counter()
+    window = np.floor((part["t"] - part["t"].min()) / 0.5).astype(np.int64)
+    truth = part["truth"]
+    for road_user in np.unique(truth[truth >= 0]):
+        own = truth == road_user
+        frames = []
+        for w in np.unique(window[own]):
+            inside = own & (window == w)
+            frames.append((_best(inside, ids, window == w) > 0.5, int(inside.sum())))
+            counts["sparse frames"] += inside.sum() <= sparse
+            counts[f"frames {LABELS[int(part['label'][own][0])]}"] += 1
+        matched = np.array([m for m, _ in frames])
+        first = int(np.argmax(matched)) if matched.any() else len(frames)
+        for i, (hit, n) in enumerate(frames):
+            if hit:
+                continue
+            place = "never" if not matched.any() else "before" if i < first else "gap" if matched[i:].any() else "after"
+            counts[place] += 1
+            counts["sparse"] += n <= sparse
+            counts[f"class {LABELS[int(part['label'][own][0])]}"] += 1
+    return counts
+
+
+def false_positives(part, ids):
+    """False positives (a window's id matched to no road user) of one sequence, counted by kind."""
+    counts = Counter()
+    window = np.floor((part["t"] - part["t"].min()) / 0.5).astype(np.int64)
+    truth = part["truth"]
+    for w in np.unique(window):
+        here = window == w
+        matched, unmatched = set(), []
+        for k in np.unique(ids[here & (ids >= 0)]):
+            predicted = here & (ids == k)
+            users, held = np.unique(truth[predicted & (truth >= 0)], return_counts=True)
+            ious = [(predicted & (truth == u)).sum() / (predicted | (here & (truth == u))).sum() for u in users]
+            if ious and max(ious) > 0.5:
+                matched.add(users[int(np.argmax(ious))])
+            else:
+                unmatched.append((predicted.sum(), users, held))
+        for size, users, held in unmatched:
+            main = users[int(np.argmax(held))] if len(users) else -1
+            if held.sum() * 2 <= size:
+                kind = "background"
+            elif main in matched:
+                kind = "duplicate"
+            else:
+                kind = "merge" if len(users) >= 2 else "partial"
+            counts[kind] += 1
+            if kind in ("merge", "partial"):
+                counts[f"{kind} {LABELS[int(part['label'][truth == main][0])]}"] += 1
+    return counts
+
+
+def measure(preset, seed, options):
+    """The counts of every id set, the Tracker's scores and setting, for one data set."""
+    start = time.perf_counter()
+    halves = streamed(preset, seed, options)
+    mota, setting = tuned_tracker(
+        halves["train"], Tracker, lambda p: p["confirmed"], TRACKER_SPACE, options.n_settings, seed
+    )
+    test = halves["test"]
+    tracked = track(test, lambda: Tracker(**setting), lambda p: p["confirmed"])
+    offsets = np.cumsum([0, *(len(p["t"]) for p in test)])
+    for part, a, b in zip(test, offsets[:-1], offsets[1:], strict=True):
+        part["tracked"] = tracked[a:b]
+    record = {"setting": setting, "train_mota": mota}
+    for name in ID_SETS:
+        ids = np.concatenate([p[name] for p in test])
+        counted = sum((misses(p, p[name], options.sparse) for p in test), Counter())
+        record["sparse_frames"] = counted.pop("sparse frames", 0)  # these two the same for every id set
+        record["class_frames"] = {k[7:]: counted.pop(k) for k in [k for k in counted if k.startswith("frames ")]}
+        record[name] = {"scores": scores(test, ids), "misses": dict(counted)}
+    record["tracked"]["false"] = dict(sum((false_positives(p, p["tracked"]) for p in test), Counter()))
+    record["seconds"] = time.perf_counter() - start
+    s = record["tracked"]["scores"]
+    print(
+        f"{preset} seed {seed}: tracked MOTA {s['mota']:.3f}, misses {s['misses']} of {s['objects']}, "
+        f"false positives {s['fp']} ({record['seconds']:.0f} s)",
+        flush=True,
+    )
+    return record
+
+
+def table(preset, runs):
+    """Per id set: MOTA, and misses and false positives by kind as shares of the object-frames (mean ± SE)."""
+    lines = [f"\n{preset}: {len(runs)} seed(s), test half; share of the object-frames, mean ± standard error"]
+    header = ("MOTA", "misses", *PLACES, "sparse", "false pos.", *FALSE_KINDS)
+    if all("sparse_frames" in run for run in runs):
+        mean, se = _mean_se([run["sparse_frames"] / run["tracked"]["scores"]["objects"] for run in runs])
+        lines.append(f"sparse object-frames (at most --sparse detections): {mean:.3f} ± {se:.3f}")
+    lines.append(f"{'':<10} " + " ".join(f"{h:>14}" for h in header))
+    for name in ID_SETS:
+        cells = []
+        for key in header:
+            values = []
+            for run in runs:
+                row, objects = run[name], run[name]["scores"]["objects"]
+                if key == "MOTA":
+                    values.append(row["scores"]["mota"])
+                elif key == "misses":
+                    values.append(row["scores"]["misses"] / objects)
+                elif key == "false pos.":
+                    values.append(row["scores"]["fp"] / objects)
+                elif key in FALSE_KINDS:
+                    values.append(row["false"].get(key, 0) / objects if "false" in row else np.nan)
+                else:
+                    values.append(row["misses"].get(key, 0) / objects)
+            mean, se = _mean_se(values)
+            cells.append("-" if np.isnan(mean) else f"{mean:.3f} ± {se:.3f}")
+        lines.append(f"{name:<10} " + " ".join(f"{c:>14}" for c in cells))
+    if all("class_frames" in run for run in runs):
+        lines.append(
+            "per class (sums over seeds): object-frames; missed (reported / confirmed / tracked); tracked "
+            "false positives whose main road user is of the class, merge / partial"
+        )
+        for name in sorted({k for run in runs for k in run["class_frames"]}):
+            total = sum(run["class_frames"].get(name, 0) for run in runs)
+            missed = [sum(run[ids]["misses"].get(f"class {name}", 0) for run in runs) for ids in ID_SETS]
+            false = [sum(run["tracked"]["false"].get(f"{kind} {name}", 0) for run in runs) for kind in FALSE_KINDS[2:]]
+            lines.append(
+                f"  {name:<22} {total:>5}; missed "
+                + " / ".join(f"{m / total:.2f}" for m in missed)
+                + "; false "
+                + " / ".join(f"{f / total:.2f}" for f in false)
+            )
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3, 4])
+    parser.add_argument("--data", nargs="+", default=list(PRESETS), choices=PRESETS, dest="presets")
+    parser.add_argument("--n-sequences", type=int, default=4)
+    parser.add_argument("--duration", type=float, default=20.0, help="s per sequence")
+    parser.add_argument("--n-settings", type=int, default=30, help="random Tracker settings tried")
+    parser.add_argument("--sparse", type=int, default=5, help="a road user with at most this many detections")
+    parser.add_argument("--save", default=None, help="folder of each seed's record (JSON)")
+    parser.add_argument("--summary", action="store_true", help="only the tables of the records in --save")
+    options = parser.parse_args(argv)
+    if options.summary and not options.save:
+        parser.error("--summary reads the records of --save: give the folder")
+    for preset in options.presets:
+        runs = []
+        for seed in options.seeds:
+            path = None if options.save is None else Path(options.save) / f"tracking_errors_{preset}_{seed}.json"
+            if options.summary:
+                if path.exists():
+                    runs.append(json.loads(path.read_text()))
+                continue
+            runs.append(measure(preset, seed, options))
+            if path is not None:
+                path.parent.mkdir(parents=True, exist_ok=True)
+                path.write_text(json.dumps(runs[-1], default=float))
+        if runs:
+            print(table(preset, runs), flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
