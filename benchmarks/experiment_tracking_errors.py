@@ -20,7 +20,13 @@ false positive of the tracked ids (a window's id matched to no road user) is cou
 detections are no road user's), ``duplicate`` (most are a matched road user's: a second id on it), ``merge`` (it
 holds two or more road users, none covered with IoU > 0.5) or ``partial`` (one road user's, under half of it).
 
-Run (about two minutes per preset and seed on one core; records ``benchmarks/results/tracking_errors/``)::
+Besides the per-class counts (object-frames, misses of each id set, and the tracked false positives whose main road
+user is of the class), each record keeps the tracked ids' MOTA, IDF1 and HOTA.  ``--extra-training N`` adds N
+simulated sequences of the preset (seed + 1000) to the training half: the model is fitted, and the Tracker tuned, on
+them too; the test half is the same (records ``benchmarks/results/tracking_errors/train8/`` with N = 6).
+
+Run (about a minute per preset and seed on one core, 3-4 with ``--extra-training 6``; records
+``benchmarks/results/tracking_errors/``)::
 
     OMP_NUM_THREADS=1 nice -n 19 python benchmarks/experiment_tracking_errors.py --data realistic radarscenes easy \\
         --seeds 0 1 2 3 4 --save benchmarks/results/tracking_errors
@@ -37,6 +43,7 @@ from collections import Counter
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 
 sys.path.insert(0, str(Path(__file__).parent))
 
@@ -54,6 +61,7 @@ from experiment_tracking import (
 )
 
 from sklearn_radar._schema import LABELS
+from sklearn_radar.datasets import make_scenes
 from sklearn_radar.experiments._learned import learned_pipeline
 from sklearn_radar.metrics import precluster_target
 from sklearn_radar.online import OnlinePipeline, Tracker
@@ -65,29 +73,42 @@ FALSE_KINDS = ("background", "duplicate", "merge", "partial")
 
 
 def streamed(preset, seed, options):
-    """Per half, per sequence: fixed-frame columns, truth, and the stream's reported and confirmed ids."""
+    """Per half, per sequence: fixed-frame columns, truth, and the stream's reported and confirmed ids.
+
+    With ``--extra-training N`` the training half has N more simulated sequences of the preset (seed + 1000, as
+    ``experiment_classification.py`` adds them): the model is fitted on them too and the Tracker tuned on them too.
+    """
     scenes, train, test = scenes_of(preset, seed, options)
-    instances = precluster_target(scenes.data, scenes.target)
-    inputs = scenes.data[[c for c in scenes.data.columns if c not in LABEL_COLUMNS]]
+    labelled = [
+        (scenes.data.iloc[train], scenes.target[train], "train"),
+        (scenes.data.iloc[test], scenes.target[test], "test"),
+    ]
+    if options.extra_training:
+        extra = make_scenes(
+            n_sequences=options.extra_training, duration=options.duration, difficulty=preset, random_state=seed + 1000
+        )
+        shifted = extra.data.assign(sequence=extra.data["sequence"] + int(scenes.groups.max()) + 1)
+        labelled.append((shifted, np.asarray(extra.target), "train"))
+    fitted_on = [(data, precluster_target(data, truth)) for data, truth, half in labelled if half == "train"]
+    inputs = pd.concat([data for data, _ in fitted_on], ignore_index=True)
+    inputs = inputs[[c for c in inputs.columns if c not in LABEL_COLUMNS]]
     model = learned_pipeline({**LEARNED_CAUSAL, "link__random_state": seed, "link__n_jobs": 1})
-    model.fit(inputs.iloc[train].reset_index(drop=True), instances[train])
-    halves = {}
-    for half, rows in (("train", train), ("test", test)):
-        parts = []
-        for sequence in np.unique(scenes.groups[rows]):
-            of_sequence = rows[scenes.groups[rows] == sequence]
-            data = scenes.data.iloc[of_sequence].reset_index(drop=True)
+    model.fit(inputs, np.concatenate([instances for _, instances in fitted_on]))
+    halves = {"train": [], "test": []}
+    for frame, truth, half in labelled:
+        groups = frame["sequence"].to_numpy()
+        for sequence in np.unique(groups):
+            data = frame[groups == sequence].reset_index(drop=True)
             replayed = replay(OnlinePipeline(model), data)
             part = fixed_frame(data)
             part.update(
                 reported=replayed["reported"],
                 confirmed=replayed["followed"],
                 sequence=np.full(len(data), sequence),
-                truth=scenes.target[of_sequence],
+                truth=truth[groups == sequence],
                 label=data["label_id"].to_numpy(),
             )
-            parts.append(part)
-        halves[half] = parts
+            halves[half].append(part)
     return halves
 
 
@@ -231,6 +252,25 @@ def table(preset, runs):
     return "\n".join(lines)
 
 
+def compared(preset, runs, others):
+    """Paired differences (mean ± 2 SE over the common seeds) of the tracked ids' scores: ``runs`` minus ``others``."""
+    common = sorted(set(runs) & set(others))
+    lines = [f"{preset}: tracked ids, {len(common)} seed(s) in both; mean here, there, difference ± 2 SE"]
+    for key in ("mota", "idf1", "hota", "misses", "fp"):
+        here = np.array([runs[s]["tracked"]["scores"][key] for s in common], dtype=float)
+        there = np.array([others[s]["tracked"]["scores"][key] for s in common], dtype=float)
+        if key in ("misses", "fp"):  # as shares of the object-frames
+            objects = np.array([runs[s]["tracked"]["scores"]["objects"] for s in common], dtype=float)
+            here, there = here / objects, there / objects
+        mean, se = _mean_se(here - there)
+        lines.append(f"  {key:<7} {here.mean():.3f} {there.mean():.3f} {mean:+.3f} ± {2 * se:.3f}")
+    return "\n".join(lines)
+
+
+def _record_path(folder, preset, seed):
+    return Path(folder) / f"tracking_errors_{preset}_{seed}.json"
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3, 4])
@@ -239,25 +279,38 @@ def main(argv=None):
     parser.add_argument("--duration", type=float, default=20.0, help="s per sequence")
     parser.add_argument("--n-settings", type=int, default=30, help="random Tracker settings tried")
     parser.add_argument("--sparse", type=int, default=5, help="a road user with at most this many detections")
+    parser.add_argument(
+        "--extra-training", type=int, default=0, help="simulated sequences added to the training half (seed + 1000)"
+    )
     parser.add_argument("--save", default=None, help="folder of each seed's record (JSON)")
     parser.add_argument("--summary", action="store_true", help="only the tables of the records in --save")
+    parser.add_argument("--against", help="with --summary: the tracked scores' paired differences to these records")
     options = parser.parse_args(argv)
     if options.summary and not options.save:
         parser.error("--summary reads the records of --save: give the folder")
+    if options.against and not options.summary:
+        parser.error("--against compares saved records: give --summary too")
     for preset in options.presets:
-        runs = []
+        runs = {}  # seed -> record
         for seed in options.seeds:
-            path = None if options.save is None else Path(options.save) / f"tracking_errors_{preset}_{seed}.json"
+            path = None if options.save is None else _record_path(options.save, preset, seed)
             if options.summary:
                 if path.exists():
-                    runs.append(json.loads(path.read_text()))
+                    runs[seed] = json.loads(path.read_text())
                 continue
-            runs.append(measure(preset, seed, options))
+            runs[seed] = measure(preset, seed, options)
             if path is not None:
                 path.parent.mkdir(parents=True, exist_ok=True)
-                path.write_text(json.dumps(runs[-1], default=float))
+                path.write_text(json.dumps(runs[seed], default=float))
         if runs:
-            print(table(preset, runs), flush=True)
+            print(table(preset, list(runs.values())), flush=True)
+        if options.against and runs:
+            others = {
+                seed: json.loads(_record_path(options.against, preset, seed).read_text())
+                for seed in runs
+                if _record_path(options.against, preset, seed).exists()
+            }
+            print(compared(preset, runs, others), flush=True)
     return 0
 
 
