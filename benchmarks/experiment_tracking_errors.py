@@ -121,37 +121,51 @@ def _best(inside, ids, window_rows):
     return best
 
 
-def misses(part, ids, sparse):
-    """Missed object-frames of one sequence, counted by place in the road user's life and sparseness; and, as
-    ``"sparse frames"``, the sparse object-frames, missed or not."""
+def _windows(part):
+    """Each detection's 0.5 s window of its sequence (the windows of ``metrics.tracking_scores``)."""
+    return np.floor((part["t"] - part["t"].min()) / 0.5).astype(np.int64)
+
+
+def object_frames(part, sparse):
+    """The object-frames of one sequence: ``"sparse"`` (at most ``sparse`` detections) and one count per class."""
     counts = Counter()
-    window = np.floor((part["t"] - part["t"].min()) / 0.5).astype(np.int64)
-    truth = part["truth"]
+    window, truth = _windows(part), part["truth"]
+    for road_user in np.unique(truth[truth >= 0]):
+        own = truth == road_user
+        sizes = np.bincount(window[own])
+        sizes = sizes[sizes > 0]
+        counts["sparse"] += int((sizes <= sparse).sum())
+        counts[LABELS[int(part["label"][own][0])]] += len(sizes)
+    return counts
+
+
+def misses(part, ids, sparse):
+    """Missed object-frames of one sequence, counted by place in the road user's life, sparseness and class."""
+    counts = Counter()
+    window, truth = _windows(part), part["truth"]
     for road_user in np.unique(truth[truth >= 0]):
         own = truth == road_user
         frames = []
         for w in np.unique(window[own]):
             inside = own & (window == w)
             frames.append((_best(inside, ids, window == w) > 0.5, int(inside.sum())))
-            counts["sparse frames"] += inside.sum() <= sparse
-            counts[f"frames {LABELS[int(part['label'][own][0])]}"] += 1
         matched = np.array([m for m, _ in frames])
         first = int(np.argmax(matched)) if matched.any() else len(frames)
+        name = LABELS[int(part["label"][own][0])]
         for i, (hit, n) in enumerate(frames):
             if hit:
                 continue
             place = "never" if not matched.any() else "before" if i < first else "gap" if matched[i:].any() else "after"
             counts[place] += 1
             counts["sparse"] += n <= sparse
-            counts[f"class {LABELS[int(part['label'][own][0])]}"] += 1
+            counts[f"class {name}"] += 1
     return counts
 
 
 def false_positives(part, ids):
     """False positives (a window's id matched to no road user) of one sequence, counted by kind."""
     counts = Counter()
-    window = np.floor((part["t"] - part["t"].min()) / 0.5).astype(np.int64)
-    truth = part["truth"]
+    window, truth = _windows(part), part["truth"]
     for w in np.unique(window):
         here = window == w
         matched, unmatched = set(), []
@@ -189,12 +203,12 @@ def measure(preset, seed, options):
     offsets = np.cumsum([0, *(len(p["t"]) for p in test)])
     for part, a, b in zip(test, offsets[:-1], offsets[1:], strict=True):
         part["tracked"] = tracked[a:b]
-    record = {"setting": setting, "train_mota": mota}
+    frames = sum((object_frames(p, options.sparse) for p in test), Counter())
+    sparse_frames = frames.pop("sparse", 0)
+    record = {"setting": setting, "train_mota": mota, "sparse_frames": sparse_frames, "class_frames": dict(frames)}
     for name in ID_SETS:
         ids = np.concatenate([p[name] for p in test])
         counted = sum((misses(p, p[name], options.sparse) for p in test), Counter())
-        record["sparse_frames"] = counted.pop("sparse frames", 0)  # these two the same for every id set
-        record["class_frames"] = {k[7:]: counted.pop(k) for k in [k for k in counted if k.startswith("frames ")]}
         record[name] = {"scores": scores(test, ids), "misses": dict(counted)}
     record["tracked"]["false"] = dict(sum((false_positives(p, p["tracked"]) for p in test), Counter()))
     record["seconds"] = time.perf_counter() - start
