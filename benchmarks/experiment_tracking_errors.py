@@ -23,7 +23,8 @@ holds two or more road users, none covered with IoU > 0.5) or ``partial`` (one r
 Besides the per-class counts (object-frames, misses of each id set, and the tracked false positives whose main road
 user is of the class), each record keeps the tracked ids' MOTA, IDF1 and HOTA.  ``--extra-training N`` adds N
 simulated sequences of the preset (seed + 1000) to the training half: the model is fitted, and the Tracker tuned, on
-them too; the test half is the same (records ``benchmarks/results/tracking_errors/train8/`` with N = 6).
+them too; the test half is the same (records ``benchmarks/results/tracking_errors/train8/`` with N = 6, ``train16/``
+with N = 14).
 
 Run (about a minute per preset and seed on one core, 3-4 with ``--extra-training 6``; records
 ``benchmarks/results/tracking_errors/``)::
