@@ -73,11 +73,11 @@ PLACES = ("never", "before", "gap", "after")
 FALSE_KINDS = ("background", "duplicate", "merge", "partial")
 
 
-def streamed(preset, seed, options):
-    """Per half, per sequence: fixed-frame columns, truth, and the stream's reported and confirmed ids.
+def labelled_model(preset, seed, options):
+    """The data set's halves as (data, truth, half) and the main job's causal model fitted on the training ones.
 
     With ``--extra-training N`` the training half has N more simulated sequences of the preset (seed + 1000, as
-    ``experiment_classification.py`` adds them): the model is fitted on them too and the Tracker tuned on them too.
+    ``experiment_classification.py`` adds them), renumbered after the data set's.
     """
     scenes, train, test = scenes_of(preset, seed, options)
     labelled = [
@@ -95,6 +95,16 @@ def streamed(preset, seed, options):
     inputs = inputs[[c for c in inputs.columns if c not in LABEL_COLUMNS]]
     model = learned_pipeline({**LEARNED_CAUSAL, "link__random_state": seed, "link__n_jobs": 1})
     model.fit(inputs, np.concatenate([instances for _, instances in fitted_on]))
+    return labelled, model
+
+
+def streamed(preset, seed, options):
+    """Per half, per sequence: fixed-frame columns, truth, and the stream's reported and confirmed ids.
+
+    With ``--extra-training N`` the model is fitted, and the Tracker tuned, on the N extra sequences too
+    (:func:`labelled_model`).
+    """
+    labelled, model = labelled_model(preset, seed, options)
     halves = {"train": [], "test": []}
     for frame, truth, half in labelled:
         groups = frame["sequence"].to_numpy()
@@ -286,19 +296,43 @@ def _record_path(folder, preset, seed):
     return Path(folder) / f"tracking_errors_{preset}_{seed}.json"
 
 
-def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+def data_arguments(parser):
+    """The arguments of the data, the Tracker's search and the records, shared with ``experiment_sliding_grouping``."""
     parser.add_argument("--seeds", type=int, nargs="+", default=[0, 1, 2, 3, 4])
     parser.add_argument("--data", nargs="+", default=list(PRESETS), choices=PRESETS, dest="presets")
     parser.add_argument("--n-sequences", type=int, default=4)
     parser.add_argument("--duration", type=float, default=20.0, help="s per sequence")
     parser.add_argument("--n-settings", type=int, default=30, help="random Tracker settings tried")
-    parser.add_argument("--sparse", type=int, default=5, help="a road user with at most this many detections")
     parser.add_argument(
         "--extra-training", type=int, default=0, help="simulated sequences added to the training half (seed + 1000)"
     )
     parser.add_argument("--save", default=None, help="folder of each seed's record (JSON)")
     parser.add_argument("--summary", action="store_true", help="only the tables of the records in --save")
+
+
+def records(options, preset, measure, path_of):
+    """Seed -> record of one preset: measured (and saved in ``--save``), or with ``--summary`` read from there.
+
+    ``measure(preset, seed, options)`` gives a record; ``path_of(folder, preset, seed)`` its file.
+    """
+    runs = {}
+    for seed in options.seeds:
+        path = None if options.save is None else path_of(options.save, preset, seed)
+        if options.summary:
+            if path.exists():
+                runs[seed] = json.loads(path.read_text())
+            continue
+        runs[seed] = measure(preset, seed, options)
+        if path is not None:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            path.write_text(json.dumps(runs[seed], default=float))
+    return runs
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    data_arguments(parser)
+    parser.add_argument("--sparse", type=int, default=5, help="a road user with at most this many detections")
     parser.add_argument("--against", help="with --summary: the tracked scores' paired differences to these records")
     options = parser.parse_args(argv)
     if options.summary and not options.save:
@@ -306,17 +340,7 @@ def main(argv=None):
     if options.against and not options.summary:
         parser.error("--against compares saved records: give --summary too")
     for preset in options.presets:
-        runs = {}  # seed -> record
-        for seed in options.seeds:
-            path = None if options.save is None else _record_path(options.save, preset, seed)
-            if options.summary:
-                if path.exists():
-                    runs[seed] = json.loads(path.read_text())
-                continue
-            runs[seed] = measure(preset, seed, options)
-            if path is not None:
-                path.parent.mkdir(parents=True, exist_ok=True)
-                path.write_text(json.dumps(runs[seed], default=float))
+        runs = records(options, preset, measure, _record_path)
         if runs:
             print(table(preset, list(runs.values())), flush=True)
         if options.against and runs:
