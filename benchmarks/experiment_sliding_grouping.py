@@ -145,8 +145,7 @@ def sliding_ids(links, n_rows, threshold, length):
     times, first = np.unique(t, return_index=True)
     ends = np.r_[first[1:], n]
     oldest = 0
-    pair_start = 0  # pairs sorted by their later end, so those up to now are a prefix
-    by_late = np.argsort(late, kind="stable")
+    by_late = np.argsort(late, kind="stable")  # pairs by their later end: those up to now are a prefix
     late_sorted = late[by_late]
     for k, now in enumerate(times):
         new = np.arange(first[k], ends[k])
@@ -158,8 +157,7 @@ def sliding_ids(links, n_rows, threshold, length):
             oldest += 1
         window = np.arange(oldest, ends[k])
         window = window[node[window]]
-        pair_start = np.searchsorted(late_sorted, now, side="right")
-        pairs = by_late[:pair_start]
+        pairs = by_late[: np.searchsorted(late_sorted, now, side="right")]
         pairs = pairs[early[pairs] > now - length]
         local = np.full(n, -1, dtype=np.int64)
         local[window] = np.arange(len(window))
