@@ -42,6 +42,7 @@ import argparse
 import itertools
 import sys
 import time
+from collections import Counter
 from pathlib import Path
 
 import numpy as np
@@ -270,8 +271,10 @@ def measure(preset, seed, options):
             part["ids"], part["confirmed"] = ids, confirmed
         mota, setting = tuned_tracker(train, Tracker, lambda p: p["confirmed"], TRACKER_SPACE, options.n_settings, seed)
         tested = scores(test, track(test, lambda s=setting: Tracker(**s), lambda p: p["confirmed"]))
-        misses = _summed(miss_kinds(p, p["ids"]) for p in test)
-        record[form] = {**best, "train_mota": mota, "setting": setting, "scores": tested, "misses": misses}
+        misses = Counter()
+        for part in test:
+            misses.update(miss_kinds(part, part["ids"]))  # (update keeps the kinds counted 0)
+        record[form] = {**best, "train_mota": mota, "setting": setting, "scores": tested, "misses": dict(misses)}
     record["step_us"] = {"p50": float(np.median(seconds) * 1e6), "p99": float(np.percentile(seconds, 99) * 1e6)}
     record["seconds"] = time.perf_counter() - start
     c, s = record["causal"], record["sliding"]
@@ -282,14 +285,6 @@ def measure(preset, seed, options):
         flush=True,
     )
     return record
-
-
-def _summed(counts):
-    total = {}
-    for count in counts:
-        for key, value in count.items():
-            total[key] = total.get(key, 0) + value
-    return total
 
 
 def table(preset, runs):
