@@ -24,7 +24,10 @@ Besides the per-class counts (object-frames, misses of each id set, and the trac
 user is of the class), each record keeps the tracked ids' MOTA, IDF1 and HOTA.  ``--extra-training N`` adds N
 simulated sequences of the preset (seed + 1000) to the training half: the model is fitted, and the Tracker tuned, on
 them too; the test half is the same (records ``benchmarks/results/tracking_errors/train8/`` with N = 6, ``train16/``
-with N = 14).
+with N = 14).  ``--paste N`` adds instead N copies of the training sequences, each with its own road users pasted in
+once more, turned and delayed (copy-paste augmentation, :func:`pasted`): the model is fitted on them too (each copy in
+its sequence's cross-validation group), the Tracker tuned on the training half alone (records ``paste6/`` and
+``paste14/``, realistic preset).
 
 Run (about a minute per preset and seed on one core, 3-4 with ``--extra-training 6``; records
 ``benchmarks/results/tracking_errors/``)::
@@ -41,7 +44,9 @@ import json
 import sys
 import time
 from collections import Counter
+from contextlib import nullcontext
 from pathlib import Path
+from unittest.mock import patch
 
 import numpy as np
 import pandas as pd
@@ -61,7 +66,9 @@ from experiment_tracking import (
     tuned_tracker,
 )
 
+from sklearn_radar import config_context
 from sklearn_radar._schema import LABELS
+from sklearn_radar.cluster import _link_clustering
 from sklearn_radar.datasets import make_scenes
 from sklearn_radar.experiments._learned import learned_pipeline
 from sklearn_radar.metrics import precluster_target
@@ -77,7 +84,9 @@ def labelled_model(preset, seed, options):
     """The data set's halves as (data, truth, half) and the main job's causal model fitted on the training ones.
 
     With ``--extra-training N`` the training half has N more simulated sequences of the preset (seed + 1000, as
-    ``experiment_classification.py`` adds them), renumbered after the data set's.
+    ``experiment_classification.py`` adds them), renumbered after the data set's.  With ``--paste N`` the model is
+    fitted on N copies of the training sequences with their road users pasted in again (:func:`pasted`) too, each in
+    its sequence's cross-validation group; the copies are not among the halves returned.
     """
     scenes, train, test = scenes_of(preset, seed, options)
     labelled = [
@@ -90,12 +99,76 @@ def labelled_model(preset, seed, options):
         )
         shifted = extra.data.assign(sequence=extra.data["sequence"] + int(scenes.groups.max()) + 1)
         labelled.append((shifted, np.asarray(extra.target), "train"))
-    fitted_on = [(data, precluster_target(data, truth)) for data, truth, half in labelled if half == "train"]
-    inputs = pd.concat([data for data, _ in fitted_on], ignore_index=True)
-    inputs = inputs[[c for c in inputs.columns if c not in LABEL_COLUMNS]]
-    model = learned_pipeline({**LEARNED_CAUSAL, "link__random_state": seed, "link__n_jobs": 1})
-    model.fit(inputs, np.concatenate([instances for _, instances in fitted_on]))
+    training = [(data, np.asarray(truth)) for data, truth, half in labelled if half == "train"]
+    origin = None
+    if options.paste:
+        data = pd.concat([d for d, _ in training], ignore_index=True)
+        first = int(max(scenes.groups.max(), data["sequence"].max())) + 1
+        *copies, origin = pasted(data, np.concatenate([t for _, t in training]), options.paste, first, seed)
+        training.append(tuple(copies))
+    # The pasted copies hold two ego paths, which the plausibility checks of the ego motion reject.
+    with config_context(check_plausibility=False if origin else None):
+        fitted_on = [(data, precluster_target(data, truth)) for data, truth in training]
+        inputs = pd.concat([data for data, _ in fitted_on], ignore_index=True)
+        inputs = inputs[[c for c in inputs.columns if c not in LABEL_COLUMNS]]
+        model = learned_pipeline({**LEARNED_CAUSAL, "link__random_state": seed, "link__n_jobs": 1})
+        grouped = patch.object(_link_clustering, "_groups", by_origin(origin)) if origin else nullcontext()
+        with grouped:
+            model.fit(inputs, np.concatenate([instances for _, instances in fitted_on]))
     return labelled, model
+
+
+def by_origin(origin):
+    """``LinkClustering``'s cross-validation groups with each pasted sequence in its host's group (no leak)."""
+
+    def groups(sequences, c, cv):
+        return [np.full(len(q.rows), origin[int(c["sequence"][q.rows[0]])], dtype=np.int64) for q in sequences]
+
+    return groups
+
+
+def pasted(data, truth, n, first, seed):
+    """``n`` sequences, each a training sequence with its own road users pasted in once more (copy-paste).
+
+    The copies (rows with ``truth >= 0``) keep their car-frame measurements (range, azimuth, RCS, Doppler, sensor);
+    their ego pose is turned by a random angle about the sequence's first ego position, so that positions, lines of
+    sight and compensated Doppler stay consistent, and delayed by up to 2 s (rows past the sequence's end dropped).
+    They get new instance ids.  Sequence ``first + k`` is the ``k % n_sequences``-th training sequence's.
+
+    Returns
+    -------
+    data, truth : DataFrame, ndarray
+        The pasted sequences.
+    origin : dict
+        Sequence id -> the training sequence it was made from (each training sequence its own).
+    """
+    rng = np.random.default_rng(seed + 2000)
+    hosts = np.unique(data["sequence"])
+    parts, truths, origin = [], [], {int(q): int(q) for q in hosts}
+    top = int(truth.max()) + 1
+    for k in range(n):
+        rows = data["sequence"].to_numpy() == hosts[k % len(hosts)]
+        base, base_truth = data[rows], truth[rows]
+        start = base.loc[base["timestamp"].idxmin()]
+        theta = rng.uniform(-np.pi, np.pi)
+        delay = 7_001 + int(rng.uniform(0, 2e6))  # µs: off the sequence's scan times
+        road, road_truth = base[base_truth >= 0].copy(), base_truth[base_truth >= 0]
+        road["timestamp"] += delay
+        kept = (road["timestamp"] <= base["timestamp"].max()).to_numpy()
+        road, road_truth = road[kept], road_truth[kept]
+        for px, py in (("ego_x_seq", "ego_y_seq"), ("x_seq", "y_seq")):
+            dx, dy = road[px] - start["ego_x_seq"], road[py] - start["ego_y_seq"]
+            road[px] = start["ego_x_seq"] + np.cos(theta) * dx - np.sin(theta) * dy
+            road[py] = start["ego_y_seq"] + np.sin(theta) * dx + np.cos(theta) * dy
+        road["ego_yaw_seq"] += theta
+        road["uuid"] += f"p{k}"
+        road["track_id"] += f"p{k}"
+        road_truth = road_truth - road_truth.min() + top
+        top = int(road_truth.max()) + 1
+        parts.append(pd.concat([base, road], ignore_index=True).assign(sequence=first + k))
+        truths.append(np.concatenate([base_truth, road_truth]))
+        origin[first + k] = int(hosts[k % len(hosts)])
+    return pd.concat(parts, ignore_index=True), np.concatenate(truths), origin
 
 
 def streamed(preset, seed, options):
@@ -305,6 +378,9 @@ def data_arguments(parser):
     parser.add_argument("--n-settings", type=int, default=30, help="random Tracker settings tried")
     parser.add_argument(
         "--extra-training", type=int, default=0, help="simulated sequences added to the training half (seed + 1000)"
+    )
+    parser.add_argument(
+        "--paste", type=int, default=0, help="copies of the training sequences, their road users pasted in again"
     )
     parser.add_argument("--save", default=None, help="folder of each seed's record (JSON)")
     parser.add_argument("--summary", action="store_true", help="only the tables of the records in --save")
