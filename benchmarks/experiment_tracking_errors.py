@@ -26,8 +26,8 @@ simulated sequences of the preset (seed + 1000) to the training half: the model 
 them too; the test half is the same (records ``benchmarks/results/tracking_errors/train8/`` with N = 6, ``train16/``
 with N = 14).  ``--paste N`` adds instead N copies of the training sequences, each with its own road users pasted in
 once more, turned and delayed (copy-paste augmentation, :func:`pasted`): the model is fitted on them too (each copy in
-its sequence's cross-validation group), the Tracker tuned on the training half alone (records ``paste6/`` and
-``paste14/``, realistic preset).
+its sequence's cross-validation group), the Tracker tuned on the training half alone (records ``paste6/``, and
+``paste14/`` of the realistic preset).
 
 Run (about a minute per preset and seed on one core, 3-4 with ``--extra-training 6``; records
 ``benchmarks/results/tracking_errors/``)::
