@@ -55,6 +55,7 @@ sys.path.insert(0, str(Path(__file__).parent))
 
 from experiment_tracking import (
     LABEL_COLUMNS,
+    LEARNED_CAUSAL,
     TRACKER_SPACE,
     _mean_se,
     fixed_frame,
@@ -71,16 +72,23 @@ from sklearn_radar.cluster._causal_agglomeration import new_state, step
 from sklearn_radar.metrics import tracking_scores
 from sklearn_radar.online import OnlinePipeline, Tracker
 from sklearn_radar.online._replay import replay
+from sklearn_radar.reproduce._learned import LEARNED_PARAMS
 
 FORMS = ("causal", "sliding")
+#: The main job's offline learned grouping (``reproduce/_learned.py``: LEARNED_PARAMS and the window).
+OFFLINE = {**LEARNED_PARAMS, "link__window": 0.5}
 MISS_KINDS = ("merge", "fragment", "unclustered")
 
 
-def fitted(preset, seed, options):
+def fitted(preset, seed, options, causal=True):
     """Per half, per sequence: fixed-frame columns, truth and the model's causal links (``t``, ``x``, ``y`` of the kept
     detections in the estimator's order, ``node``, pairs ``i``, ``j``, ``p``, and ``rows``: their rows of the
-    sequence); the fitted link threshold, ``min_cluster_size`` and pair window."""
-    labelled, model = labelled_model(preset, seed, options)
+    sequence); the fitted link threshold, ``min_cluster_size`` and pair window.
+
+    ``causal=False``: the main job's offline model instead (``OFFLINE``), its links (of features that see 0.15 s
+    past each detection, :data:`~sklearn_radar.cluster._link_features.LOCAL_WINDOW`) and its labels (``offline``).
+    """
+    labelled, model = labelled_model(preset, seed, options, params=LEARNED_CAUSAL if causal else OFFLINE)
     link = model[-1]
     halves = {"train": [], "test": []}
     for frame, truth, half in labelled:
@@ -91,12 +99,14 @@ def fitted(preset, seed, options):
             part.update(sequence=np.full(len(data), sequence), truth=truth[groups == sequence])
             working = model[:-1].transform(data.drop(columns=list(LABEL_COLUMNS)))
             _, columns = read_columns(link, working, _link_clustering.LINK_READS, reset=False)
-            (kept,) = _link_clustering._sequences(columns, causal=True)
+            (kept,) = _link_clustering._sequences(columns, causal=causal)
             objectness, i, j, p = link._probabilities(kept, link.objectness_threshold_)
             d = kept.detections
             node = objectness > link.objectness_threshold_
             part["links"] = {"rows": kept.rows, "t": d.t, "x": d.x, "y": d.y, "node": node, "i": i, "j": j, "p": p}
-            if options.check_stream:  # the causal ids computed here are the stream's reported ids
+            if not causal:
+                part["offline"] = model.predict(data.drop(columns=list(LABEL_COLUMNS)))
+            elif options.check_stream:  # the causal ids computed here are the stream's reported ids
                 reported = replay(OnlinePipeline(model), data)["reported"]
                 mine, _ = causal_ids(part["links"], len(data), link.link_threshold_, link.pair_window)
                 if adjusted_rand_score(reported, mine) != 1.0:
@@ -134,8 +144,11 @@ def causal_ids(links, n_rows, threshold, window):
     return out, size
 
 
-def sliding_ids(links, n_rows, threshold, length):
-    """Id of each row at its scan time by the sliding re-clustering (-1 for noise), and the step's seconds per scan."""
+def sliding_ids(links, n_rows, threshold, length, lag=0.0):
+    """Id of each row by the sliding re-clustering (-1 for noise), and the step's seconds per scan.
+
+    A row's id is the one its cluster has at the last step within ``lag`` s of its scan time (0: at its scan).
+    """
     t, node, i, j, p = links["t"], links["node"], links["i"], links["j"], links["p"]
     n = len(t)
     late, early = np.maximum(t[i], t[j]), np.minimum(t[i], t[j])
@@ -195,7 +208,8 @@ def sliding_ids(links, n_rows, threshold, length):
             given[c] = next_id
             next_id += 1
         previous[window[members]] = given[of_member]
-        out[new] = previous[new]
+        recent = new if lag == 0 else window[t[window] >= now - lag]
+        out[recent] = previous[recent]
         seconds.append(time.perf_counter() - start)
     ids = np.full(n_rows, -1, dtype=np.int64)
     ids[links["rows"]] = out
@@ -239,42 +253,61 @@ def miss_kinds(part, ids):
     return counts
 
 
+def pair_grid(model, options):
+    """(link threshold, ``min_cluster_size``) pairs to choose from: the fitted one first, then ``--thresholds`` x
+    ``--sizes``."""
+    grid = [(model["link_threshold"], model["min_cluster_size"])]
+    return grid + [(value, size) for value in options.thresholds for size in options.sizes if (value, size) != grid[0]]
+
+
+def chosen_and_scored(train, test, grid, labelled, options, seed):
+    """One form's record: the (link threshold, ``min_cluster_size``) of ``grid`` with the best training MOTA of the
+    Tracker at its defaults, the Tracker then tuned on the training half, its test scores and the misses by kind.
+
+    ``labelled(part, threshold, min_cluster_size)`` sets the part's ``ids`` and ``confirmed`` ids.
+    """
+    truth = np.concatenate([p["truth"] for p in train])
+    times = np.concatenate([p["t"] for p in train])
+    groups = np.concatenate([p["sequence"] for p in train])
+    best = None
+    for value, size in grid:
+        for part in (*train, *test):
+            labelled(part, value, size)
+        ids = track(train, Tracker, lambda p: p["confirmed"])
+        mota = tracking_scores(truth, ids, times=times, groups=groups, window=0.5)["mota"]
+        if best is None or mota > best["default_tracker_mota"]:
+            best = {"threshold": value, "min_cluster_size": size, "default_tracker_mota": mota}
+            best["parts"] = [(p["ids"], p["confirmed"]) for p in (*train, *test)]
+    for part, (ids, confirmed) in zip((*train, *test), best.pop("parts"), strict=True):
+        part["ids"], part["confirmed"] = ids, confirmed
+    mota, setting = tuned_tracker(train, Tracker, lambda p: p["confirmed"], TRACKER_SPACE, options.n_settings, seed)
+    tested = scores(test, track(test, lambda s=setting: Tracker(**s), lambda p: p["confirmed"]))
+    misses = Counter()
+    for part in test:
+        misses.update(miss_kinds(part, part["ids"]))  # (update keeps the kinds counted 0)
+    return {**best, "train_mota": mota, "setting": setting, "scores": tested, "misses": dict(misses)}
+
+
 def measure(preset, seed, options):
     """Both forms' chosen thresholds, tracked test scores and reported miss kinds, for one data set."""
     start = time.perf_counter()
     halves, model = fitted(preset, seed, options)
     record = {"model": model}
     train, test = halves["train"], halves["test"]
-    truth = np.concatenate([p["truth"] for p in train])
-    times = np.concatenate([p["t"] for p in train])
-    groups = np.concatenate([p["sequence"] for p in train])
-    grid = [(model["link_threshold"], model["min_cluster_size"])]
-    grid += [(value, size) for value in options.thresholds for size in options.sizes if (value, size) != grid[0]]
+    grid = pair_grid(model, options)
     seconds = []
     for form in FORMS:
-        best = None
-        for value, size in grid:
-            for part in (*train, *test):
-                if form == "causal":
-                    part["ids"], at_time = causal_ids(part["links"], len(part["t"]), value, model["pair_window"])
-                    part["confirmed"] = np.where(at_time >= size, part["ids"], -1)
-                else:
-                    part["ids"], spent = sliding_ids(part["links"], len(part["t"]), value, options.length)
-                    part["confirmed"] = confirmed_of(part["ids"], part["t"], size)
-                    seconds += spent
-            ids = track(train, Tracker, lambda p: p["confirmed"])
-            mota = tracking_scores(truth, ids, times=times, groups=groups, window=0.5)["mota"]
-            if best is None or mota > best["default_tracker_mota"]:
-                best = {"threshold": value, "min_cluster_size": size, "default_tracker_mota": mota}
-                best["parts"] = [(p["ids"], p["confirmed"]) for p in (*train, *test)]
-        for part, (ids, confirmed) in zip((*train, *test), best.pop("parts"), strict=True):
-            part["ids"], part["confirmed"] = ids, confirmed
-        mota, setting = tuned_tracker(train, Tracker, lambda p: p["confirmed"], TRACKER_SPACE, options.n_settings, seed)
-        tested = scores(test, track(test, lambda s=setting: Tracker(**s), lambda p: p["confirmed"]))
-        misses = Counter()
-        for part in test:
-            misses.update(miss_kinds(part, part["ids"]))  # (update keeps the kinds counted 0)
-        record[form] = {**best, "train_mota": mota, "setting": setting, "scores": tested, "misses": dict(misses)}
+
+        def labelled(part, value, size, form=form):
+            if form == "causal":
+                part["ids"], at_time = causal_ids(part["links"], len(part["t"]), value, model["pair_window"])
+                part["confirmed"] = np.where(at_time >= size, part["ids"], -1)
+            else:
+                part["ids"], spent = sliding_ids(part["links"], len(part["t"]), value, options.length)
+                part["confirmed"] = confirmed_of(part["ids"], part["t"], size)
+                seconds.extend(spent)
+
+        record[form] = chosen_and_scored(train, test, grid, labelled, options, seed)
     record["step_us"] = {"p50": float(np.median(seconds) * 1e6), "p99": float(np.percentile(seconds, 99) * 1e6)}
     record["seconds"] = time.perf_counter() - start
     c, s = record["causal"], record["sliding"]

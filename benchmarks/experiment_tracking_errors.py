@@ -80,8 +80,9 @@ PLACES = ("never", "before", "gap", "after")
 FALSE_KINDS = ("background", "duplicate", "merge", "partial")
 
 
-def labelled_model(preset, seed, options):
-    """The data set's halves as (data, truth, half) and the main job's causal model fitted on the training ones.
+def labelled_model(preset, seed, options, params=LEARNED_CAUSAL):
+    """The data set's halves as (data, truth, half) and the main job's causal model (or the learned pipeline of
+    ``params``) fitted on the training ones.
 
     With ``--extra-training N`` the training half has N more simulated sequences of the preset (seed + 1000, as
     ``experiment_classification.py`` adds them), renumbered after the data set's.  With ``--paste N`` the model is
@@ -111,7 +112,7 @@ def labelled_model(preset, seed, options):
         fitted_on = [(data, precluster_target(data, truth)) for data, truth in training]
         inputs = pd.concat([data for data, _ in fitted_on], ignore_index=True)
         inputs = inputs[[c for c in inputs.columns if c not in LABEL_COLUMNS]]
-        model = learned_pipeline({**LEARNED_CAUSAL, "link__random_state": seed, "link__n_jobs": 1})
+        model = learned_pipeline({"link__n_jobs": 1, **params, "link__random_state": seed})
         grouped = patch.object(_link_clustering, "_groups", by_origin(origin)) if origin else nullcontext()
         with grouped:
             model.fit(inputs, np.concatenate([instances for _, instances in fitted_on]))
