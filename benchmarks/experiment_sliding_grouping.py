@@ -72,11 +72,18 @@ from sklearn_radar.cluster._causal_agglomeration import new_state, step
 from sklearn_radar.metrics import tracking_scores
 from sklearn_radar.online import OnlinePipeline, Tracker
 from sklearn_radar.online._replay import replay
-from sklearn_radar.reproduce._learned import LEARNED_PARAMS
+from sklearn_radar.reproduce._learned import LEARNED_CAUSAL_PARAMS, LEARNED_PARAMS
 
 FORMS = ("causal", "sliding")
-#: The main job's offline learned grouping (``reproduce/_learned.py``: LEARNED_PARAMS and the window).
-OFFLINE = {**LEARNED_PARAMS, "link__window": 0.5}
+#: The learned grouping whose links see both sides of each detection, with the causal model's capacity and filter
+#: (``reproduce/_learned.py``: LEARNED_PARAMS, the window, LEARNED_CAUSAL_PARAMS's trees and the causal Doppler-density
+#: filter; every candidate pair, as ``causal=False`` requires).
+OFFLINE = {
+    **LEARNED_PARAMS,
+    **{k: v for k, v in LEARNED_CAUSAL_PARAMS.items() if k != "link__max_links_per_detection"},
+    "link__window": 0.5,
+    "filter__causal": True,
+}
 MISS_KINDS = ("merge", "fragment", "unclustered")
 
 
@@ -85,8 +92,9 @@ def fitted(preset, seed, options, causal=True):
     detections in the estimator's order, ``node``, pairs ``i``, ``j``, ``p``, and ``rows``: their rows of the
     sequence); the fitted link threshold, ``min_cluster_size`` and pair window.
 
-    ``causal=False``: the main job's offline model instead (``OFFLINE``), its links (of features that see 0.15 s
-    past each detection, :data:`~sklearn_radar.cluster._link_features.LOCAL_WINDOW`) and its labels (``offline``).
+    ``causal=False``: a model that sees both sides of each detection instead (``OFFLINE``), its links (of features
+    that see 0.15 s past each detection, :data:`~sklearn_radar.cluster._link_features.LOCAL_WINDOW`) and its labels
+    (``offline``).
     """
     labelled, model = labelled_model(preset, seed, options, params=LEARNED_CAUSAL if causal else OFFLINE)
     link = model[-1]
@@ -216,17 +224,20 @@ def sliding_ids(links, n_rows, threshold, length, lag=0.0):
     return ids, seconds
 
 
-def confirmed_of(ids, t, min_size):
-    """The ids of the rows whose id has ``min_size`` detections so far (up to their scan), -1 otherwise."""
+def confirmed_of(ids, t, min_size, lag=0.0):
+    """The ids of the rows whose id has ``min_size`` detections up to ``lag`` s after their scan, -1 otherwise."""
     order = np.lexsort((np.arange(len(t)), t))
     seen, confirmed = {}, np.full(len(t), -1, dtype=np.int64)
     times = t[order]
     bounds = np.flatnonzero(np.r_[True, times[1:] != times[:-1], True])
+    counted = 0  # the scans whose ids are counted in seen
     for a, b in itertools.pairwise(bounds):
-        scan = order[a:b]
-        for g in ids[scan][ids[scan] >= 0].tolist():
-            seen[g] = seen.get(g, 0) + 1
-        for r in scan[ids[scan] >= 0].tolist():
+        while counted < len(bounds) - 1 and times[bounds[counted]] <= times[a] + lag:
+            scan = order[bounds[counted] : bounds[counted + 1]]
+            for g in ids[scan][ids[scan] >= 0].tolist():
+                seen[g] = seen.get(g, 0) + 1
+            counted += 1
+        for r in order[a:b][ids[order[a:b]] >= 0].tolist():
             if seen[ids[r]] >= min_size:
                 confirmed[r] = ids[r]
     return confirmed
