@@ -101,7 +101,7 @@ def table(preset, runs, against):
         for name in ("causal", "sliding"):
             if len(base) == len(seeds):
                 diffs = [rows[form][k] - rows[f"{name} (--against)"][k] for k in keys]
-                cells = " ".join(f"{_cell(d, 2):>16}" for d in diffs)
+                cells = " ".join(f"{_cell(d, paired=True):>16}" for d in diffs)
                 lines.append(f"{form + ' - ' + name:<22} " + cells)
     for form in named[:-1]:
         chosen = ", ".join(f"{runs[s][form]['threshold']}/{runs[s][form]['min_cluster_size']}" for s in seeds)
@@ -109,9 +109,10 @@ def table(preset, runs, against):
     return "\n".join(lines)
 
 
-def _cell(values, scale=1):
+def _cell(values, paired=False):
+    """Mean ± SE; ``paired``: a paired difference, signed, ± 2 SE."""
     mean, se = _mean_se(values)
-    return f"{mean:+.3f} ± {scale * se:.3f}" if scale == 2 else f"{mean:.3f} ± {se:.3f}"
+    return f"{mean:+.3f} ± {2 * se:.3f}" if paired else f"{mean:.3f} ± {se:.3f}"
 
 
 def _record_path(folder, preset, seed):
@@ -126,10 +127,11 @@ def main(argv=None):
     parser.add_argument("--thresholds", type=float, nargs="+", default=[0.5, 0.6, 0.7])
     parser.add_argument("--sizes", type=int, nargs="+", default=[3, 6], help="min_cluster_size values tried")
     parser.add_argument(
-        "--against", default=str(Path(__file__).parent / "results" / "sliding_grouping"), help="its records' folder"
+        "--against",
+        default=str(Path(__file__).parent / "results" / "sliding_grouping"),
+        help="experiment_sliding_grouping.py's records of the same data (its causal and sliding forms)",
     )
     options = parser.parse_args(argv)
-    options.check_stream = False
     if options.summary and not options.save:
         parser.error("--summary reads the records of --save: give the folder")
     for preset in options.presets:
