@@ -40,6 +40,7 @@ import numpy as np
 sys.path.insert(0, str(Path(__file__).parent))
 
 from experiment_sliding_grouping import (
+    choice_arguments,
     chosen_and_scored,
     confirmed_of,
     fitted,
@@ -122,10 +123,8 @@ def _record_path(folder, preset, seed):
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     data_arguments(parser)
-    parser.add_argument("--length", type=float, default=0.5, help="s of links the sliding re-clustering sees")
+    choice_arguments(parser)
     parser.add_argument("--lags", type=float, nargs="+", default=[0.0, 0.1, 0.25], help="s after the links are known")
-    parser.add_argument("--thresholds", type=float, nargs="+", default=[0.5, 0.6, 0.7])
-    parser.add_argument("--sizes", type=int, nargs="+", default=[3, 6], help="min_cluster_size values tried")
     parser.add_argument(
         "--against",
         default=str(Path(__file__).parent / "results" / "sliding_grouping"),

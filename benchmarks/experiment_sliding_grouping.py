@@ -375,12 +375,17 @@ def _record_path(folder, preset, seed):
     return Path(folder) / f"sliding_{preset}_{seed}.json"
 
 
-def main(argv=None):
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    data_arguments(parser)
+def choice_arguments(parser):
+    """The arguments of the sliding re-clustering's window and of the choice of :func:`pair_grid`."""
     parser.add_argument("--length", type=float, default=0.5, help="s of links the sliding re-clustering sees")
     parser.add_argument("--thresholds", type=float, nargs="+", default=[0.5, 0.6, 0.7])
     parser.add_argument("--sizes", type=int, nargs="+", default=[3, 6], help="min_cluster_size values tried")
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    data_arguments(parser)
+    choice_arguments(parser)
     parser.add_argument(
         "--check-stream", action="store_true", help="check the causal ids against OnlinePipeline's (slower)"
     )
