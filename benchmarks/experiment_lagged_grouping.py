@@ -14,7 +14,7 @@ training half and scored on the test half):
   last ``--length`` s), a detection's id the one its cluster has ``L`` s after its scan (``--lags``), confirmed when
   that id has ``min_cluster_size`` detections by then: ids of a scan known ``0.15 + L`` s after it;
 * ``offline``: the offline model's own labels (every link of the sequence, past and future: the limit of a long
-  lag), fed to the Tracker as they are.
+  lag), fed to the Tracker as they are (no threshold or size chosen).
 
 The summary compares each form, paired by seed, with the causal and sliding forms of the same data in
 ``--against`` (``experiment_sliding_grouping.py``'s records, the main job's causal model).
@@ -29,29 +29,25 @@ Run (3-5 minutes per preset and seed on one core; records ``benchmarks/results/l
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 import time
-from collections import Counter
 from pathlib import Path
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).parent))
 
+from experiment_sliding_grouping import _record_path as sliding_record
 from experiment_sliding_grouping import (
     choice_arguments,
     chosen_and_scored,
     confirmed_of,
     fitted,
-    miss_kinds,
     pair_grid,
     sliding_ids,
 )
-from experiment_tracking import TRACKER_SPACE, _mean_se, scores, track, tuned_tracker
-from experiment_tracking_errors import data_arguments, records
-
-from sklearn_radar.online import Tracker
+from experiment_tracking import _mean_se
+from experiment_tracking_errors import data_arguments, records, saved_records
 
 
 def measure(preset, seed, options):
@@ -67,12 +63,11 @@ def measure(preset, seed, options):
             part["confirmed"] = confirmed_of(part["ids"], part["t"], size, lag)
 
         record[f"lag {lag:g}"] = chosen_and_scored(train, test, pair_grid(model, options), labelled, options, seed)
-    mota, setting = tuned_tracker(train, Tracker, lambda p: p["offline"], TRACKER_SPACE, options.n_settings, seed)
-    misses = Counter()
-    for part in test:
-        misses.update(miss_kinds(part, part["offline"]))
-    tested = scores(test, track(test, lambda: Tracker(**setting), lambda p: p["offline"]))
-    record["offline"] = {"train_mota": mota, "setting": setting, "scores": tested, "misses": dict(misses)}
+
+    def offline(part, *_):  # the offline labels as they are: no threshold or size to choose
+        part["ids"] = part["confirmed"] = part["offline"]
+
+    record["offline"] = chosen_and_scored(train, test, [(None, None)], offline, options, seed)
     record["seconds"] = time.perf_counter() - start
     shown = ", ".join(f"{form} {record[form]['scores']['mota']:.3f}" for form in forms(record))
     print(f"{preset} seed {seed}: MOTA {shown} ({record['seconds']:.0f} s)", flush=True)
@@ -136,12 +131,7 @@ def main(argv=None):
     for preset in options.presets:
         runs = records(options, preset, measure, _record_path)
         if runs:
-            path = Path(options.against)
-            against = {
-                s: json.loads((path / f"sliding_{preset}_{s}.json").read_text())
-                for s in runs
-                if (path / f"sliding_{preset}_{s}.json").exists()
-            }
+            against = saved_records(options.against, preset, runs, sliding_record)
             print(table(preset, runs, against), flush=True)
     return 0
 

@@ -406,6 +406,12 @@ def records(options, preset, measure, path_of):
     return runs
 
 
+def saved_records(folder, preset, seeds, path_of):
+    """Seed -> record of one preset saved in ``folder`` (``path_of(folder, preset, seed)``), for the seeds it has."""
+    paths = {seed: path_of(folder, preset, seed) for seed in seeds}
+    return {seed: json.loads(path.read_text()) for seed, path in paths.items() if path.exists()}
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     data_arguments(parser)
@@ -421,11 +427,7 @@ def main(argv=None):
         if runs:
             print(table(preset, list(runs.values())), flush=True)
         if options.against and runs:
-            others = {
-                seed: json.loads(_record_path(options.against, preset, seed).read_text())
-                for seed in runs
-                if _record_path(options.against, preset, seed).exists()
-            }
+            others = saved_records(options.against, preset, runs, _record_path)
             print(compared(preset, runs, others), flush=True)
     return 0
 
