@@ -16,6 +16,11 @@ training half and scored on the test half):
 * ``offline``: the offline model's own labels (every link of the sequence, past and future: the limit of a long
   lag), fed to the Tracker as they are (no threshold or size chosen).
 
+``--links causal`` takes instead the main job's causal model and its causal links (each detection's past only, as
+``experiment_sliding_grouping.py`` does): ids of a scan known ``L`` s after it, and no ``offline`` form.  With it,
+``lag 0`` is that benchmark's ``sliding`` form, so the two can be told apart: what the look-ahead of the links gives,
+and what the delay of the ids gives.
+
 The summary compares each form, paired by seed, with the causal and sliding forms of the same data in
 ``--against`` (``experiment_sliding_grouping.py``'s records, the main job's causal model).
 
@@ -24,6 +29,8 @@ Run (3-5 minutes per preset and seed on one core; records ``benchmarks/results/l
     OMP_NUM_THREADS=1 nice -n 19 python benchmarks/experiment_lagged_grouping.py --data realistic radarscenes easy \\
         --seeds 0 1 2 3 4 --save benchmarks/results/lagged_grouping
     python benchmarks/experiment_lagged_grouping.py --summary --save benchmarks/results/lagged_grouping
+    OMP_NUM_THREADS=1 nice -n 19 python benchmarks/experiment_lagged_grouping.py --links causal --lags 0 0.25 0.4 \\
+        --data realistic radarscenes easy --seeds 0 1 2 3 4 --save benchmarks/results/lagged_grouping/causal
 """
 
 from __future__ import annotations
@@ -53,7 +60,8 @@ from experiment_tracking_errors import data_arguments, records, saved_records
 def measure(preset, seed, options):
     """Each form's chosen thresholds, tracked test scores and reported miss kinds, for one data set."""
     start = time.perf_counter()
-    halves, model = fitted(preset, seed, options, causal=False)
+    causal = options.links == "causal"
+    halves, model = fitted(preset, seed, options, causal=causal)
     record = {"model": model}
     train, test = halves["train"], halves["test"]
     for lag in options.lags:
@@ -67,7 +75,8 @@ def measure(preset, seed, options):
     def offline(part, *_):  # the offline labels as they are: no threshold or size to choose
         part["ids"] = part["confirmed"] = part["offline"]
 
-    record["offline"] = chosen_and_scored(train, test, [(None, None)], offline, options, seed)
+    if not causal:
+        record["offline"] = chosen_and_scored(train, test, [(None, None)], offline, options, seed)
     record["seconds"] = time.perf_counter() - start
     shown = ", ".join(f"{form} {record[form]['scores']['mota']:.3f}" for form in forms(record))
     print(f"{preset} seed {seed}: MOTA {shown} ({record['seconds']:.0f} s)", flush=True)
@@ -76,7 +85,7 @@ def measure(preset, seed, options):
 
 def forms(record):
     """The forms of ids in a record, lags first."""
-    return [key for key in record if key.startswith("lag ")] + ["offline"]
+    return [key for key in record if key.startswith("lag ")] + [key for key in ("offline",) if key in record]
 
 
 def table(preset, runs, against):
@@ -99,7 +108,9 @@ def table(preset, runs, against):
                 diffs = [rows[form][k] - rows[f"{name} (--against)"][k] for k in keys]
                 cells = " ".join(f"{_cell(d, paired=True):>16}" for d in diffs)
                 lines.append(f"{form + ' - ' + name:<22} " + cells)
-    for form in named[:-1]:
+    for form in named:
+        if form == "offline":  # nothing chosen
+            continue
         chosen = ", ".join(f"{runs[s][form]['threshold']}/{runs[s][form]['min_cluster_size']}" for s in seeds)
         lines.append(f"{form}: link threshold / min_cluster_size chosen per seed: {chosen}")
     return "\n".join(lines)
@@ -120,6 +131,12 @@ def main(argv=None):
     data_arguments(parser)
     choice_arguments(parser)
     parser.add_argument("--lags", type=float, nargs="+", default=[0.0, 0.1, 0.25], help="s after the links are known")
+    parser.add_argument(
+        "--links",
+        choices=("offline", "causal"),
+        default="offline",
+        help="the links' model: seeing 0.15 s on both sides of a detection, or its past only (the main job's)",
+    )
     parser.add_argument(
         "--against",
         default=str(Path(__file__).parent / "results" / "sliding_grouping"),

@@ -87,14 +87,15 @@ OFFLINE = {
 MISS_KINDS = ("merge", "fragment", "unclustered")
 
 
-def fitted(preset, seed, options, causal=True):
+def fitted(preset, seed, options, causal=True, check_stream=False):
     """Per half, per sequence: fixed-frame columns, truth and the model's causal links (``t``, ``x``, ``y`` of the kept
     detections in the estimator's order, ``node``, pairs ``i``, ``j``, ``p``, and ``rows``: their rows of the
     sequence); the fitted link threshold, ``min_cluster_size`` and pair window.
 
     ``causal=False``: a model that sees both sides of each detection instead (``OFFLINE``), its links (of features
     that see 0.15 s past each detection, :data:`~sklearn_radar.cluster._link_features.LOCAL_WINDOW`) and its labels
-    (``offline``).
+    (``offline``).  ``check_stream``: replay ``OnlinePipeline`` on each sequence and check that :func:`causal_ids`
+    gives its reported ids (causal links only).
     """
     labelled, model = labelled_model(preset, seed, options, params=LEARNED_CAUSAL if causal else OFFLINE)
     link = model[-1]
@@ -114,7 +115,7 @@ def fitted(preset, seed, options, causal=True):
             part["links"] = {"rows": kept.rows, "t": d.t, "x": d.x, "y": d.y, "node": node, "i": i, "j": j, "p": p}
             if not causal:
                 part["offline"] = model.predict(data.drop(columns=list(LABEL_COLUMNS)))
-            elif options.check_stream:  # the causal ids computed here are the stream's reported ids
+            elif check_stream:  # the causal ids computed here are the stream's reported ids
                 reported = replay(OnlinePipeline(model), data)["reported"]
                 mine, _ = causal_ids(part["links"], len(data), link.link_threshold_, link.pair_window)
                 if adjusted_rand_score(reported, mine) != 1.0:
@@ -302,7 +303,7 @@ def chosen_and_scored(train, test, grid, labelled, options, seed):
 def measure(preset, seed, options):
     """Both forms' chosen thresholds, tracked test scores and reported miss kinds, for one data set."""
     start = time.perf_counter()
-    halves, model = fitted(preset, seed, options)
+    halves, model = fitted(preset, seed, options, check_stream=options.check_stream)
     record = {"model": model}
     train, test = halves["train"], halves["test"]
     grid = pair_grid(model, options)
