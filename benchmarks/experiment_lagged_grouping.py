@@ -85,7 +85,7 @@ def measure(preset, seed, options):
 
 def forms(record):
     """The forms of ids in a record, lags first."""
-    return [key for key in record if key.startswith("lag ")] + [key for key in ("offline",) if key in record]
+    return [key for key in record if key.startswith("lag ")] + (["offline"] if "offline" in record else [])
 
 
 def table(preset, runs, against):
