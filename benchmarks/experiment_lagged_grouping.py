@@ -54,7 +54,7 @@ from experiment_sliding_grouping import (
     sliding_ids,
 )
 from experiment_tracking import _mean_se
-from experiment_tracking_errors import data_arguments, records, saved_records
+from experiment_tracking_errors import data_arguments, parsed, records, saved_records
 
 
 def measure(preset, seed, options):
@@ -142,9 +142,7 @@ def main(argv=None):
         default=str(Path(__file__).parent / "results" / "sliding_grouping"),
         help="experiment_sliding_grouping.py's records of the same data (its causal and sliding forms)",
     )
-    options = parser.parse_args(argv)
-    if options.summary and not options.save:
-        parser.error("--summary reads the records of --save: give the folder")
+    options = parsed(parser, argv)
     for preset in options.presets:
         runs = records(options, preset, measure, _record_path)
         if runs:

@@ -63,7 +63,7 @@ from experiment_tracking import (
     track,
     tuned_tracker,
 )
-from experiment_tracking_errors import _windows, data_arguments, labelled_model, records
+from experiment_tracking_errors import _windows, data_arguments, labelled_model, parsed, records
 
 from sklearn_radar._validation import read_columns
 from sklearn_radar.cluster import _link_clustering
@@ -390,9 +390,7 @@ def main(argv=None):
     parser.add_argument(
         "--check-stream", action="store_true", help="check the causal ids against OnlinePipeline's (slower)"
     )
-    options = parser.parse_args(argv)
-    if options.summary and not options.save:
-        parser.error("--summary reads the records of --save: give the folder")
+    options = parsed(parser, argv)
     for preset in options.presets:
         runs = records(options, preset, measure, _record_path)
         if runs:

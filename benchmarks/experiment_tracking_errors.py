@@ -387,6 +387,14 @@ def data_arguments(parser):
     parser.add_argument("--summary", action="store_true", help="only the tables of the records in --save")
 
 
+def parsed(parser, argv):
+    """The options of ``argv``; an error when ``--summary`` comes without ``--save``, the folder it reads."""
+    options = parser.parse_args(argv)
+    if options.summary and not options.save:
+        parser.error("--summary reads the records of --save: give the folder")
+    return options
+
+
 def records(options, preset, measure, path_of):
     """Seed -> record of one preset: measured (and saved in ``--save``), or with ``--summary`` read from there.
 
@@ -417,9 +425,7 @@ def main(argv=None):
     data_arguments(parser)
     parser.add_argument("--sparse", type=int, default=5, help="a road user with at most this many detections")
     parser.add_argument("--against", help="with --summary: the tracked scores' paired differences to these records")
-    options = parser.parse_args(argv)
-    if options.summary and not options.save:
-        parser.error("--summary reads the records of --save: give the folder")
+    options = parsed(parser, argv)
     if options.against and not options.summary:
         parser.error("--against compares saved records: give --summary too")
     for preset in options.presets:
