@@ -130,22 +130,28 @@ def fitted(preset, seed, options, causal=True, check_stream=False):
     }
 
 
+def scans(links):
+    """Per scan time with a detection above the objectness threshold: the time, the bounds ``start``, ``end`` of its
+    detections in ``links`` (sorted by time) and those of them above the threshold."""
+    t, node = links["t"], links["node"]
+    times, first = np.unique(t, return_index=True)
+    ends = np.r_[first[1:], len(t)]
+    for now, start, end in zip(times, first, ends, strict=True):
+        new = np.arange(start, end)
+        new = new[node[new]]
+        if len(new):
+            yield now, start, end, new
+
+
 def causal_ids(links, n_rows, threshold, window):
     """Id of each row at its scan time by the causal agglomeration (-1 for noise), and its cluster's size then: what
     ``OnlinePipeline`` reports (the cluster's oldest node, renumbered there), from ``_causal_agglomeration.step``."""
-    t, node, i, j, p = links["t"], links["node"], links["i"], links["j"], links["p"]
-    n = len(t)
+    i, j, p = links["i"], links["j"], links["p"]
+    n = len(links["t"])
     state = new_state()
     ids, sizes = np.full(n, -1, dtype=np.int64), np.zeros(n, dtype=np.int64)
-    times, first = np.unique(t, return_index=True)
-    ends = np.r_[first[1:], n]
-    bounds = np.searchsorted(j, np.r_[first, n])  # the pairs end at their j, in the order of j
-    for k, now in enumerate(times):
-        new = np.arange(first[k], ends[k])
-        new = new[node[new]]
-        if not len(new):
-            continue
-        pairs = slice(bounds[k], bounds[k + 1])
+    for now, start, end, new in scans(links):
+        pairs = slice(*np.searchsorted(j, [start, end]))  # the pairs end at their j, in the order of j
         clusters, counts, _, _ = step(state, now, new, i[pairs], j[pairs], p[pairs], window, threshold)
         ids[new], sizes[new] = clusters, counts
     out, size = np.full(n_rows, -1, dtype=np.int64), np.zeros(n_rows, dtype=np.int64)
@@ -165,20 +171,14 @@ def sliding_ids(links, n_rows, threshold, length, lag=0.0):
     out = np.full(n, -1, dtype=np.int64)
     seconds = []
     next_id = 0
-    times, first = np.unique(t, return_index=True)
-    ends = np.r_[first[1:], n]
     oldest = 0
     by_late = np.argsort(late, kind="stable")  # pairs by their later end: those up to now are a prefix
     late_sorted = late[by_late]
-    for k, now in enumerate(times):
-        new = np.arange(first[k], ends[k])
-        new = new[node[new]]
-        if not len(new):
-            continue
+    for now, _, end, new in scans(links):
         start = time.perf_counter()
         while t[oldest] <= now - length:
             oldest += 1
-        window = np.arange(oldest, ends[k])
+        window = np.arange(oldest, end)
         window = window[node[window]]
         pairs = by_late[: np.searchsorted(late_sorted, now, side="right")]
         pairs = pairs[early[pairs] > now - length]
